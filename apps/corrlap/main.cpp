@@ -1,0 +1,53 @@
+// corrlap: command-line front end. Each subcommand lives in its own cmd_*.cpp file.
+#include <algorithm>
+#include <iostream>
+#include <new>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/threads.hpp>
+
+#include "command.hpp"
+
+namespace corrlap::cli {
+std::vector<Command>& commands() {
+  static std::vector<Command> list;
+  return list;
+}
+}  // namespace corrlap::cli
+
+int main(int argc, char** argv) {
+  using namespace corrlap;
+  CLI::App app{"corrlap: corrected Laplace-Beltrami operators for digital surfaces"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "corrlap 0.1.0");
+  int threads = 0;
+  app.add_option("--threads", threads, "worker threads for TBB and OpenBLAS (default: all; env CORRLAP_THREADS)")
+      ->check(CLI::NonNegativeNumber);
+  auto& list = cli::commands();
+  std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.order < b.order; });
+  for (const auto& c : list) c.setup(app);
+  app.parse_complete_callback([&] {
+    try {
+      if (threads > 0) set_thread_count(threads);
+      else apply_thread_count_from_environment();
+    } catch (const corrlap::Error& e) {
+      std::cerr << "corrlap: error: " << e.what() << "\n";
+      std::exit(1);
+    }
+  });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const corrlap::Error& e) {
+    std::cerr << "corrlap: error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "corrlap: error: out of memory\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "corrlap: internal error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

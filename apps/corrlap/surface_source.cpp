@@ -1,0 +1,75 @@
+#include "surface_source.hpp"
+
+#include <sstream>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/volume_io.hpp>
+
+namespace corrlap::cli {
+
+void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
+  allow_mesh = with_mesh;
+  auto* g = cmd.add_option_group("surface", "where the digital surface comes from (one of)");
+  auto* s = g->add_option("--shape", shape, "named implicit shape (sphere1, torus, goursat, ...)");
+  auto* p = g->add_option("--polynomial", polynomial, "implicit shape P(x,y,z) <= 0, e.g. \"x^2+y^2+z^2-1\"");
+  auto* v = g->add_option("--volume", volume, "volume file (.vol, .nrrd, .raw) digitized by --threshold");
+  CLI::Option* m = nullptr;
+  if (with_mesh) m = g->add_option("--mesh", mesh, "quad mesh of surfels (.obj), vertex/face order kept");
+  g->require_option(1);
+  (void)s; (void)p; (void)v; (void)m;
+  cmd.add_option("--h", h, "grid step (shapes: world units per voxel; volumes: voxel size)")->check(CLI::PositiveNumber);
+  cmd.add_option("--center", center, "shape centre X Y Z")->expected(3);
+  cmd.add_option("--bbox", bbox, "digitization box MIN MAX (reference default -10 10)")->expected(2);
+  cmd.add_option("--offset", offset, "extra voxels around the box (reference default 5)")->check(CLI::NonNegativeNumber);
+  cmd.add_option("--threshold", threshold, "volumes: a voxel is inside when its value > threshold");
+  cmd.add_option("--raw-dimensions", raw_dimensions, "raw volumes: NX NY NZ")->expected(3);
+}
+
+std::optional<ImplicitShape> SurfaceSource::implicit_shape() const {
+  const Eigen::Vector3d c(center[0], center[1], center[2]);
+  if (!shape.empty()) return make_implicit_shape(shape, c);
+  if (!polynomial.empty()) {
+    ImplicitShape s = make_implicit_shape(polynomial, c);
+    return s;
+  }
+  return std::nullopt;
+}
+
+DigitizationParams SurfaceSource::digitization() const {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = bbox[0];
+  p.max_aabb = bbox[1];
+  p.offset = offset;
+  return p;
+}
+
+VoxelGrid SurfaceSource::voxels() const {
+  if (auto s = implicit_shape()) return digitize(*s, digitization());
+  if (!volume.empty()) {
+    VolumeReadOptions opt;
+    opt.threshold = threshold;
+    opt.h = h;
+    if (raw_dimensions.size() == 3) opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
+    return read_volume_as_voxels(volume, opt);
+  }
+  throw InputError("no voxel source: give --shape, --polynomial or --volume");
+}
+
+SurfelMesh SurfaceSource::surface() const {
+  if (!mesh.empty()) return to_surfel_mesh(read_mesh(mesh), "mesh file '" + mesh + "'");
+  return extract_surface(voxels());
+}
+
+std::string SurfaceSource::describe() const {
+  std::ostringstream os;
+  if (!shape.empty()) os << shape << ", h=" << h;
+  else if (!polynomial.empty()) os << "\"" << polynomial << "\", h=" << h;
+  else if (!volume.empty()) os << volume << ", threshold " << threshold;
+  else os << mesh;
+  return os.str();
+}
+
+}  // namespace corrlap::cli

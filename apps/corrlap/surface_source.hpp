@@ -1,0 +1,40 @@
+#pragma once
+// Shared CLI options that produce a digital surface: --shape/--polynomial/--volume/--mesh,
+// --h, --center, --bbox, --offset.
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
+
+namespace corrlap::cli {
+
+struct SurfaceSource {
+  std::string shape, polynomial, volume, mesh;
+  double h = 1.0;
+  std::vector<double> center = {0.0, 0.0, 0.0};
+  std::vector<double> bbox = {-10.0, 10.0};
+  int offset = 5;
+  double threshold = 0.0;               ///< volumes: voxels with value > threshold are inside
+  std::vector<int> raw_dimensions;      ///< raw volumes: NX NY NZ
+  bool allow_mesh = true;
+
+  /// Adds the options to a subcommand.
+  void add_options(CLI::App& cmd, bool with_mesh = true);
+
+  /// The implicit shape when --shape/--polynomial is used.
+  std::optional<ImplicitShape> implicit_shape() const;
+  DigitizationParams digitization() const;
+  /// Builds the voxel grid (shapes, volumes); throws InputError when none was given.
+  VoxelGrid voxels() const;
+  /// Builds the surface mesh from whichever source was given.
+  SurfelMesh surface() const;
+  /// Short description for logs ("sphere1, h=0.1").
+  std::string describe() const;
+};
+
+}  // namespace corrlap::cli

@@ -1,0 +1,22 @@
+# Install the libraries, headers and a CMake package: find_package(corrlap CONFIG REQUIRED)
+# then link corrlap::corrlap (or one of corrlap::core / estimators / discretizations / backends).
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+get_property(_targets GLOBAL PROPERTY CORRLAP_EXPORTED_TARGETS)
+install(TARGETS ${_targets} corrlap EXPORT corrlapTargets
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+  INCLUDES DESTINATION include)
+set_target_properties(corrlap PROPERTIES EXPORT_NAME corrlap)
+install(EXPORT corrlapTargets NAMESPACE corrlap:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/corrlap)
+
+configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/corrlapConfig.cmake.in
+  ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfig.cmake
+  INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/corrlap)
+write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/corrlapConfigVersion.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfig.cmake
+  ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfigVersion.cmake
+  DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/corrlap)

@@ -1,0 +1,84 @@
+#pragma once
+// The LinearSolver contract (Eigen's analyze / factorize / solve / info pattern) for symmetric
+// positive (semi-)definite sparse systems, and the EigenSolver contract for L u = lambda M u.
+#include <Eigen/Core>
+#include <Eigen/Sparse>
+#include <string>
+#include <vector>
+
+#include "config.hpp"
+#include "error.hpp"
+
+namespace corrlap {
+
+enum class SolverStatus {
+  Success,
+  NotAnalyzed,          ///< factorize/solve called before analyze/factorize
+  NotPositiveDefinite,  ///< a non-positive pivot (the message names the column)
+  NumericalIssue,       ///< NaN/Inf in input or factor
+  NoConvergence,        ///< iterative solver hit its iteration limit
+  InvalidInput,         ///< dimension mismatch, non-square matrix...
+  OutOfMemory,
+};
+const char* to_string(SolverStatus status);
+
+/// Outcome and timings of the last phase of a solver.
+struct SolverReport {
+  SolverStatus status = SolverStatus::NotAnalyzed;
+  std::string message;
+  int iterations = 0;      ///< iterative solvers
+  double residual = 0.0;   ///< relative residual |Ax-b|/|b| of the last solve
+  double analyze_seconds = 0.0, factorize_seconds = 0.0, solve_seconds = 0.0;
+};
+
+/// Raised when a solver phase fails; carries the backend status.
+class SolverError : public NumericalError {
+ public:
+  SolverError(SolverStatus status, const std::string& message) : NumericalError(message), status_(status) {}
+  SolverStatus status() const { return status_; }
+
+ private:
+  SolverStatus status_;
+};
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  virtual std::string name() const = 0;
+  /// Options this backend accepts (name, default, meaning).
+  virtual std::vector<ParameterInfo> options() const = 0;
+  /// Applies options; unknown keys are InputErrors listing the valid ones.
+  virtual void configure(const Config& options) = 0;
+  /// Symbolic analysis of the pattern of A (reusable for matrices with the same pattern).
+  virtual void analyze(const Eigen::SparseMatrix<double>& A) = 0;
+  /// Numeric factorization of A (same pattern as the analyzed one). Throws SolverError.
+  virtual void factorize(const Eigen::SparseMatrix<double>& A) = 0;
+  /// analyze + factorize.
+  void compute(const Eigen::SparseMatrix<double>& A) {
+    analyze(A);
+    factorize(A);
+  }
+  /// Solves A X = B for every column of B. Throws SolverError.
+  virtual Eigen::MatrixXd solve(const Eigen::MatrixXd& B) = 0;
+  /// Report of the last phase.
+  virtual const SolverReport& info() const = 0;
+};
+
+/// Result of a generalized symmetric eigenproblem.
+struct EigenResult {
+  Eigen::VectorXd values;   ///< ascending
+  Eigen::MatrixXd vectors;  ///< one column per value, M-orthonormal
+  int iterations = 0;
+};
+
+/// Computes the k eigenpairs of L u = lambda M u of smallest |lambda|.
+class EigenSolver {
+ public:
+  virtual ~EigenSolver() = default;
+  virtual std::string name() const = 0;
+  virtual std::vector<ParameterInfo> options() const = 0;
+  virtual void configure(const Config& options) = 0;
+  virtual EigenResult solve(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, int k) = 0;
+};
+
+}  // namespace corrlap

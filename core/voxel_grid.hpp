@@ -1,0 +1,58 @@
+#pragma once
+// Dense bit storage of a box of voxels (spec §0, §1.2).
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace corrlap {
+
+/// A box [lower, upper] (inclusive, on each axis) of digital points z in Z^3 with one bit per
+/// voxel ("inside"). Voxel z sits at world position h * z (spec §0).
+/// Storage: each (y, z) row of voxels is padded to whole 64-bit words, x fastest, so that
+/// transitions along every axis can be found 64 voxels at a time.
+class VoxelGrid {
+ public:
+  VoxelGrid() = default;
+  /// Throws InputError for an empty or absurdly large box, or h <= 0.
+  VoxelGrid(const Eigen::Vector3i& lower, const Eigen::Vector3i& upper, double h);
+
+  const Eigen::Vector3i& lower() const { return lower_; }
+  const Eigen::Vector3i& upper() const { return upper_; }
+  Eigen::Vector3i size() const { return upper_ - lower_ + Eigen::Vector3i::Ones(); }
+  double h() const { return h_; }
+  bool empty_box() const { return words_.empty(); }
+
+  bool in_box(int x, int y, int z) const {
+    return x >= lower_.x() && x <= upper_.x() && y >= lower_.y() && y <= upper_.y() &&
+           z >= lower_.z() && z <= upper_.z();
+  }
+  /// False outside the box.
+  bool get(int x, int y, int z) const {
+    if (!in_box(x, y, z)) return false;
+    const int lx = x - lower_.x();
+    return (row(y, z)[lx >> 6] >> (lx & 63)) & 1u;
+  }
+  void set(int x, int y, int z, bool value);
+
+  /// Number of inside voxels.
+  std::int64_t count() const;
+
+  std::size_t words_per_row() const { return words_per_row_; }
+  const std::uint64_t* row(int y, int z) const { return words_.data() + row_offset(y, z); }
+  std::uint64_t* row(int y, int z) { return words_.data() + row_offset(y, z); }
+  std::size_t memory_bytes() const { return words_.size() * sizeof(std::uint64_t); }
+
+ private:
+  std::size_t row_offset(int y, int z) const {
+    return (static_cast<std::size_t>(z - lower_.z()) * static_cast<std::size_t>(size().y()) +
+            static_cast<std::size_t>(y - lower_.y())) *
+           words_per_row_;
+  }
+  Eigen::Vector3i lower_ = Eigen::Vector3i::Zero();
+  Eigen::Vector3i upper_ = -Eigen::Vector3i::Ones();
+  double h_ = 1.0;
+  std::size_t words_per_row_ = 0;
+  std::vector<std::uint64_t> words_;
+};
+
+}  // namespace corrlap

@@ -1,0 +1,52 @@
+#include "implicit_normals.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace corrlap {
+
+Eigen::Vector3d project_onto_surface(const ImplicitShape& shape, const Eigen::Vector3d& x,
+                                     const ProjectionParams& params) {
+  Eigen::Vector3d p = x;
+  for (int it = 0; it < params.max_iterations; ++it) {
+    const double value = shape.value(p);
+    const Eigen::Vector3d g = shape.gradient(p);
+    const double g2 = g.squaredNorm();
+    if (g2 == 0.0 || !std::isfinite(g2)) break;
+    const Eigen::Vector3d step = (params.gamma * value / g2) * g;
+    p -= step;
+    if (step.norm() < params.accuracy) break;
+  }
+  return p;
+}
+
+Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& x, const ProjectionParams& params) {
+  if (shape.sphere_radius() > 0.0) {
+    const Eigen::Vector3d d = x - shape.center;
+    const double n = d.norm();
+    return n > 0 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::Zero();
+  }
+  const Eigen::Vector3d g = shape.gradient(project_onto_surface(shape, x, params));
+  const double n = g.norm();
+  return n > 0 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::Zero();
+}
+
+Eigen::MatrixX3d true_face_normals(const ImplicitShape& shape, const SurfelMesh& mesh, const ProjectionParams& params) {
+  const Eigen::MatrixX3d c = mesh.face_centroids();
+  Eigen::MatrixX3d n(c.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), c.rows(), [&](Eigen::Index f) {
+    n.row(f) = true_normal(shape, c.row(f).transpose(), params).transpose();
+  });
+  return n;
+}
+
+Eigen::MatrixX3d true_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh, const ProjectionParams& params) {
+  Eigen::MatrixX3d n(mesh.positions.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), mesh.positions.rows(), [&](Eigen::Index v) {
+    n.row(v) = true_normal(shape, mesh.positions.row(v).transpose(), params).transpose();
+  });
+  return n;
+}
+
+}  // namespace corrlap

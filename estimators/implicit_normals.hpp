@@ -1,0 +1,33 @@
+#pragma once
+// True normals of implicit shapes (spec §1.5): exact radial normals on spheres, otherwise the
+// gradient at the projection of the point onto {P = 0} by a damped Newton iteration.
+#include <Eigen/Core>
+
+#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+
+namespace corrlap {
+
+/// Damped Newton projection onto {P = 0} (spec §1.5; reference defaults).
+struct ProjectionParams {
+  int max_iterations = 20;
+  double accuracy = 1e-4;
+  double gamma = 0.5;
+};
+
+/// Projection of x onto the zero level set of the shape.
+Eigen::Vector3d project_onto_surface(const ImplicitShape& shape, const Eigen::Vector3d& x,
+                                     const ProjectionParams& params = {});
+
+/// Unit outward normal of the shape "at" x: radial for spheres, else grad P at the projection.
+Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& x,
+                            const ProjectionParams& params = {});
+
+/// True normal at every face centroid (#F x 3).
+Eigen::MatrixX3d true_face_normals(const ImplicitShape& shape, const SurfelMesh& mesh,
+                                   const ProjectionParams& params = {});
+/// True normal at every vertex (#V x 3).
+Eigen::MatrixX3d true_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh,
+                                     const ProjectionParams& params = {});
+
+}  // namespace corrlap

@@ -1,0 +1,34 @@
+#include "mesh_io.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+#include <corrlap/core/error.hpp>
+
+namespace corrlap {
+
+namespace {
+std::string extension(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && slash > dot)) return "";
+  std::string e = path.substr(dot + 1);
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return e;
+}
+}  // namespace
+
+PolygonMesh read_mesh(const std::string& path) {
+  const std::string ext = extension(path);
+  if (ext == "obj") return read_obj(path);
+  throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' (supported: .obj)");
+}
+
+void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshAttributes& attributes) {
+  const std::string ext = extension(path);
+  (void)attributes;
+  if (ext == "obj") return write_obj(path, mesh);
+  throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' for writing (supported: .obj)");
+}
+
+}  // namespace corrlap

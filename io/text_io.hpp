@@ -1,0 +1,24 @@
+#pragma once
+// Plain-text fields (one row of numbers per line) and Matrix Market matrices.
+#include <Eigen/Core>
+#include <Eigen/Sparse>
+#include <string>
+
+namespace corrlap {
+
+/// Reads "nx ny nz" per line (blank lines and # comments skipped). Throws IoError naming the
+/// file and line for malformed or non-finite values, a wrong column count, or an empty file.
+Eigen::MatrixX3d read_normals(const std::string& path);
+/// Writes one "nx ny nz" line per row with 17 significant digits.
+void write_normals(const std::string& path, const Eigen::MatrixX3d& normals);
+
+/// One value per line (same rules as read_normals).
+Eigen::VectorXd read_scalars(const std::string& path);
+void write_scalars(const std::string& path, const Eigen::VectorXd& values);
+
+/// "%%MatrixMarket matrix coordinate real general", 1-based, every stored entry, %.17g.
+void write_matrix_market(const std::string& path, const Eigen::SparseMatrix<double>& A);
+/// Reads coordinate real general/symmetric files (symmetric ones are expanded).
+Eigen::SparseMatrix<double> read_matrix_market(const std::string& path);
+
+}  // namespace corrlap

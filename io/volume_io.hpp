@@ -1,0 +1,43 @@
+#pragma once
+// Grey-level volumes (uint8 voxels) and their conversion to voxel sets by a threshold.
+// Formats: DGtal .vol (read/write), raw uint8 with given dimensions (.raw), NRRD (.nrrd).
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <corrlap/core/voxel_grid.hpp>
+
+namespace corrlap {
+
+/// A dense uint8 volume, x fastest.
+struct Volume {
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+  std::vector<std::uint8_t> values;
+  std::uint8_t at(int x, int y, int z) const {
+    return values[(std::size_t(z) * std::size_t(size.y()) + std::size_t(y)) * std::size_t(size.x()) + std::size_t(x)];
+  }
+};
+
+struct VolumeReadOptions {
+  double threshold = 0.0;   ///< inside iff value > threshold
+  double h = 1.0;           ///< grid step given to the voxel grid
+  std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
+};
+
+/// Reads by extension. Throws IoError naming the file and the problem (missing header field,
+/// truncated data, absurd dimensions...).
+Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
+/// Writes by extension (.vol, .raw, .nrrd).
+void write_volume(const std::string& path, const Volume& volume);
+
+/// Voxels with value > threshold; the box is [0, size-1] padded by one empty voxel on every side
+/// so that the surface is closed. Throws InputError for an empty or full volume.
+VoxelGrid threshold_volume(const Volume& volume, double threshold, double h);
+/// read_volume + threshold_volume.
+VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options);
+/// 255 inside, 0 outside, over the grid's box.
+Volume voxels_to_volume(const VoxelGrid& grid);
+
+}  // namespace corrlap

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs the Debian packages corrlap needs, only those missing. Needs root (or sudo).
+set -euo pipefail
+packages=(cmake ninja-build g++ ccache pkg-config python3
+          libeigen3-dev libsuitesparse-dev libopenblas-dev libspectra-dev libtbb-dev
+          doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev libfftw3-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "corrlap: installing missing Debian packages: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "corrlap: error: need root to install: ${missing[*]}" >&2; exit 1; fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

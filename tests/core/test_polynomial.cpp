@@ -1,0 +1,59 @@
+// Polynomial parser and named shapes (spec §1.1).
+#include <doctest/doctest.h>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/implicit_shape.hpp>
+
+using namespace corrlap;
+
+TEST_CASE("parser evaluates and differentiates") {
+  const Polynomial p = Polynomial::parse("(x^2+y^2+z^2+6*6-2*2)^2-4*6*6*(x^2+y^2)");
+  const Eigen::Vector3d q(1.5, -0.25, 2.0);
+  const double r2 = q.squaredNorm();
+  CHECK(p(q) == doctest::Approx((r2 + 32) * (r2 + 32) - 144 * (q.x() * q.x() + q.y() * q.y())));
+  const Eigen::Vector3d g = p.gradient(q);
+  const double eps = 1e-6;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d e = Eigen::Vector3d::Zero();
+    e[a] = eps;
+    CHECK(g[a] == doctest::Approx((p(q + e) - p(q - e)) / (2 * eps)).epsilon(1e-6));
+  }
+  CHECK(Polynomial::parse("2.5e-1*x - -y / 4")(Eigen::Vector3d(4, 8, 0)) == doctest::Approx(3.0));
+  CHECK(Polynomial::parse("0.1*y*y -0.1*x*x - 2.0*z").total_degree() == 2);
+}
+
+TEST_CASE("parse errors name the position") {
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x^2+"), doctest::Contains("position"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x^y"), doctest::Contains("exponent"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("(x+1"), doctest::Contains("')'"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x/y"), doctest::Contains("non-constant"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x # 2"), doctest::Contains("unexpected character"), InputError);
+  CHECK_THROWS_AS(Polynomial::parse(""), InputError);
+  CHECK_THROWS_WITH_AS(make_implicit_shape("spehre1"), doctest::Contains("sphere1"), InputError);
+  CHECK_THROWS_AS(make_implicit_shape("3+4"), InputError);
+}
+
+TEST_CASE("every named shape parses and has a surface") {
+  for (const auto& [name, text] : named_shapes()) {
+    CAPTURE(name);
+    const ImplicitShape s = make_implicit_shape(name);
+    CHECK(s.polynomial.total_degree() >= 2);
+  }
+  CHECK(make_implicit_shape("sphere1").sphere_radius() == 1.0);
+  CHECK(make_implicit_shape("sphere9").sphere_radius() == 9.0);
+  CHECK(make_implicit_shape("torus").sphere_radius() == 0.0);
+}
+
+TEST_CASE("interval bounds enclose the values") {
+  const Polynomial p = Polynomial::parse("-1*(8-0.03*x^4-0.03*y^4-0.03*z^4+2*x^2+2*y^2+2*z^2)");
+  const Eigen::Vector3d lo(-1.2, 0.3, -4), hi(0.7, 2.1, -3.5);
+  double mn, mx;
+  p.bounds(lo, hi, mn, mx);
+  for (int i = 0; i <= 10; ++i)
+    for (int j = 0; j <= 10; ++j)
+      for (int k = 0; k <= 10; ++k) {
+        const Eigen::Vector3d q = lo + (hi - lo).cwiseProduct(Eigen::Vector3d(i, j, k) / 10.0);
+        CHECK(p(q) >= mn);
+        CHECK(p(q) <= mx);
+      }
+}
