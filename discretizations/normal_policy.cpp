@@ -1,0 +1,113 @@
+#include "normal_policy.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include <corrlap/core/error.hpp>
+
+namespace corrlap {
+
+std::vector<ParameterInfo> normal_policy_parameters() {
+  return {{"orientation", "warn", "normals with u.n <= 0 on a surfel: error | warn (compute as given) | clamp"},
+          {"clamp_min", "0.05", "with orientation=clamp: smallest allowed u.n before renormalization"},
+          {"normalize", "false", "rescale non-unit normals instead of rejecting them"}};
+}
+
+OrientationPolicy parse_orientation_policy(const std::string& text) {
+  if (text == "error") return OrientationPolicy::Error;
+  if (text == "warn") return OrientationPolicy::Warn;
+  if (text == "clamp") return OrientationPolicy::Clamp;
+  throw InputError("orientation policy '" + text + "': expected error, warn or clamp");
+}
+
+std::string OrientationReport::summary(const std::string& method) const {
+  std::ostringstream os;
+  os.precision(6);
+  os << method << ": " << inconsistent << " of " << checked
+     << (worst_corner >= 0 ? " face corners" : " faces") << " have normals with u.n <= 0 (worst: face "
+     << worst_face;
+  if (worst_corner >= 0) os << " corner " << worst_corner;
+  os << ", u.n = " << worst_dot << ")";
+  return os.str();
+}
+
+Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh) {
+  if (!mesh.has_surfels()) return mesh.face_normals_from_positions();
+  Eigen::MatrixX3d n(mesh.num_faces(), 3);
+  for (int f = 0; f < mesh.num_faces(); ++f) n.row(f) = mesh.surfels[std::size_t(f)].trivial_normal().transpose();
+  return n;
+}
+
+Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
+                                 const Config& params, const std::string& method,
+                                 std::vector<std::string>& warnings, OrientationReport* out_report) {
+  if (kind == NormalKind::None) return {};
+  const bool face = kind == NormalKind::Face;
+  Eigen::MatrixX3d u = face ? normals.face : normals.vertex;
+  const std::string what = method + ": " + (face ? "face" : "vertex") + " normals";
+  if (u.rows() == 0)
+    throw InputError(method + " needs " + (face ? "one normal per face" : "one normal per vertex") +
+                     " (none given)");
+  validate_normals(u, face ? mesh.num_faces() : mesh.num_vertices(), what, params.get_bool("normalize", false));
+  const OrientationPolicy policy = parse_orientation_policy(params.get_string("orientation", "warn"));
+  const double clamp_min = params.get_double("clamp_min", 0.05);
+  if (!(clamp_min > 0.0 && clamp_min < 1.0)) throw InputError(method + ": clamp_min must be in (0, 1)");
+
+  const Eigen::MatrixX3d n = trivial_face_normals(mesh);
+  OrientationReport r;
+  auto note = [&](Eigen::Index f, Eigen::Index corner, double d) {
+    ++r.inconsistent;
+    if (d < r.worst_dot || r.worst_face < 0) {
+      r.worst_dot = d;
+      r.worst_face = f;
+      r.worst_corner = corner;
+    }
+  };
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    if (face) {
+      ++r.checked;
+      const double d = u.row(f).dot(n.row(f));
+      if (!(d > 0.0)) note(f, -1, d);
+    } else {
+      for (int c = 0; c < 4; ++c) {
+        ++r.checked;
+        const double d = u.row(mesh.faces(f, c)).dot(n.row(f));
+        if (!(d > 0.0)) note(f, c, d);
+      }
+    }
+  }
+  if (!face && r.inconsistent == 0) r.worst_corner = -1;
+  if (out_report) *out_report = r;
+  if (r.inconsistent == 0) return u;
+  if (2 * r.inconsistent > r.checked)
+    throw InputError(r.summary(method) + ": the normals point inward (flipped); flip them or the face orientation");
+  switch (policy) {
+    case OrientationPolicy::Error:
+      throw InputError(r.summary(method));
+    case OrientationPolicy::Warn:
+      warnings.push_back(r.summary(method));
+      return u;
+    case OrientationPolicy::Clamp:
+      break;
+  }
+  // Clamp: push u toward the trivial normal until u.n >= clamp_min on every face (for vertex
+  // normals: every incident face), renormalizing after each correction.
+  for (int pass = 0; pass < 8; ++pass) {
+    bool changed = false;
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int c = 0; c < (face ? 1 : 4); ++c) {
+        const Eigen::Index row = face ? f : mesh.faces(f, c);
+        const double d = u.row(row).dot(n.row(f));
+        if (d < clamp_min - 1e-12) {
+          u.row(row) += (clamp_min - d + 1e-9) * n.row(f);
+          u.row(row).normalize();
+          changed = true;
+        }
+      }
+    if (!changed) break;
+  }
+  warnings.push_back(r.summary(method) + "; clamped to u.n >= " + std::to_string(clamp_min));
+  return u;
+}
+
+}  // namespace corrlap

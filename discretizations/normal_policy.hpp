@@ -1,0 +1,44 @@
+#pragma once
+// Validation of the normal field given to a corrected discretization, and the policy for
+// normals inconsistent with the surfel orientation (u . n_triv <= 0).
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/discretization.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+
+namespace corrlap {
+
+/// Parameter keys shared by every corrected method (documented in parameters()).
+std::vector<ParameterInfo> normal_policy_parameters();
+/// "error" | "warn" | "clamp"; InputError otherwise.
+OrientationPolicy parse_orientation_policy(const std::string& text);
+
+/// Outcome of the orientation check.
+struct OrientationReport {
+  int checked = 0;        ///< faces (face normals) or face corners (vertex normals)
+  int inconsistent = 0;   ///< u . n_triv <= 0
+  Eigen::Index worst_face = -1, worst_corner = -1;
+  double worst_dot = 1.0;
+  std::string summary(const std::string& method) const;
+};
+
+/// Returns the normals the kernels must use:
+///  - checks count, finiteness, non-zero length and unit length (parameter "normalize": rescale instead);
+///  - orientation: for face normals u_f . n_f, for vertex normals u_v . n_f at every corner of f;
+///    policy "error" throws naming the worst element, "warn" (default) keeps the normals exactly as
+///    given and appends a warning with the count and the worst element, "clamp" raises u . n_f to
+///    `clamp_min` (default 0.05) and renormalizes.
+///  - normals pointing inward on more than half of the elements are rejected under every policy
+///    (flipped orientation: the mass matrix would be negative).
+Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
+                                 const Config& params, const std::string& method,
+                                 std::vector<std::string>& warnings, OrientationReport* report = nullptr);
+
+/// Trivial (outward) unit normal of every face: from the surfel data when present, else from
+/// the corner positions (spec §1.5; equal on surfels).
+Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh);
+
+}  // namespace corrlap
