@@ -3,6 +3,8 @@ BUILD ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
+# Relative paths in the compiler cache, so that clones at other paths (CI) reuse it.
+export CCACHE_BASEDIR ?= $(CURDIR)
 
 .PHONY: all deps configure build demo test test-stress bench install clean
 
