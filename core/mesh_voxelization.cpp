@@ -317,6 +317,9 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
           if (cr.empty()) continue;
           int total = 0;
           for (const Crossing& q : cr) total += q.sign;
+          // The centre is perturbed by +delta along a too (as in the closed case, where a crossing
+          // exactly at the centre is not "beyond" it): a crossing at the centre counts as below,
+          // so both rays agree with the half-open rule used on the other axes.
           int before = 0;  // sum of signs of crossings at or below the centre
           std::size_t next = 0;
           Eigen::Vector3i p;
@@ -324,14 +327,10 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
           p[c] = k;
           for (int i = lo[a]; i <= hi[a]; ++i) {
             const double px = i * h;
-            int at = 0;
-            while (next < cr.size() && cr[next].x <= px) {
-              if (cr[next].x == px) at += cr[next].sign;
-              before += cr[next++].sign;
-            }
+            while (next < cr.size() && cr[next].x <= px) before += cr[next++].sign;
             p[a] = i;
-            const int w_plus = total - before;       // ray towards +a: crossings strictly beyond
-            const int w_minus = -(before - at);      // ray towards -a: crossings strictly below
+            const int w_plus = total - before;  // ray towards +a: crossings beyond the centre
+            const int w_minus = -before;        // ray towards -a: crossings below it
             votes[index(p)] += std::uint8_t((w_plus > 0) + (w_minus > 0));
           }
         }

@@ -290,6 +290,14 @@ void write_nrrd(const std::string& path, const Volume& v) {
 
 }  // namespace
 
+bool nrrd_gzip_supported() {
+#ifdef CORRLAP_HAVE_ZLIB
+  return true;
+#else
+  return false;
+#endif
+}
+
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   const std::string ext = extension_of(path);
   if (ext == "vol") return read_vol(path);

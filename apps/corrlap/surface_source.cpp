@@ -54,6 +54,7 @@ DigitizationParams SurfaceSource::digitization() const {
 }
 
 VoxelGrid SurfaceSource::voxels() const {
+  if (resolution > 0 && mesh_file.empty()) throw InputError("--resolution applies to --mesh-file only");
   if (auto s = implicit_shape()) return digitize(*s, digitization());
   if (!volume.empty()) {
     VolumeReadOptions opt;
@@ -77,7 +78,6 @@ VoxelGrid SurfaceSource::voxels() const {
               << report.inside_voxels << " voxels inside\n";
     return grid;
   }
-  if (resolution > 0) throw InputError("--resolution applies to --mesh-file only");
   throw InputError("no voxel source: give --shape, --polynomial, --volume or --mesh-file");
 }
 
