@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -211,6 +213,79 @@ class RayCaster {
   std::vector<int> bucket_;
 };
 
+
+// ---- self-intersections: pairs of triangles without a common vertex that properly cross ----
+inline double orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+
+// Segment pq crosses the interior of triangle abc (strictly: touching is not counted).
+bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                     const Eigen::Vector3d& c) {
+  const double dp = orient3d(a, b, c, p), dq = orient3d(a, b, c, q);
+  if (!((dp > 0 && dq < 0) || (dp < 0 && dq > 0))) return false;
+  const double s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
+  return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
+}
+
+bool triangles_cross(const Prepared& m, const Tri& t, const Tri& u) {
+  Eigen::Vector3d T[3], U[3];
+  for (int k = 0; k < 3; ++k) {
+    T[k] = m.P.row(t[std::size_t(k)]);
+    U[k] = m.P.row(u[std::size_t(k)]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (segment_crosses(T[k], T[(k + 1) % 3], U[0], U[1], U[2])) return true;
+    if (segment_crosses(U[k], U[(k + 1) % 3], T[0], T[1], T[2])) return true;
+  }
+  return false;
+}
+
+// Uniform grid of about one cell per triangle; each candidate pair is tested once, in the cell
+// holding the lower corner of the intersection of the two bounding boxes.
+std::int64_t count_self_intersections(const Prepared& m) {
+  const std::size_t nt = m.tris.size();
+  if (nt < 2) return 0;
+  std::vector<Eigen::AlignedBox3d> box(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) box[t].extend(Eigen::Vector3d(m.P.row(m.tris[t][std::size_t(k)])));
+  const Eigen::Vector3d lo = m.P.colwise().minCoeff().transpose(), hi = m.P.colwise().maxCoeff().transpose();
+  const int g = std::clamp(int(std::cbrt(double(nt))), 1, 200);
+  const Eigen::Vector3d cell = ((hi - lo) / g).cwiseMax(1e-300);
+  auto cell_of = [&](const Eigen::Vector3d& x) {
+    Eigen::Vector3i c;
+    for (int a = 0; a < 3; ++a) c[a] = std::clamp(int((x[a] - lo[a]) / cell[a]), 0, g - 1);
+    return c;
+  };
+  auto cell_id = [&](const Eigen::Vector3i& c) { return (std::size_t(c.z()) * std::size_t(g) + std::size_t(c.y())) * std::size_t(g) + std::size_t(c.x()); };
+  const std::size_t ncells = std::size_t(g) * std::size_t(g) * std::size_t(g);
+  std::vector<std::vector<int>> cells(ncells);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const Eigen::Vector3i c0 = cell_of(box[t].min()), c1 = cell_of(box[t].max());
+    for (int z = c0.z(); z <= c1.z(); ++z)
+      for (int y = c0.y(); y <= c1.y(); ++y)
+        for (int x = c0.x(); x <= c1.x(); ++x) cells[cell_id({x, y, z})].push_back(int(t));
+  }
+  std::vector<std::int64_t> per_cell(ncells, 0);
+  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t id) {
+    const auto& list = cells[id];
+    std::int64_t n = 0;
+    for (std::size_t i = 0; i < list.size(); ++i)
+      for (std::size_t j = i + 1; j < list.size(); ++j) {
+        const Tri &t = m.tris[std::size_t(list[i])], &u = m.tris[std::size_t(list[j])];
+        bool adjacent = false;
+        for (int a : t)
+          for (int b : u) adjacent |= a == b;
+        if (adjacent) continue;
+        const Eigen::AlignedBox3d both = box[std::size_t(list[i])].intersection(box[std::size_t(list[j])]);
+        if (both.isEmpty() || cell_id(cell_of(both.min())) != id) continue;
+        n += triangles_cross(m, t, u);
+      }
+    per_cell[id] = n;
+  });
+  return std::accumulate(per_cell.begin(), per_cell.end(), std::int64_t{0});
+}
+
 }  // namespace
 
 std::vector<std::string> MeshVoxelizationReport::warnings() const {
@@ -223,8 +298,13 @@ std::vector<std::string> MeshVoxelizationReport::warnings() const {
     w.push_back(os.str());
   } else if (ambiguous_voxels) {
     std::ostringstream os;
-    os << "mesh is self-intersecting or has overlapping parts: " << ambiguous_voxels
+    os << "mesh has overlapping parts: " << ambiguous_voxels
        << " voxels have a winding number other than 0 or 1 (counted as inside when > 0)";
+    w.push_back(os.str());
+  }
+  if (self_intersections) {
+    std::ostringstream os;
+    os << "mesh is self-intersecting: " << self_intersections << " pairs of triangles without a common vertex cross";
     w.push_back(os.str());
   }
   if (inconsistent_edges) {
@@ -244,6 +324,7 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
   MeshVoxelizationReport& r = report ? *report : local;
   r = MeshVoxelizationReport{};
   const Prepared m = prepare(mesh, r);
+  r.self_intersections = count_self_intersections(m);
   r.bbox_min = m.P.colwise().minCoeff();
   r.bbox_max = m.P.colwise().maxCoeff();
   const double side = (r.bbox_max - r.bbox_min).maxCoeff();

@@ -37,6 +37,8 @@ struct MeshVoxelizationReport {
   bool inward_oriented = false; ///< negative signed volume: orientation flipped before the test
   std::int64_t ambiguous_voxels = 0;  ///< closed: winding number not in {0,1} (self-intersection,
                                       ///< overlapping parts); open: rays disagreeing
+  std::int64_t self_intersections = 0;  ///< pairs of triangles without a common vertex whose
+                                        ///< interiors cross (touching contacts are not counted)
   std::int64_t inside_voxels = 0;
   double h = 0.0;
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero(), bbox_max = Eigen::Vector3d::Zero();

@@ -265,6 +265,7 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
       for (const auto& pr : e.properties) per += binary ? (pr.count_type ? pr.count_type->bytes : pr.type->bytes) : 2;
       needed += per * double(e.count);
     }
+    if (!binary) needed -= 1;  // N ASCII values need at least 2N - 1 characters
     if (needed > double(body.remaining()))
       fail(path, "truncated data: the header announces " + std::to_string(vertex_el->count) + " vertices and " +
                      std::to_string(face_el->count) + " faces, more than the file holds");

@@ -122,6 +122,13 @@ TEST_CASE("ASCII PLY with other types, extra elements and vertex_index is read")
   CHECK(a.face_scalars.at("flags") == Eigen::Vector2d(7, 8));
 }
 
+TEST_CASE("smallest ASCII PLY without a final newline is read") {
+  const std::string p = tmp_path("ascii_min.ply");
+  write_text(p, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
+  CHECK(read_ply(p).faces == std::vector<std::vector<int>>{{0, 1, 2}});
+}
+
 TEST_CASE("OFF files are read (comments, counts on the header line, colours ignored)") {
   const std::string p = tmp_path("tet.off");
   write_text(p, "OFF # a tetrahedron\n# comment\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1 0.5 0.5 0.5 1\n"
