@@ -1,4 +1,5 @@
 // Object File Format (OFF) reader: "OFF" header, counts "nv nf ne", vertices, faces "n i1 .. in".
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>

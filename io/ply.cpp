@@ -1,5 +1,7 @@
 // Stanford PLY reader (ASCII, binary little-endian) and binary little-endian writer.
+#include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
