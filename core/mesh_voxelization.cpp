@@ -381,7 +381,15 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
   } else {
     // Open: the winding number depends on the ray; each of the 6 axis rays (+/- x, y, z) votes.
     const Eigen::Vector3i n = grid.size();
-    std::vector<std::uint8_t> votes(std::size_t(n.prod()), 0);
+    const double vote_bytes = double(n.x()) * n.y() * n.z();
+    if (vote_bytes > 4294967296.0) {
+      std::ostringstream os;
+      os << "mesh voxelization: the mesh is not closed (" << r.boundary_edges << " boundary edges, " << r.nonmanifold_edges
+         << " non-manifold edges) and the ray vote at this resolution would need " << vote_bytes / 1073741824.0
+         << " GiB; close the mesh or use a coarser resolution";
+      throw InputError(os.str());
+    }
+    std::vector<std::uint8_t> votes(std::size_t(vote_bytes), 0);
     auto index = [&](const Eigen::Vector3i& p) {
       return (std::size_t(p.z() - lo.z()) * std::size_t(n.y()) + std::size_t(p.y() - lo.y())) * std::size_t(n.x()) +
              std::size_t(p.x() - lo.x());
