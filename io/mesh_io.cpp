@@ -21,14 +21,16 @@ std::string extension(const std::string& path) {
 PolygonMesh read_mesh(const std::string& path) {
   const std::string ext = extension(path);
   if (ext == "obj") return read_obj(path);
-  throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' (supported: .obj)");
+  if (ext == "ply") return read_ply(path);
+  if (ext == "off") return read_off(path);
+  throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' (supported: .obj, .ply, .off)");
 }
 
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshAttributes& attributes) {
   const std::string ext = extension(path);
-  (void)attributes;
-  if (ext == "obj") return write_obj(path, mesh);
-  throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' for writing (supported: .obj)");
+  if (ext == "obj") return write_obj(path, mesh);  // OBJ has no place for attributes
+  if (ext == "ply") return write_ply(path, mesh, attributes);
+  throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' for writing (supported: .obj, .ply)");
 }
 
 }  // namespace corrlap

@@ -57,6 +57,19 @@ std::vector<double> read_rows(const std::string& path, int cols, const char* wha
   if (values.empty()) throw IoError(std::string(what) + " file '" + path + "': no data (empty file)");
   return values;
 }
+
+// Exactly three whitespace-separated numbers (trailing '\r' allowed), nothing else on the line.
+template <class A, class B, class C>
+bool parse_numbers(const std::string& line, A& a, B& b, C& c) {
+  std::istringstream ls(line);
+  std::string t[3], extra;
+  if (!(ls >> t[0] >> t[1] >> t[2]) || (ls >> extra)) return false;
+  auto one = [](const std::string& s, auto& v) {
+    auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return ec == std::errc() && p == s.data() + s.size();
+  };
+  return one(t[0], a) && one(t[1], b) && one(t[2], c);
+}
 }  // namespace
 
 Eigen::MatrixX3d read_normals(const std::string& path) {
@@ -104,15 +117,18 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
   while (std::getline(in, line) && (line.empty() || line[0] == '%')) {
   }
   long long r = 0, c = 0, nnz = 0;
-  if (std::sscanf(line.c_str(), "%lld %lld %lld", &r, &c, &nnz) != 3 || r <= 0 || c <= 0 || nnz < 0 ||
-      r > (1LL << 31) || c > (1LL << 31) || nnz > (1LL << 34))
-    throw IoError("Matrix Market file '" + path + "': malformed size line '" + line + "'");
+  if (!parse_numbers(line, r, c, nnz) || r <= 0 || c <= 0 || nnz < 0)
+    throw IoError("Matrix Market file '" + path + "': malformed size line '" + line.substr(0, 80) + "'");
+  // 2^27 rows/columns is far beyond any surface this tool handles; larger is a corrupt file (the
+  // column pointer array alone would take gigabytes).
+  if (r > (1LL << 27) || c > (1LL << 27) || nnz > (1LL << 34) || double(nnz) > double(r) * double(c))
+    throw IoError("Matrix Market file '" + path + "': absurd size line '" + line.substr(0, 80) + "'");
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(std::size_t(std::min<long long>(nnz, 1LL << 26)));
   for (long long k = 0; k < nnz; ++k) {
     long long i = 0, j = 0;
     double v = 0;
-    if (!std::getline(in, line) || std::sscanf(line.c_str(), "%lld %lld %lf", &i, &j, &v) != 3)
+    if (!std::getline(in, line) || !parse_numbers(line, i, j, v))
       throw IoError("Matrix Market file '" + path + "': truncated or malformed entry " + std::to_string(k + 1));
     if (i < 1 || i > r || j < 1 || j > c || !std::isfinite(v))
       throw IoError("Matrix Market file '" + path + "': entry " + std::to_string(k + 1) + " out of range or not finite");

@@ -4,10 +4,15 @@
 #include <cctype>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
 #include <corrlap/core/error.hpp>
+
+#ifdef CORRLAP_HAVE_ZLIB
+#include <zlib.h>
+#endif
 
 namespace corrlap {
 
@@ -34,8 +39,25 @@ void check_size(const std::string& path, const Eigen::Vector3i& s) {
   if (double(s.x()) * s.y() * s.z() > kMaxVoxels) fail(path, "dimensions are absurdly large");
 }
 
+// Bytes left in the stream (without consuming them).
+std::size_t bytes_left(std::istream& in) {
+  const auto here = in.tellg();
+  if (here < 0) return 0;
+  in.seekg(0, std::ios::end);
+  const auto end = in.tellg();
+  in.seekg(here);
+  return end > here ? std::size_t(end - here) : 0;
+}
+
 void read_payload(std::istream& in, const std::string& path, Volume& v) {
   const std::size_t n = std::size_t(v.size.x()) * std::size_t(v.size.y()) * std::size_t(v.size.z());
+  // Checked before allocating, so that a corrupt header cannot make us allocate gigabytes.
+  if (const std::size_t left = bytes_left(in); left < n) {
+    std::ostringstream os;
+    os << "truncated data: dimensions " << v.size.x() << "x" << v.size.y() << "x" << v.size.z() << " need " << n
+       << " bytes, the file holds " << left;
+    fail(path, os.str());
+  }
   v.values.resize(n);
   in.read(reinterpret_cast<char*>(v.values.data()), std::streamsize(n));
   if (std::size_t(in.gcount()) != n) {
@@ -113,13 +135,175 @@ void write_raw(const std::string& path, const Volume& v) {
   if (!out) fail(path, "write error");
 }
 
+// ---- NRRD (http://teem.sourceforge.net/nrrd/format.html) ----
+// Attached header "NRRD000N", "field: value" lines, a blank line, then the data. We read 3D uint8
+// volumes (type uint8/uchar/unsigned char/uint8_t, or int8 kept only if non-negative) with raw,
+// ascii/text or gzip encoding (gzip when built with zlib); anything else is a clear error.
+std::string trim(std::string s) {
+  s.erase(0, s.find_first_not_of(" \t"));
+  const auto e = s.find_last_not_of(" \t\r");
+  s.erase(e == std::string::npos ? 0 : e + 1);
+  return s;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+#ifdef CORRLAP_HAVE_ZLIB
+void gunzip_payload(const std::string& path, const std::string& compressed, Volume& v) {
+  const std::size_t n = v.values.size();
+  z_stream zs{};
+  // 15 + 32: accept gzip and zlib headers (NRRD "gzip" files are gzip streams).
+  if (inflateInit2(&zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data()));
+  zs.avail_in = uInt(std::min<std::size_t>(compressed.size(), std::numeric_limits<uInt>::max()));
+  std::size_t produced = 0;
+  int rc = Z_OK;
+  unsigned char overflow[1];
+  while (rc == Z_OK) {
+    if (produced < n) {
+      zs.next_out = v.values.data() + produced;
+      zs.avail_out = uInt(std::min<std::size_t>(n - produced, std::numeric_limits<uInt>::max()));
+    } else {
+      zs.next_out = overflow;  // probe: more data than the sizes announce?
+      zs.avail_out = 1;
+    }
+    const std::size_t before = zs.avail_out;
+    rc = inflate(&zs, Z_NO_FLUSH);
+    const std::size_t got = before - zs.avail_out;
+    if (produced >= n && got > 0) {
+      inflateEnd(&zs);
+      fail(path, "gzip data holds more bytes than the sizes announce");
+    }
+    produced += got;
+    if (rc == Z_BUF_ERROR && zs.avail_in == 0) break;
+    if (rc == Z_BUF_ERROR) rc = Z_OK;
+  }
+  const bool ok = rc == Z_STREAM_END;
+  const std::string msg = zs.msg ? zs.msg : "";
+  inflateEnd(&zs);
+  if (!ok && rc != Z_BUF_ERROR) fail(path, "corrupt gzip data" + (msg.empty() ? std::string() : ": " + msg));
+  if (produced != n) {
+    std::ostringstream os;
+    os << "truncated gzip data: expected " << n << " bytes, got " << produced;
+    fail(path, os.str());
+  }
+}
+#endif
+
+Volume read_nrrd(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, "cannot open");
+  std::string line;
+  if (!std::getline(in, line)) fail(path, "empty file");
+  if (line.rfind("NRRD000", 0) != 0) fail(path, "not a NRRD file (missing NRRD000x magic)");
+  std::map<std::string, std::string> fields;
+  bool ended = false;
+  int lines = 0;
+  while (std::getline(in, line)) {
+    if (++lines > 1024) fail(path, "header too long");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) {
+      ended = true;
+      break;
+    }
+    if (line[0] == '#') continue;
+    if (line.find(":=") != std::string::npos) continue;  // key/value pairs: free-form metadata
+    const auto colon = line.find(": ");
+    if (colon == std::string::npos) fail(path, "malformed header line '" + line.substr(0, 60) + "'");
+    fields[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 2));
+  }
+  auto field = [&](const char* key) -> std::string {
+    auto it = fields.find(key);
+    if (it == fields.end()) fail(path, std::string("header has no '") + key + "' field");
+    return it->second;
+  };
+  if (fields.count("data file") || fields.count("datafile"))
+    fail(path, "detached data ('data file' field) is not supported; use an attached-header .nrrd");
+  const std::string type = lower(field("type"));
+  const bool u8 = type == "uint8" || type == "uchar" || type == "unsigned char" || type == "uint8_t";
+  const bool s8 = type == "int8" || type == "signed char" || type == "int8_t";
+  if (!u8 && !s8) fail(path, "unsupported type '" + type + "' (supported: uint8/uchar, int8)");
+  const std::string dim = field("dimension");
+  if (dim != "3") fail(path, "dimension must be 3, got '" + dim + "'");
+  Eigen::Vector3i s;
+  {
+    std::istringstream ss(field("sizes"));
+    long long d[3];
+    std::string extra;
+    if (!(ss >> d[0] >> d[1] >> d[2]) || (ss >> extra)) fail(path, "malformed 'sizes' field (expected three integers)");
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] <= 0 || d[a] > 1000000) fail(path, "invalid size " + std::to_string(d[a]) + " on axis " + std::to_string(a));
+      s[a] = int(d[a]);
+    }
+  }
+  check_size(path, s);
+  if (auto it = fields.find("endian"); it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
+    fail(path, "invalid endian '" + it->second + "' (little or big)");  // irrelevant for 1-byte types
+  const std::string encoding = lower(field("encoding"));
+  if (!ended) fail(path, "header not terminated by a blank line (truncated file?)");
+  Volume v;
+  v.size = s;
+  if (encoding == "raw") {
+    read_payload(in, path, v);
+    if (in.peek() != std::char_traits<char>::eof()) fail(path, "file is larger than the announced sizes");
+  } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
+    const std::size_t n = std::size_t(s.prod());
+    if (bytes_left(in) < 2 * n - 1) fail(path, "truncated ascii data: fewer characters than " + std::to_string(n) + " values need");
+    v.values.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      long long x = 0;
+      if (!(in >> x)) fail(path, "truncated or malformed ascii data at value " + std::to_string(i));
+      if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255)) fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
+      v.values[i] = std::uint8_t(x);
+    }
+    std::string extra;
+    if (in >> extra) fail(path, "more ascii values than the announced sizes");
+  } else if (encoding == "gzip" || encoding == "gz") {
+#ifdef CORRLAP_HAVE_ZLIB
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    v.values.resize(std::size_t(s.prod()));
+    gunzip_payload(path, ss.str(), v);
+#else
+    fail(path, "encoding 'gzip' needs corrlap built with zlib (zlib1g-dev); re-save with encoding raw");
+#endif
+  } else {
+    fail(path, "unsupported encoding '" + encoding + "' (supported: raw, ascii, gzip)");
+  }
+  if (s8)
+    for (std::uint8_t& x : v.values)
+      if (x > 127) fail(path, "negative int8 values are not supported (grey levels must be 0..127 for int8)");
+  return v;
+}
+
+void write_nrrd(const std::string& path, const Volume& v) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) fail(path, "cannot open for writing");
+  out << "NRRD0004\n# written by corrlap\ntype: uint8\ndimension: 3\nsizes: " << v.size.x() << " " << v.size.y() << " "
+      << v.size.z() << "\nencoding: raw\nendian: little\n\n";
+  out.write(reinterpret_cast<const char*>(v.values.data()), std::streamsize(v.values.size()));
+  if (!out) fail(path, "write error");
+}
+
 }  // namespace
+
+bool nrrd_gzip_supported() {
+#ifdef CORRLAP_HAVE_ZLIB
+  return true;
+#else
+  return false;
+#endif
+}
 
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   const std::string ext = extension_of(path);
   if (ext == "vol") return read_vol(path);
   if (ext == "raw") return read_raw(path, options);
-  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .raw)");
+  if (ext == "nrrd") return read_nrrd(path);
+  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .raw, .nrrd)");
 }
 
 void write_volume(const std::string& path, const Volume& volume) {
@@ -127,7 +311,8 @@ void write_volume(const std::string& path, const Volume& volume) {
   if (volume.values.size() != std::size_t(volume.size.prod())) fail(path, "volume data does not match its size");
   if (ext == "vol") return write_vol(path, volume);
   if (ext == "raw") return write_raw(path, volume);
-  fail(path, "unsupported extension '" + ext + "' for writing (supported: .vol, .raw)");
+  if (ext == "nrrd") return write_nrrd(path, volume);
+  fail(path, "unsupported extension '" + ext + "' for writing (supported: .vol, .raw, .nrrd)");
 }
 
 VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {

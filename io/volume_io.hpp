@@ -1,6 +1,7 @@
 #pragma once
 // Grey-level volumes (uint8 voxels) and their conversion to voxel sets by a threshold.
-// Formats: DGtal .vol (read/write), raw uint8 with given dimensions (.raw), NRRD (.nrrd).
+// Formats: DGtal .vol (read/write), raw uint8 with given dimensions (.raw), NRRD (.nrrd: 3D uint8
+// with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
@@ -29,8 +30,10 @@ struct VolumeReadOptions {
 /// Reads by extension. Throws IoError naming the file and the problem (missing header field,
 /// truncated data, absurd dimensions...).
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
-/// Writes by extension (.vol, .raw, .nrrd).
+/// Writes by extension (.vol, .raw, .nrrd). NRRD is written as uint8, raw encoding.
 void write_volume(const std::string& path, const Volume& volume);
+/// True when corrlap was built with zlib: NRRD files with "encoding: gzip" can be read.
+bool nrrd_gzip_supported();
 
 /// Voxels with value > threshold; the box is [0, size-1] padded by one empty voxel on every side
 /// so that the surface is closed. Throws InputError for an empty or full volume.

@@ -1,8 +1,10 @@
 #include "surface_source.hpp"
 
+#include <iostream>
 #include <sstream>
 
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_voxelization.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
@@ -15,11 +17,16 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   auto* s = g->add_option("--shape", shape, "named implicit shape (sphere1, torus, goursat, ...)");
   auto* p = g->add_option("--polynomial", polynomial, "implicit shape P(x,y,z) <= 0, e.g. \"x^2+y^2+z^2-1\"");
   auto* v = g->add_option("--volume", volume, "volume file (.vol, .nrrd, .raw) digitized by --threshold");
+  auto* mf = g->add_option("--mesh-file", mesh_file,
+                           "closed triangle mesh (.obj, .ply, .off) voxelized at --resolution N or grid step --h");
   CLI::Option* m = nullptr;
   if (with_mesh) m = g->add_option("--mesh", mesh, "quad mesh of surfels (.obj), vertex/face order kept");
   g->require_option(1);
-  (void)s; (void)p; (void)v; (void)m;
-  cmd.add_option("--h", h, "grid step (shapes: world units per voxel; volumes: voxel size)")->check(CLI::PositiveNumber);
+  (void)s; (void)p; (void)v; (void)m; (void)mf;
+  h_option = cmd.add_option("--h", h, "grid step (shapes: world units per voxel; volumes: voxel size; mesh files: "
+                                      "voxel size in mesh units)")->check(CLI::PositiveNumber);
+  cmd.add_option("--resolution", resolution, "mesh files: longest bounding-box side = N voxels")
+      ->check(CLI::PositiveNumber);
   cmd.add_option("--center", center, "shape centre X Y Z")->expected(3);
   cmd.add_option("--bbox", bbox, "digitization box MIN MAX (reference default -10 10)")->expected(2);
   cmd.add_option("--offset", offset, "extra voxels around the box (reference default 5)")->check(CLI::NonNegativeNumber);
@@ -47,6 +54,7 @@ DigitizationParams SurfaceSource::digitization() const {
 }
 
 VoxelGrid SurfaceSource::voxels() const {
+  if (resolution > 0 && mesh_file.empty()) throw InputError("--resolution applies to --mesh-file only");
   if (auto s = implicit_shape()) return digitize(*s, digitization());
   if (!volume.empty()) {
     VolumeReadOptions opt;
@@ -55,7 +63,22 @@ VoxelGrid SurfaceSource::voxels() const {
     if (raw_dimensions.size() == 3) opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
     return read_volume_as_voxels(volume, opt);
   }
-  throw InputError("no voxel source: give --shape, --polynomial or --volume");
+  if (!mesh_file.empty()) {
+    const bool h_given = h_option && h_option->count() > 0;
+    if (resolution > 0 && h_given) throw InputError("--mesh-file: give either --resolution or --h, not both");
+    if (resolution <= 0 && !h_given) throw InputError("--mesh-file needs --resolution N (voxels along the longest side) or --h STEP");
+    MeshVoxelizationParams params;
+    params.resolution = resolution;
+    params.h = h;
+    MeshVoxelizationReport report;
+    VoxelGrid grid = voxelize_mesh(read_mesh(mesh_file), params, &report);
+    for (const std::string& w : report.warnings()) std::cerr << "warning: " << mesh_file << ": " << w << "\n";
+    std::cerr << "voxelized " << mesh_file << ": " << report.triangles << " triangles, h = " << report.h << ", grid "
+              << report.grid_size.x() << "x" << report.grid_size.y() << "x" << report.grid_size.z() << ", "
+              << report.inside_voxels << " voxels inside\n";
+    return grid;
+  }
+  throw InputError("no voxel source: give --shape, --polynomial, --volume or --mesh-file");
 }
 
 SurfelMesh SurfaceSource::surface() const {
@@ -68,6 +91,7 @@ std::string SurfaceSource::describe() const {
   if (!shape.empty()) os << shape << ", h=" << h;
   else if (!polynomial.empty()) os << "\"" << polynomial << "\", h=" << h;
   else if (!volume.empty()) os << volume << ", threshold " << threshold;
+  else if (!mesh_file.empty()) os << mesh_file << (resolution > 0 ? ", resolution " + std::to_string(resolution) : ", h=" + std::to_string(h));
   else os << mesh;
   return os.str();
 }

@@ -1,6 +1,6 @@
 #pragma once
-// Shared CLI options that produce a digital surface: --shape/--polynomial/--volume/--mesh,
-// --h, --center, --bbox, --offset.
+// Shared CLI options that produce a digital surface: --shape/--polynomial/--volume/--mesh-file/--mesh,
+// --h, --center, --bbox, --offset, --threshold, --raw-dimensions, --resolution.
 #include <CLI/CLI.hpp>
 
 #include <optional>
@@ -15,6 +15,8 @@ namespace corrlap::cli {
 
 struct SurfaceSource {
   std::string shape, polynomial, volume, mesh;
+  std::string mesh_file;                ///< closed triangle/polygon mesh voxelized (.obj, .ply, .off)
+  int resolution = 0;                   ///< mesh files: longest bbox side = resolution voxels
   double h = 1.0;
   std::vector<double> center = {0.0, 0.0, 0.0};
   std::vector<double> bbox = {-10.0, 10.0};
@@ -22,6 +24,7 @@ struct SurfaceSource {
   double threshold = 0.0;               ///< volumes: voxels with value > threshold are inside
   std::vector<int> raw_dimensions;      ///< raw volumes: NX NY NZ
   bool allow_mesh = true;
+  CLI::Option* h_option = nullptr;      ///< to know whether --h was given explicitly
 
   /// Adds the options to a subcommand.
   void add_options(CLI::App& cmd, bool with_mesh = true);
@@ -29,7 +32,8 @@ struct SurfaceSource {
   /// The implicit shape when --shape/--polynomial is used.
   std::optional<ImplicitShape> implicit_shape() const;
   DigitizationParams digitization() const;
-  /// Builds the voxel grid (shapes, volumes); throws InputError when none was given.
+  /// Builds the voxel grid (shapes, volumes, mesh files); throws InputError when none was given.
+  /// Mesh-file warnings (holes, non-manifold edges, self-intersections) go to stderr.
   VoxelGrid voxels() const;
   /// Builds the surface mesh from whichever source was given.
   SurfelMesh surface() const;

@@ -1,0 +1,413 @@
+// Stanford PLY reader (ASCII, binary little-endian) and binary little-endian writer.
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include <corrlap/core/error.hpp>
+
+#include "mesh_io.hpp"
+
+namespace corrlap {
+
+// Binary payloads are copied with memcpy: the host must be little-endian like the files we write.
+static_assert(std::endian::native == std::endian::little, "PLY binary I/O assumes a little-endian host");
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw IoError("PLY file '" + path + "': " + what);
+}
+
+// More elements than this is certainly a corrupt header (ids are stored as int).
+constexpr std::uint64_t kMaxCount = std::uint64_t{1} << 31;
+
+enum class Kind { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+
+struct TypeInfo {
+  const char* names[2];
+  Kind kind;
+  int bytes;
+};
+constexpr TypeInfo kTypes[] = {
+    {{"char", "int8"}, Kind::Int8, 1},       {{"uchar", "uint8"}, Kind::UInt8, 1},
+    {{"short", "int16"}, Kind::Int16, 2},    {{"ushort", "uint16"}, Kind::UInt16, 2},
+    {{"int", "int32"}, Kind::Int32, 4},      {{"uint", "uint32"}, Kind::UInt32, 4},
+    {{"float", "float32"}, Kind::Float32, 4}, {{"double", "float64"}, Kind::Float64, 8},
+};
+
+const TypeInfo* find_type(const std::string& name) {
+  for (const auto& t : kTypes)
+    if (name == t.names[0] || name == t.names[1]) return &t;
+  return nullptr;
+}
+
+bool is_integer(Kind k) { return k != Kind::Float32 && k != Kind::Float64; }
+
+struct Property {
+  std::string name;
+  const TypeInfo* type = nullptr;        // value type (item type for lists)
+  const TypeInfo* count_type = nullptr;  // non-null for lists
+};
+
+struct Element {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<Property> properties;
+};
+
+// Sequential reader of the body, ASCII (tokens) or binary (bytes), with bounds checks.
+class BodyReader {
+ public:
+  BodyReader(const std::string& path, const std::string& data, std::size_t pos, bool binary, std::size_t header_lines)
+      : path_(path), data_(data), pos_(pos), binary_(binary), line_(header_lines + 1) {}
+
+  double read(const TypeInfo& t, const char* context) {
+    return binary_ ? read_binary(t, context) : read_ascii(t, context);
+  }
+  std::size_t remaining() const { return data_.size() - pos_; }
+  bool binary() const { return binary_; }
+  std::string where() const {
+    if (binary_) return "byte " + std::to_string(pos_);
+    return "line " + std::to_string(line_);
+  }
+  bool only_whitespace_left() {
+    if (binary_) return pos_ == data_.size();
+    skip_space();
+    return pos_ == data_.size();
+  }
+
+ private:
+  void skip_space() {
+    while (pos_ < data_.size() && std::isspace(static_cast<unsigned char>(data_[pos_]))) {
+      if (data_[pos_] == '\n') ++line_;
+      ++pos_;
+    }
+  }
+  double read_ascii(const TypeInfo& t, const char* context) {
+    skip_space();
+    if (pos_ == data_.size()) fail(path_, std::string("truncated data: end of file while reading ") + context);
+    const char* b = data_.data() + pos_;
+    std::size_t e = pos_;
+    while (e < data_.size() && !std::isspace(static_cast<unsigned char>(data_[e]))) ++e;
+    const char* end = data_.data() + e;
+    double v = 0;
+    auto [ptr, ec] = std::from_chars(b, end, v);
+    if (ec != std::errc() || ptr != end)
+      fail(path_, "line " + std::to_string(line_) + ": malformed number '" + std::string(b, std::min<std::size_t>(end - b, 40)) +
+                      "' in " + context);
+    if (is_integer(t.kind) && v != std::floor(v))
+      fail(path_, "line " + std::to_string(line_) + ": non-integer value '" + std::string(b, end) + "' for an integer property in " + context);
+    pos_ = e;
+    return v;
+  }
+  double read_binary(const TypeInfo& t, const char* context) {
+    if (remaining() < std::size_t(t.bytes))
+      fail(path_, std::string("truncated binary data: end of file while reading ") + context);
+    const char* p = data_.data() + pos_;
+    pos_ += std::size_t(t.bytes);
+    switch (t.kind) {
+      case Kind::Int8: { std::int8_t v; std::memcpy(&v, p, 1); return v; }
+      case Kind::UInt8: { std::uint8_t v; std::memcpy(&v, p, 1); return v; }
+      case Kind::Int16: { std::int16_t v; std::memcpy(&v, p, 2); return v; }
+      case Kind::UInt16: { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
+      case Kind::Int32: { std::int32_t v; std::memcpy(&v, p, 4); return v; }
+      case Kind::UInt32: { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
+      case Kind::Float32: { float v; std::memcpy(&v, p, 4); return v; }
+      case Kind::Float64: { double v; std::memcpy(&v, p, 8); return v; }
+    }
+    return 0;
+  }
+
+  const std::string& path_;
+  const std::string& data_;
+  std::size_t pos_;
+  bool binary_;
+  std::size_t line_;
+};
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, "cannot open");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) fail(path, "read error");
+  return ss.str();
+}
+
+bool is_identifier(const std::string& s) {
+  if (s.empty()) return false;
+  for (unsigned char c : s)
+    if (!(std::isalnum(c) || c == '_' || c == '-' || c == '.')) return false;
+  return true;
+}
+
+}  // namespace
+
+PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
+  const std::string data = read_file(path);
+  if (data.empty()) fail(path, "empty file");
+  // ---- header ----
+  std::size_t pos = 0, lineno = 0;
+  auto next_line = [&](std::string& line) {
+    if (pos >= data.size()) return false;
+    std::size_t e = data.find('\n', pos);
+    if (e == std::string::npos) e = data.size();
+    line = data.substr(pos, e - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = std::min(data.size(), e + 1);
+    ++lineno;
+    return true;
+  };
+  std::string line;
+  if (!next_line(line) || line != "ply") fail(path, "not a PLY file (first line must be 'ply')");
+  bool binary = false, have_format = false, ended = false;
+  std::vector<Element> elements;
+  while (next_line(line)) {
+    if (lineno > 100000) fail(path, "header too long (missing end_header?)");
+    std::istringstream ls(line);
+    std::string kw;
+    if (!(ls >> kw)) continue;
+    const std::string at = "header line " + std::to_string(lineno) + ": ";
+    if (kw == "end_header") {
+      ended = true;
+      break;
+    }
+    if (kw == "comment" || kw == "obj_info") continue;
+    if (kw == "format") {
+      std::string fmt, version;
+      ls >> fmt >> version;
+      if (fmt == "ascii") binary = false;
+      else if (fmt == "binary_little_endian") binary = true;
+      else if (fmt == "binary_big_endian") fail(path, at + "unsupported format binary_big_endian (supported: ascii, binary_little_endian)");
+      else fail(path, at + "unknown format '" + fmt + "'");
+      if (version != "1.0") fail(path, at + "unsupported PLY version '" + version + "'");
+      have_format = true;
+    } else if (kw == "element") {
+      Element e;
+      std::string count;
+      if (!(ls >> e.name >> count)) fail(path, at + "malformed element line '" + line + "'");
+      std::uint64_t c = 0;
+      auto [p, ec] = std::from_chars(count.data(), count.data() + count.size(), c);
+      if (ec == std::errc::result_out_of_range || (ec == std::errc() && c > kMaxCount))
+        fail(path, at + "absurd element count " + count + " for '" + e.name + "'");
+      if (ec != std::errc() || p != count.data() + count.size())
+        fail(path, at + "malformed element count '" + count + "'");
+      e.count = c;
+      elements.push_back(std::move(e));
+    } else if (kw == "property") {
+      if (elements.empty()) fail(path, at + "property before any element");
+      Property prop;
+      std::string type;
+      ls >> type;
+      if (type == "list") {
+        std::string ct, it;
+        ls >> ct >> it >> prop.name;
+        prop.count_type = find_type(ct);
+        prop.type = find_type(it);
+        if (!prop.count_type || !prop.type || !is_integer(prop.count_type->kind))
+          fail(path, at + "malformed list property '" + line + "'");
+      } else {
+        ls >> prop.name;
+        prop.type = find_type(type);
+        if (!prop.type) fail(path, at + "unknown property type '" + type + "'");
+      }
+      if (prop.name.empty()) fail(path, at + "property without a name");
+      elements.back().properties.push_back(prop);
+    } else {
+      fail(path, at + "unknown header keyword '" + kw.substr(0, 40) + "'");
+    }
+  }
+  if (!ended) fail(path, "header not terminated by end_header (truncated file?)");
+  if (!have_format) fail(path, "header has no format line");
+
+  // ---- locate what we need ----
+  const Element* vertex_el = nullptr;
+  const Element* face_el = nullptr;
+  for (const auto& e : elements) {
+    if (e.name == "vertex") vertex_el = &e;
+    if (e.name == "face") face_el = &e;
+  }
+  if (!vertex_el) fail(path, "no 'vertex' element");
+  if (!face_el) fail(path, "no 'face' element (point clouds are not meshes)");
+  if (vertex_el->count == 0) fail(path, "no vertex");
+  if (face_el->count == 0) fail(path, "no face");
+  int xyz[3] = {-1, -1, -1};
+  for (std::size_t p = 0; p < vertex_el->properties.size(); ++p) {
+    const auto& pr = vertex_el->properties[p];
+    for (int a = 0; a < 3; ++a)
+      if (pr.name == std::string(1, char('x' + a)) && !pr.count_type) xyz[a] = int(p);
+  }
+  for (int a = 0; a < 3; ++a)
+    if (xyz[a] < 0) fail(path, std::string("vertex element has no scalar property '") + char('x' + a) + "'");
+  int face_list = -1;
+  for (std::size_t p = 0; p < face_el->properties.size(); ++p) {
+    const auto& pr = face_el->properties[p];
+    if (pr.count_type && (pr.name == "vertex_indices" || pr.name == "vertex_index")) face_list = int(p);
+  }
+  if (face_list < 0) fail(path, "face element has no list property 'vertex_indices' or 'vertex_index'");
+
+  BodyReader body(path, data, pos, binary, lineno);
+  // Reject absurd counts before allocating: every element needs at least this many bytes (binary)
+  // or characters (ASCII: one digit and one separator per value).
+  {
+    double needed = 0;
+    for (const auto& e : elements) {
+      double per = 0;
+      for (const auto& pr : e.properties) per += binary ? (pr.count_type ? pr.count_type->bytes : pr.type->bytes) : 2;
+      needed += per * double(e.count);
+    }
+    if (!binary) needed -= 1;  // N ASCII values need at least 2N - 1 characters
+    if (needed > double(body.remaining()))
+      fail(path, "truncated data: the header announces " + std::to_string(vertex_el->count) + " vertices and " +
+                     std::to_string(face_el->count) + " faces, more than the file holds");
+  }
+
+  PolygonMesh mesh;
+  const Eigen::Index nv = Eigen::Index(vertex_el->count);
+  mesh.positions.resize(nv, 3);
+  std::vector<Eigen::VectorXd> vprops(vertex_el->properties.size()), fprops(face_el->properties.size());
+  for (auto& v : vprops) v.resize(nv);
+  for (auto& v : fprops) v.resize(Eigen::Index(face_el->count));
+  mesh.faces.reserve(std::size_t(face_el->count));
+
+  for (const auto& e : elements) {
+    const bool is_v = &e == vertex_el, is_f = &e == face_el;
+    const std::string ctx_base = "element '" + e.name + "' #";
+    for (std::uint64_t i = 0; i < e.count; ++i) {
+      for (std::size_t p = 0; p < e.properties.size(); ++p) {
+        const Property& pr = e.properties[p];
+        if (!pr.count_type) {
+          const double v = body.read(*pr.type, e.name.c_str());
+          if (is_v) {
+            if (!std::isfinite(v)) fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + pr.name + "'");
+            vprops[p][Eigen::Index(i)] = v;
+          } else if (is_f) {
+            fprops[p][Eigen::Index(i)] = v;
+          }
+          continue;
+        }
+        const double cnt = body.read(*pr.count_type, e.name.c_str());
+        if (cnt < 0 || cnt > double(body.remaining()))
+          fail(path, ctx_base + std::to_string(i) + ": invalid list length " + std::to_string((long long)cnt) + " (" + body.where() + ")");
+        const std::size_t n = std::size_t(cnt);
+        if (is_f && int(p) == face_list) {
+          if (n < 3) fail(path, "face " + std::to_string(i) + " has " + std::to_string(n) + " corners (at least 3 needed)");
+          std::vector<int> ids(n);
+          for (std::size_t k = 0; k < n; ++k) {
+            const double id = body.read(*pr.type, "face");
+            if (!(id >= 0 && id < double(nv)) || id != std::floor(id))
+              fail(path, "face " + std::to_string(i) + ": vertex index " + std::to_string((long long)id) + " out of range (" +
+                             std::to_string(nv) + " vertices)");
+            ids[k] = int(id);
+          }
+          mesh.faces.push_back(std::move(ids));
+        } else {
+          for (std::size_t k = 0; k < n; ++k) body.read(*pr.type, e.name.c_str());
+        }
+      }
+    }
+  }
+  if (!body.only_whitespace_left() && binary)
+    fail(path, "trailing data after the last element (" + std::to_string(body.remaining()) + " bytes): header counts do not match the data");
+  if (!body.only_whitespace_left()) fail(path, "trailing data after the last element (" + body.where() + "): header counts do not match the data");
+
+  for (int a = 0; a < 3; ++a) mesh.positions.col(a) = vprops[std::size_t(xyz[a])];
+  if (attributes) {
+    *attributes = MeshAttributes{};
+    auto collect = [](const Element& e, const std::vector<Eigen::VectorXd>& props, std::map<std::string, Eigen::VectorXd>& scalars,
+                      Eigen::MatrixX3d& normals, bool is_vertex) {
+      int n[3] = {-1, -1, -1};
+      for (std::size_t p = 0; p < e.properties.size(); ++p) {
+        const auto& pr = e.properties[p];
+        if (pr.count_type) continue;
+        if (pr.name == "nx") n[0] = int(p);
+        else if (pr.name == "ny") n[1] = int(p);
+        else if (pr.name == "nz") n[2] = int(p);
+        else if (!(is_vertex && (pr.name == "x" || pr.name == "y" || pr.name == "z"))) scalars[pr.name] = props[p];
+      }
+      if (n[0] >= 0 && n[1] >= 0 && n[2] >= 0) {
+        normals.resize(Eigen::Index(e.count), 3);
+        for (int a = 0; a < 3; ++a) normals.col(a) = props[std::size_t(n[a])];
+      } else {
+        for (int a = 0; a < 3; ++a)
+          if (n[a] >= 0) scalars[e.properties[std::size_t(n[a])].name] = props[std::size_t(n[a])];
+      }
+    };
+    collect(*vertex_el, vprops, attributes->vertex_scalars, attributes->vertex_normals, true);
+    collect(*face_el, fprops, attributes->face_scalars, attributes->face_normals, false);
+  }
+  return mesh;
+}
+
+void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttributes& a) {
+  const Eigen::Index nv = mesh.positions.rows();
+  const Eigen::Index nf = Eigen::Index(mesh.faces.size());
+  auto check_rows = [&](Eigen::Index rows, Eigen::Index expected, const std::string& what) {
+    if (rows != expected)
+      fail(path, what + " has " + std::to_string(rows) + " rows, expected " + std::to_string(expected));
+  };
+  if (a.vertex_normals.rows() != 0) check_rows(a.vertex_normals.rows(), nv, "vertex normals");
+  if (a.face_normals.rows() != 0) check_rows(a.face_normals.rows(), nf, "face normals");
+  auto check_scalars = [&](const std::map<std::string, Eigen::VectorXd>& s, Eigen::Index expected, const char* kind) {
+    for (const auto& [name, v] : s) {
+      if (!is_identifier(name) || name == "x" || name == "y" || name == "z" || name == "nx" || name == "ny" || name == "nz" ||
+          name == "vertex_indices" || name == "vertex_index")
+        fail(path, std::string(kind) + " scalar name '" + name + "' is not a valid, unreserved PLY property name");
+      check_rows(v.size(), expected, std::string(kind) + " scalar '" + name + "'");
+    }
+  };
+  check_scalars(a.vertex_scalars, nv, "vertex");
+  check_scalars(a.face_scalars, nf, "face");
+  std::size_t max_degree = 0;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    max_degree = std::max(max_degree, mesh.faces[f].size());
+    for (int id : mesh.faces[f])
+      if (id < 0 || id >= nv) fail(path, "face " + std::to_string(f) + " refers to vertex " + std::to_string(id) + " (out of range)");
+  }
+  const bool wide = max_degree > 255;
+
+  std::ostringstream h;
+  h << "ply\nformat binary_little_endian 1.0\ncomment written by corrlap\n";
+  h << "element vertex " << nv << "\nproperty double x\nproperty double y\nproperty double z\n";
+  if (a.vertex_normals.rows()) h << "property double nx\nproperty double ny\nproperty double nz\n";
+  for (const auto& [name, v] : a.vertex_scalars) h << "property double " << name << "\n";
+  h << "element face " << nf << "\nproperty list " << (wide ? "uint" : "uchar") << " int vertex_indices\n";
+  if (a.face_normals.rows()) h << "property double nx\nproperty double ny\nproperty double nz\n";
+  for (const auto& [name, v] : a.face_scalars) h << "property double " << name << "\n";
+  h << "end_header\n";
+
+  std::string out = h.str();
+  auto put = [&out](const auto& value) { out.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    for (int c = 0; c < 3; ++c) put(double(mesh.positions(v, c)));
+    if (a.vertex_normals.rows())
+      for (int c = 0; c < 3; ++c) put(double(a.vertex_normals(v, c)));
+    for (const auto& [name, s] : a.vertex_scalars) put(double(s[v]));
+  }
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const auto& face = mesh.faces[std::size_t(f)];
+    if (wide) put(std::uint32_t(face.size()));
+    else put(std::uint8_t(face.size()));
+    for (int id : face) put(std::int32_t(id));
+    if (a.face_normals.rows())
+      for (int c = 0; c < 3; ++c) put(double(a.face_normals(f, c)));
+    for (const auto& [name, s] : a.face_scalars) put(double(s[f]));
+  }
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (!file) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  if (std::fwrite(out.data(), 1, out.size(), file.get()) != out.size()) fail(path, "write error");
+  if (std::fflush(file.get()) != 0) fail(path, "write error");
+}
+
+}  // namespace corrlap

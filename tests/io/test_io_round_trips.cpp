@@ -1,0 +1,257 @@
+// Write-then-read round trips of every format, bit-exact, and parsing of hand-written files.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/error.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/text_io.hpp>
+#include <corrlap/io/volume_io.hpp>
+
+#include "test_support.hpp"
+
+using namespace corrlap;
+using corrlap::test::tmp_path;
+using corrlap::test::write_text;
+
+namespace {
+// A mesh with mixed face degrees and coordinates that need all 17 digits.
+PolygonMesh odd_mesh() {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-3, 3);
+  PolygonMesh m;
+  m.positions.resize(7, 3);
+  for (Eigen::Index i = 0; i < m.positions.size(); ++i) m.positions.data()[i] = u(rng) / 3.0;
+  m.positions(0, 0) = 1e-300;
+  m.positions(1, 1) = -123456789.123456789;
+  m.faces = {{0, 1, 2}, {1, 2, 3, 4}, {2, 3, 4, 5, 6}, {6, 5, 0}};
+  return m;
+}
+
+void check_same(const PolygonMesh& a, const PolygonMesh& b) {
+  REQUIRE(a.positions.rows() == b.positions.rows());
+  CHECK((a.positions.array() == b.positions.array()).all());
+  CHECK(a.faces == b.faces);
+}
+
+Volume random_volume(Eigen::Vector3i size, unsigned seed) {
+  std::mt19937 rng(seed);
+  Volume v;
+  v.size = size;
+  v.values.resize(std::size_t(size.prod()));
+  for (auto& x : v.values) x = std::uint8_t(rng() & 0xff);
+  v.values[0] = 0;
+  v.values[1] = 255;
+  v.values[2] = '\n';  // a newline byte in the payload must not confuse header parsing
+  return v;
+}
+}  // namespace
+
+TEST_CASE("OBJ round trip is exact (17 significant digits)") {
+  const PolygonMesh m = odd_mesh();
+  const std::string p = tmp_path("rt.obj");
+  write_mesh(p, m);
+  check_same(read_mesh(p), m);
+}
+
+TEST_CASE("binary PLY round trip is exact, attributes included") {
+  const PolygonMesh m = odd_mesh();
+  MeshAttributes a;
+  a.vertex_normals = Eigen::MatrixX3d::Random(7, 3);
+  a.face_normals = Eigen::MatrixX3d::Random(4, 3);
+  a.vertex_scalars["u"] = Eigen::VectorXd::LinSpaced(7, -1, 1) / 3.0;
+  a.vertex_scalars["curvature.mean"] = Eigen::VectorXd::Random(7);
+  a.face_scalars["area"] = Eigen::VectorXd::Random(4);
+  const std::string p = tmp_path("rt.ply");
+  write_mesh(p, m, a);
+  MeshAttributes b;
+  check_same(read_ply(p, &b), m);
+  CHECK(b.vertex_normals == a.vertex_normals);
+  CHECK(b.face_normals == a.face_normals);
+  CHECK(b.vertex_scalars.size() == 2);
+  CHECK(b.vertex_scalars.at("u") == a.vertex_scalars.at("u"));
+  CHECK(b.vertex_scalars.at("curvature.mean") == a.vertex_scalars.at("curvature.mean"));
+  CHECK(b.face_scalars.at("area") == a.face_scalars.at("area"));
+  CHECK(b.face_scalars.size() == 1);
+  // read_mesh dispatches .ply
+  check_same(read_mesh(p), m);
+}
+
+TEST_CASE("PLY writer rejects attributes of the wrong size or with invalid names") {
+  const PolygonMesh m = odd_mesh();
+  const std::string p = tmp_path("bad_attr.ply");
+  MeshAttributes a;
+  a.vertex_scalars["u"] = Eigen::VectorXd::Zero(6);
+  CHECK_THROWS_WITH_AS(write_ply(p, m, a), doctest::Contains("vertex scalar 'u' has 6 rows, expected 7"), IoError);
+  MeshAttributes b;
+  b.face_scalars["two words"] = Eigen::VectorXd::Zero(4);
+  CHECK_THROWS_WITH_AS(write_ply(p, m, b), doctest::Contains("not a valid"), IoError);
+  MeshAttributes c;
+  c.face_normals = Eigen::MatrixX3d::Zero(3, 3);
+  CHECK_THROWS_WITH_AS(write_ply(p, m, c), doctest::Contains("face normals has 3 rows, expected 4"), IoError);
+}
+
+TEST_CASE("PLY faces of more than 255 corners use a wide count type") {
+  PolygonMesh m;
+  const int n = 300;
+  m.positions.resize(n, 3);
+  for (int i = 0; i < n; ++i) m.positions.row(i) << std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), 0;
+  m.faces.resize(1);
+  for (int i = 0; i < n; ++i) m.faces[0].push_back(i);
+  const std::string p = tmp_path("wide.ply");
+  write_ply(p, m);
+  check_same(read_ply(p), m);
+}
+
+TEST_CASE("ASCII PLY with other types, extra elements and vertex_index is read") {
+  const std::string p = tmp_path("ascii.ply");
+  write_text(p,
+             "ply\r\nformat ascii 1.0\ncomment hi\nelement vertex 4\nproperty float x\nproperty float y\n"
+             "property float z\nproperty uchar red\nelement face 2\nproperty list uchar uint vertex_index\n"
+             "property int flags\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n"
+             "0 0 0 255\n1 0 0 0\n0 1 0 1\n0.5 0.5 1 2\n3 0 1 2 7\n4 0 1 3 2 8\n0 1\n");
+  MeshAttributes a;
+  const PolygonMesh m = read_ply(p, &a);
+  REQUIRE(m.positions.rows() == 4);
+  CHECK(m.positions(3, 0) == 0.5);
+  CHECK(m.positions(3, 2) == 1.0);
+  CHECK(m.faces == std::vector<std::vector<int>>{{0, 1, 2}, {0, 1, 3, 2}});
+  CHECK(a.vertex_scalars.at("red") == Eigen::Vector4d(255, 0, 1, 2));
+  CHECK(a.face_scalars.at("flags") == Eigen::Vector2d(7, 8));
+}
+
+TEST_CASE("smallest ASCII PLY without a final newline is read") {
+  const std::string p = tmp_path("ascii_min.ply");
+  write_text(p, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
+  CHECK(read_ply(p).faces == std::vector<std::vector<int>>{{0, 1, 2}});
+}
+
+TEST_CASE("OFF files are read (comments, counts on the header line, colours ignored)") {
+  const std::string p = tmp_path("tet.off");
+  write_text(p, "OFF # a tetrahedron\n# comment\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1 0.5 0.5 0.5 1\n"
+                "3 0 2 1\n3 0 1 3\n3 1 2 3 255 0 0\n3 0 3 2\n");
+  const PolygonMesh m = read_mesh(p);
+  CHECK(m.positions.rows() == 4);
+  CHECK(m.positions(3, 2) == 1.0);
+  CHECK(m.faces == std::vector<std::vector<int>>{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
+  const std::string q = tmp_path("tet2.off");
+  write_text(q, "COFF 4 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n");
+  CHECK(read_off(q).faces.size() == 1);
+}
+
+TEST_CASE("volume round trips are exact for .vol, .raw and .nrrd") {
+  const Volume v = random_volume({5, 3, 4}, 3);
+  for (const char* ext : {"vol", "raw", "nrrd"}) {
+    CAPTURE(ext);
+    const std::string p = tmp_path(std::string("rt.") + ext);
+    write_volume(p, v);
+    VolumeReadOptions o;
+    o.raw_dimensions = v.size;
+    const Volume w = read_volume(p, o);
+    CHECK(w.size == v.size);
+    CHECK(w.values == v.values);
+  }
+}
+
+TEST_CASE("NRRD: ascii encoding, aliases of uint8, comments and key/value pairs") {
+  const std::string p = tmp_path("ascii.nrrd");
+  write_text(p, "NRRD0005\n# comment\ntype: unsigned char\ndimension: 3\nsizes: 2 2 1\nspacings: 1 1 1\n"
+                "endian: big\nkey:=value: with colon\nencoding: ascii\n\n0 10\n200 255\n");
+  const Volume v = read_volume(p);
+  CHECK(v.size == Eigen::Vector3i(2, 2, 1));
+  CHECK(v.values == std::vector<std::uint8_t>{0, 10, 200, 255});
+}
+
+TEST_CASE("NRRD gzip encoding is read when built with zlib, else a clear error") {
+  const Volume v = random_volume({6, 5, 4}, 11);
+  const std::string raw = tmp_path("payload.bin");
+  {
+    std::ofstream out(raw, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(v.values.data()), std::streamsize(v.values.size()));
+  }
+  const std::string gz = tmp_path("payload.bin.gz");
+  if (std::system(("gzip -c " + raw + " > " + gz).c_str()) != 0) {
+    MESSAGE("gzip command not available: gzip NRRD test skipped");
+    return;
+  }
+  const std::string p = tmp_path("gz.nrrd");
+  write_text(p, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 4\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
+  if (nrrd_gzip_supported()) {
+    const Volume w = read_volume(p);
+    CHECK(w.values == v.values);
+    // Announcing more voxels than the stream holds is a truncation error.
+    write_text(p, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 5\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
+    CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("truncated gzip data"), IoError);
+    write_text(p, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 3\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
+    CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("more bytes than the sizes"), IoError);
+  } else {
+    CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("gzip"), IoError);
+  }
+}
+
+TEST_CASE("threshold turns grey levels into voxels (strictly above)") {
+  Volume v;
+  v.size = {3, 2, 2};
+  v.values = {0, 50, 100, 150, 200, 250, 10, 20, 30, 40, 100, 101};
+  const VoxelGrid g = threshold_volume(v, 100, 0.5);
+  CHECK(g.count() == 4);  // 150 200 250 101; the two values equal to 100 are outside
+  CHECK(g.get(0, 1, 0));   // 150
+  CHECK(g.get(2, 1, 1));
+  CHECK_FALSE(g.get(2, 0, 0));
+  CHECK(g.h() == 0.5);
+  const Volume back = voxels_to_volume(g);
+  CHECK(back.size == Eigen::Vector3i(5, 4, 4));  // padded by one voxel on every side
+}
+
+TEST_CASE("normals, scalars and Matrix Market round trips are exact") {
+  const Eigen::MatrixX3d n = Eigen::MatrixX3d::Random(9, 3) / 7.0;
+  const std::string pn = tmp_path("rt_normals.txt");
+  write_normals(pn, n);
+  CHECK(read_normals(pn) == n);
+  const Eigen::VectorXd s = Eigen::VectorXd::Random(5) * 1e-20;
+  const std::string ps = tmp_path("rt_scalars.txt");
+  write_scalars(ps, s);
+  CHECK(read_scalars(ps) == s);
+  Eigen::SparseMatrix<double> A(4, 6);
+  A.insert(0, 0) = 1.0 / 3.0;
+  A.insert(3, 5) = -2e-300;
+  A.insert(2, 1) = M_PI;
+  A.makeCompressed();
+  const std::string pm = tmp_path("rt.mtx");
+  write_matrix_market(pm, A);
+  const Eigen::SparseMatrix<double> B = read_matrix_market(pm);
+  CHECK(B.rows() == 4);
+  CHECK(B.cols() == 6);
+  CHECK(Eigen::MatrixXd(B) == Eigen::MatrixXd(A));
+}
+
+TEST_CASE("CLI digitizes every volume format with --threshold") {
+  // A 6x6x6 grey ball: values decrease with the distance to the centre.
+  Volume v;
+  v.size = {7, 7, 7};
+  v.values.resize(343);
+  for (int z = 0; z < 7; ++z)
+    for (int y = 0; y < 7; ++y)
+      for (int x = 0; x < 7; ++x) {
+        const double d = std::sqrt(double((x - 3) * (x - 3) + (y - 3) * (y - 3) + (z - 3) * (z - 3)));
+        v.values[std::size_t((z * 7 + y) * 7 + x)] = std::uint8_t(std::max(0.0, 250.0 - 80.0 * d));
+      }
+  // threshold 100: d < 1.875 -> the centre, its 6 + 12 + 8 neighbours at d = 1, 1.41, 1.73: 27 voxels = a 3^3 cube
+  int expected_vertices = -1;
+  for (const char* ext : {"vol", "raw", "nrrd"}) {
+    CAPTURE(ext);
+    const std::string p = tmp_path(std::string("ball.") + ext), out = tmp_path(std::string("ball_") + ext + ".obj");
+    write_volume(p, v);
+    std::string err;
+    const std::string extra = std::string(ext) == "raw" ? " --raw-dimensions 7 7 7" : "";
+    REQUIRE(corrlap::test::run_cli("digitize --volume " + p + " --threshold 100" + extra + " --out " + out, nullptr, &err) == 0);
+    const PolygonMesh m = read_mesh(out);
+    CHECK(m.faces.size() == 54);      // 6 sides of a 3x3x3 cube, 9 surfels each
+    CHECK(m.positions.rows() == 56);  // 6*16 - 12*4 + 8 pointels of the cube surface
+    if (expected_vertices < 0) expected_vertices = int(m.positions.rows());
+    CHECK(int(m.positions.rows()) == expected_vertices);
+  }
+}
