@@ -1,29 +1,56 @@
 // Digitization + surface extraction throughput (surfels/s) on sphere1, box -1.5..1.5.
 // Goal (issue 2): h = 0.0025 (~3M surfels) under 2 s on 2 cores.
+//
+//   ./build/bench/bench_digitization                       # all benchmarks
+//   ./build/bench/bench_digitization --benchmark_filter=BM_digitize_and_extract
+//   ./build/bench/bench_digitization --phases              # per-phase breakdown table only
+//
+// BM_digitize_and_extract is the goal metric (digitize + extract_surface, exact DGtal numbering).
+// BM_digitize, BM_extract and BM_build_edges time the single steps; the phase counters of
+// BM_extract (ms) split extract_surface into its internal phases.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+
 #include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 #include "support.hpp"
 
 using namespace corrlap;
 
-static void BM_digitize_and_extract(benchmark::State& state) {
-  const double h = 1.0 / double(state.range(0));
+namespace {
+DigitizationParams sphere_params(double h) {
   DigitizationParams p;
   p.h = h;
   p.min_aabb = -1.5;
   p.max_aabb = 1.5;
-  const ImplicitShape sphere = make_implicit_shape("sphere1");
+  return p;
+}
+const ImplicitShape& sphere() {
+  static const ImplicitShape s = make_implicit_shape("sphere1");
+  return s;
+}
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+static void BM_digitize_and_extract(benchmark::State& state) {
+  const DigitizationParams p = sphere_params(1.0 / double(state.range(0)));
   bench::reset_peak_rss();
   std::size_t surfels = 0;
   for (auto _ : state) {
-    const SurfelMesh m = extract_surface(digitize(sphere, p));
+    const SurfelMesh m = extract_surface(digitize(sphere(), p));
     surfels = std::size_t(m.num_faces());
     benchmark::DoNotOptimize(m.positions.data());
   }
-  state.counters["h"] = h;
+  state.counters["h"] = p.h;
   state.counters["surfels"] = double(surfels);
   state.counters["surfels_per_s"] = benchmark::Counter(double(surfels), benchmark::Counter::kIsIterationInvariantRate);
   state.counters["peak_rss_MiB"] = bench::peak_rss_mib();
@@ -31,4 +58,67 @@ static void BM_digitize_and_extract(benchmark::State& state) {
 // h = 1/50, 1/100, 1/200, 1/400
 BENCHMARK(BM_digitize_and_extract)->Arg(50)->Arg(100)->Arg(200)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-BENCHMARK_MAIN();
+static void BM_digitize(benchmark::State& state) {
+  const DigitizationParams p = sphere_params(1.0 / double(state.range(0)));
+  for (auto _ : state) {
+    const VoxelGrid g = digitize(sphere(), p);
+    benchmark::DoNotOptimize(g.row(g.lower().y(), g.lower().z()));
+  }
+}
+BENCHMARK(BM_digitize)->Arg(100)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+static void BM_extract(benchmark::State& state) {
+  const VoxelGrid g = digitize(sphere(), sphere_params(1.0 / double(state.range(0))));
+  std::map<std::string, double> total;
+  for (auto _ : state) {
+    PhaseTimings t;
+    const SurfelMesh m = extract_surface(g, &t);
+    benchmark::DoNotOptimize(m.positions.data());
+    for (const auto& [name, s] : t.phases) total[name] += s;
+  }
+  for (const auto& [name, s] : total)
+    state.counters[name + "_ms"] = benchmark::Counter(1e3 * s / double(state.iterations()));
+}
+BENCHMARK(BM_extract)->Arg(100)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+static void BM_build_edges(benchmark::State& state) {
+  const SurfelMesh m = extract_surface(digitize(sphere(), sphere_params(1.0 / double(state.range(0)))));
+  for (auto _ : state) {
+    const EdgeTopology t = build_edges(m);
+    benchmark::DoNotOptimize(t.edges.data());
+  }
+  state.counters["faces"] = double(m.num_faces());
+}
+BENCHMARK(BM_build_edges)->Arg(100)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// --phases: one run per h, phases in execution order, plus build_edges and peak memory.
+static int print_phases() {
+  std::printf("%-8s %-20s %10s\n", "h", "phase", "ms");
+  for (int inv : {50, 100, 200, 400}) {
+    const DigitizationParams p = sphere_params(1.0 / inv);
+    auto t0 = std::chrono::steady_clock::now();
+    const VoxelGrid g = digitize(sphere(), p);
+    std::printf("%-8g %-20s %10.1f\n", p.h, "digitize", 1e3 * seconds_since(t0));
+    PhaseTimings t;
+    t0 = std::chrono::steady_clock::now();
+    const SurfelMesh m = extract_surface(g, &t);
+    const double extract = seconds_since(t0);
+    for (const auto& [name, s] : t.phases) std::printf("%-8g   %-18s %10.1f\n", p.h, name.c_str(), 1e3 * s);
+    std::printf("%-8g %-20s %10.1f\n", p.h, "extract_surface", 1e3 * extract);
+    t0 = std::chrono::steady_clock::now();
+    const EdgeTopology e = build_edges(m);
+    std::printf("%-8g %-20s %10.1f   (%d faces, %d edges, peak %.0f MiB)\n", p.h, "build_edges",
+                1e3 * seconds_since(t0), m.num_faces(), e.num_edges(), bench::peak_rss_mib());
+  }
+  return 0;
+}
+
+int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--phases") == 0) return print_phases();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -3,6 +3,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "voxel_grid.hpp"
@@ -52,5 +54,13 @@ struct SurfelMesh {
 /// faces sorted by (positive, kc_x, kc_y, kc_z), vertices numbered in order of first appearance.
 /// Surfels exist only between two voxels of the box. Throws InputError if there is no surfel.
 SurfelMesh extract_surface(const VoxelGrid& grid);
+
+/// Wall-clock seconds spent in each phase of extract_surface, in order (for benchmarks).
+struct PhaseTimings {
+  std::vector<std::pair<std::string, double>> phases;
+  void add(std::string name, double seconds) { phases.emplace_back(std::move(name), seconds); }
+};
+/// extract_surface recording its phase times into `timings` (may be null).
+SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings);
 
 }  // namespace corrlap
