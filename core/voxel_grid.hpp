@@ -1,10 +1,16 @@
 #pragma once
 // Dense bit storage of a box of voxels (spec §0, §1.2).
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
 namespace corrlap {
+
+/// Asks the kernel to back the 2 MiB-aligned interior of [data, data + bytes) with transparent
+/// huge pages (madvise MADV_HUGEPAGE; no-op elsewhere or for small buffers). Call before the first
+/// write: first-touch page faults dominate the cost of filling buffers of hundreds of MB.
+void advise_huge_pages(void* data, std::size_t bytes);
 
 /// A box [lower, upper] (inclusive, on each axis) of digital points z in Z^3 with one bit per
 /// voxel ("inside"). Voxel z sits at world position h * z (spec §0).
