@@ -10,12 +10,16 @@
 // BM_extract (ms) split extract_surface into its internal phases.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <corrlap/core/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
@@ -99,35 +103,60 @@ static void BM_build_edges(benchmark::State& state) {
 }
 BENCHMARK(BM_build_edges)->Arg(100)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// --phases: one run per h, phases in execution order, plus build_edges and peak memory.
-static int print_phases() {
-  std::printf("%-8s %-20s %10s %10s\n", "h", "phase", "wall ms", "cpu ms");
+// --phases [REPS]: per h, every step and every phase of extract_surface in execution order, the
+// minimum over REPS runs (default 3) of wall and process CPU milliseconds, plus peak memory.
+static int print_phases(int reps) {
+  std::printf("%-8s %-20s %10s %10s   (min of %d runs)\n", "h", "phase", "wall ms", "cpu ms", reps);
   for (int inv : {50, 100, 200, 400}) {
     const DigitizationParams p = sphere_params(1.0 / inv);
-    auto t0 = std::chrono::steady_clock::now();
-    double c0 = process_cpu_seconds();
-    const VoxelGrid g = digitize(sphere(), p);
-    std::printf("%-8g %-20s %10.1f %10.1f\n", p.h, "digitize", 1e3 * seconds_since(t0), 1e3 * (process_cpu_seconds() - c0));
-    PhaseTimings t;
-    t0 = std::chrono::steady_clock::now();
-    c0 = process_cpu_seconds();
-    const SurfelMesh m = extract_surface(g, &t);
-    const double extract = seconds_since(t0), extract_cpu = process_cpu_seconds() - c0;
-    for (const auto& [name, s] : t.phases) std::printf("%-8g   %-18s %10.1f\n", p.h, name.c_str(), 1e3 * s);
-    std::printf("%-8g %-20s %10.1f %10.1f\n", p.h, "extract_surface", 1e3 * extract, 1e3 * extract_cpu);
-    t0 = std::chrono::steady_clock::now();
-    c0 = process_cpu_seconds();
-    const EdgeTopology e = build_edges(m);
-    std::printf("%-8g %-20s %10.1f %10.1f   (%d faces, %d edges, peak %.0f MiB)\n", p.h, "build_edges",
-                1e3 * seconds_since(t0), 1e3 * (process_cpu_seconds() - c0), m.num_faces(), e.num_edges(),
-                bench::peak_rss_mib());
+    std::vector<std::pair<std::string, std::pair<double, double>>> rows;  // name -> (wall, cpu)
+    auto record = [&](std::size_t& slot, const std::string& name, double wall, double cpu) {
+      if (slot == rows.size()) rows.push_back({name, {wall, cpu}});
+      auto& r = rows[slot++].second;
+      r.first = std::min(r.first, wall);
+      r.second = std::min(r.second, cpu);
+    };
+    int faces = 0, edges = 0;
+    for (int rep = 0; rep < reps; ++rep) {
+      std::size_t slot = 0;
+      auto t0 = std::chrono::steady_clock::now();
+      double c0 = process_cpu_seconds();
+      const auto total0 = t0;
+      const double total_c0 = c0;
+      auto step = [&](const std::string& name) {
+        record(slot, name, 1e3 * seconds_since(t0), 1e3 * (process_cpu_seconds() - c0));
+        t0 = std::chrono::steady_clock::now();
+        c0 = process_cpu_seconds();
+      };
+      const VoxelGrid g = digitize(sphere(), p);
+      step("digitize");
+      PhaseTimings t;
+      const SurfelMesh m = extract_surface(g, &t);
+      const double wall_extract = 1e3 * seconds_since(t0);
+      for (const auto& [name, sec] : t.phases) record(slot, "  " + name, 1e3 * sec, -1);
+      record(slot, "extract_surface", wall_extract, 1e3 * (process_cpu_seconds() - c0));
+      record(slot, "= digitize+extract", 1e3 * seconds_since(total0), 1e3 * (process_cpu_seconds() - total_c0));
+      t0 = std::chrono::steady_clock::now();
+      c0 = process_cpu_seconds();
+      const EdgeTopology e = build_edges(m);
+      step("build_edges");
+      faces = m.num_faces();
+      edges = e.num_edges();
+    }
+    for (const auto& [name, wc] : rows) {
+      if (wc.second < 0)
+        std::printf("%-8g %-20s %10.1f\n", p.h, name.c_str(), wc.first);
+      else
+        std::printf("%-8g %-20s %10.1f %10.1f\n", p.h, name.c_str(), wc.first, wc.second);
+    }
+    std::printf("%-8g %d faces, %d edges, peak RSS so far %.0f MiB\n", p.h, faces, edges, bench::peak_rss_mib());
   }
   return 0;
 }
 
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "--phases") == 0) return print_phases();
+    if (std::strcmp(argv[i], "--phases") == 0) return print_phases(i + 1 < argc ? std::max(1, std::atoi(argv[i + 1])) : 3);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -108,7 +108,37 @@ inline std::uint64_t surfel_key(std::uint64_t positive, std::uint64_t kx, std::u
 // Why this order: among surfels with equal (positive, kc_x) it is exactly ascending (kc_y, kc_z)
 // (axis-2 surfels of row y have kc_y = 2y+1, axis-1 surfels kc_y = 2y+2, axis-0 surfels have their
 // own even kc_x), so a stable bucket sort by (positive, kc_x) yields the face order of spec §1.4.
-void scan_rows(const VoxelGrid& g, int y0, int y1, std::vector<std::uint64_t>& out) {
+// Row (y, z) of the grid: all voxels outside, all inside, or mixed. Two equal uniform rows have
+// no surfel between them, and a uniform row has none inside it: the scan skips them.
+enum RowState : std::uint8_t { kEmptyRow = 0, kFullRow = 1, kMixedRow = 2 };
+
+std::vector<std::uint8_t> row_states(const VoxelGrid& g) {
+  const Eigen::Vector3i lo = g.lower(), n = g.size();
+  const std::size_t W = g.words_per_row();
+  const int rem = n.x() % 64;
+  const std::uint64_t last_mask = rem == 0 ? ~std::uint64_t{0} : (std::uint64_t{1} << rem) - 1;
+  std::vector<std::uint8_t> state(std::size_t(n.y()) * std::size_t(n.z()));
+  tbb::parallel_for(0, n.z(), [&](int lz) {
+    for (int ly = 0; ly < n.y(); ++ly) {
+      const std::uint64_t* r = g.row(lo.y() + ly, lo.z() + lz);
+      std::uint64_t any = 0, all = ~std::uint64_t{0};
+      for (std::size_t w = 0; w + 1 < W; ++w) {
+        any |= r[w];
+        all &= r[w];
+      }
+      const std::uint64_t last = r[W - 1] & last_mask;
+      any |= last;
+      all &= last | ~last_mask;
+      state[std::size_t(lz) * std::size_t(n.y()) + std::size_t(ly)] =
+          any == 0 ? kEmptyRow : (all == ~std::uint64_t{0} ? kFullRow : kMixedRow);
+    }
+  });
+  return state;
+}
+
+void scan_rows(const VoxelGrid& g, const std::vector<std::uint8_t>& state, int y0, int y1,
+               std::vector<std::uint64_t>& out) {
+  auto st = [&](int ly, int lz) { return state[std::size_t(lz) * std::size_t(g.size().y()) + std::size_t(ly)]; };
   const Eigen::Vector3i lo = g.lower(), n = g.size();
   const std::size_t W = g.words_per_row();
   const int rem = n.x() % 64;
@@ -120,6 +150,8 @@ void scan_rows(const VoxelGrid& g, int y0, int y1, std::vector<std::uint64_t>& o
   for (int ly = y0; ly < y1; ++ly) {
     const int y = lo.y() + ly;
     for (int lz = 0; lz < n.z(); ++lz) {
+      const std::uint8_t here = st(ly, lz);
+      if (here != kMixedRow && (lz + 1 == n.z() || st(ly, lz + 1) == here)) continue;
       const std::uint64_t* r = g.row(y, lo.z() + lz);
       const std::uint64_t* s = lz + 1 < n.z() ? g.row(y, lo.z() + lz + 1) : nullptr;
       for (std::size_t w = 0; w < W; ++w) {
@@ -149,6 +181,8 @@ void scan_rows(const VoxelGrid& g, int y0, int y1, std::vector<std::uint64_t>& o
     }
     if (ly + 1 >= n.y()) continue;
     for (int lz = 0; lz < n.z(); ++lz) {
+      const std::uint8_t here = st(ly, lz);
+      if (here != kMixedRow && st(ly + 1, lz) == here) continue;
       const std::uint64_t* r = g.row(y, lo.z() + lz);
       const std::uint64_t* s = g.row(y + 1, lo.z() + lz);
       for (std::size_t w = 0; w < W; ++w) {
@@ -214,7 +248,10 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   const int chunks = std::min(n.y(), 64);
   std::vector<std::vector<std::uint64_t>> chunk_keys(std::size_t(chunks), std::vector<std::uint64_t>{});
   auto chunk_begin = [&](int c) { return int((std::int64_t(n.y()) * c) / chunks); };
-  tbb::parallel_for(0, chunks, [&](int c) { scan_rows(grid, chunk_begin(c), chunk_begin(c + 1), chunk_keys[std::size_t(c)]); });
+  const std::vector<std::uint8_t> states = row_states(grid);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    scan_rows(grid, states, chunk_begin(c), chunk_begin(c + 1), chunk_keys[std::size_t(c)]);
+  });
   std::size_t F = 0;
   for (const auto& v : chunk_keys) F += v.size();
   if (F == 0)
