@@ -8,6 +8,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <sstream>
 
 #include "error.hpp"
@@ -233,11 +234,20 @@ inline void corner_pointel(const DecodedFace& d, int c, int q[3]) {
 SurfelMesh extract_surface(const VoxelGrid& grid) { return extract_surface(grid, nullptr); }
 
 SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
+  auto cpu_now = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+  };
   auto t0 = std::chrono::steady_clock::now();
+  double c0 = timings ? cpu_now() : 0.0;
   auto lap = [&](const char* name) {
+    if (!timings) return;
     const auto t1 = std::chrono::steady_clock::now();
-    if (timings) timings->add(name, std::chrono::duration<double>(t1 - t0).count());
+    const double c1 = cpu_now();
+    timings->phases.push_back({name, std::chrono::duration<double>(t1 - t0).count(), c1 - c0});
     t0 = t1;
+    c0 = c1;
   };
   if (grid.empty_box()) throw InputError("surface extraction: the voxel grid has no voxels");
   const Eigen::Vector3i lo = grid.lower(), n = grid.size();
@@ -282,7 +292,10 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
     }
     bucket_start[NB] = run;
   }
-  std::vector<std::uint64_t> keys(F);
+  std::vector<std::uint64_t> keys;
+  keys.reserve(F);
+  advise_huge_pages(keys.data(), F * sizeof(std::uint64_t));
+  keys.resize(F);
   tbb::parallel_for(0, chunks, [&](int c) {
     std::uint32_t* off = counts.data() + std::size_t(c) * NB;
     for (std::uint64_t k : chunk_keys[std::size_t(c)]) keys[off[bucket(k)]++] = k;
@@ -293,8 +306,11 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
 
   SurfelMesh mesh;
   mesh.h = grid.h();
+  mesh.surfels.reserve(F);
+  advise_huge_pages(mesh.surfels.data(), F * sizeof(Surfel));
   mesh.surfels.resize(F);
   mesh.faces.resize(Eigen::Index(F), 4);
+  advise_huge_pages(mesh.faces.data(), 4 * F * sizeof(int));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t f = r.begin(); f != r.end(); ++f) {
       const DecodedFace d = decode(keys[f]);
@@ -314,7 +330,10 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   //    faces() temporarily holds each corner's first occurrence; is_new marks first occurrences.
   const std::size_t NYZ = std::size_t(n.y() + 1) * std::size_t(n.z() + 1);
   constexpr std::uint32_t kNone = ~std::uint32_t{0};
-  std::vector<std::uint8_t> is_new(4 * F, 0);
+  std::vector<std::uint8_t> is_new;
+  is_new.reserve(4 * F);
+  advise_huge_pages(is_new.data(), 4 * F);
+  is_new.assign(4 * F, 0);
   std::uint32_t* raw = reinterpret_cast<std::uint32_t*>(mesh.faces.data());
   tbb::enumerable_thread_specific<std::vector<std::uint32_t>> tables([&] { return std::vector<std::uint32_t>(NYZ, kNone); });
   tbb::enumerable_thread_specific<std::vector<std::uint32_t>> touched_lists;
@@ -357,6 +376,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   }
   const std::size_t V = base[F];
   mesh.positions.resize(Eigen::Index(V), 3);
+  advise_huge_pages(mesh.positions.data(), 3 * V * sizeof(double));
   const double h = grid.h();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t f = r.begin(); f != r.end(); ++f) {

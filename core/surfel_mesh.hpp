@@ -55,10 +55,16 @@ struct SurfelMesh {
 /// Surfels exist only between two voxels of the box. Throws InputError if there is no surfel.
 SurfelMesh extract_surface(const VoxelGrid& grid);
 
-/// Wall-clock seconds spent in each phase of extract_surface, in order (for benchmarks).
+/// Time spent in each phase of extract_surface, in order (for benchmarks): wall-clock seconds and
+/// CPU seconds of the whole process (all threads; on a shared machine the CPU time shows the work
+/// even when the wall-clock time is inflated by other processes).
 struct PhaseTimings {
-  std::vector<std::pair<std::string, double>> phases;
-  void add(std::string name, double seconds) { phases.emplace_back(std::move(name), seconds); }
+  struct Phase {
+    std::string name;
+    double wall_seconds = 0.0;
+    double cpu_seconds = 0.0;
+  };
+  std::vector<Phase> phases;
 };
 /// extract_surface recording its phase times into `timings` (may be null).
 SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings);
