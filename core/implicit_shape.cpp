@@ -238,6 +238,23 @@ struct DigitizeTile {
       for (int y = z0[1]; y <= z1[1]; ++y) grid.row(y, z)[w] |= mask;
   }
 
+  // DigitizationKernel::row_value at x = x0 .. x0+count-1 for degree D in x, operation by
+  // operation (sx = 0; px = 1; sx += a_i px; px *= x), so the values are bitwise identical.
+  template <int D>
+  void row_values(const double* a, int x0, int count, double* out) const {
+    const double cx = centred ? c.x() : 0.0;
+    for (int k = 0; k < count; ++k) {
+      double x = (x0 + k) * h;
+      if (centred) x = x - cx;
+      double sx = 0.0, px = 1.0;
+      for (int i = 0; i <= D; ++i) {
+        sx += a[i] * px;
+        px *= x;
+      }
+      out[k] = sx;
+    }
+  }
+
   void evaluate(const int z0[3], const int z1[3]) const {
     const int lx0 = z0[0] - grid.lower().x();
     const std::size_t w = std::size_t(lx0 >> 6);
@@ -257,13 +274,26 @@ struct DigitizeTile {
           pz = pz - c.z();
         }
         kernel.row_coefficients(py, pz, coef);
-        std::uint64_t bits = 0;
-        for (int x = z0[0]; x <= z1[0]; ++x) {
-          double px = x * h;
-          if (centred) px = px - c.x();
-          if (kernel.row_value(coef, px) <= 0.0) bits |= std::uint64_t{1} << ((x - grid.lower().x()) & 63);
+        double values[64];
+        const int count = z1[0] - z0[0] + 1;  // <= 64: a leaf lies in one word
+        switch (dx) {  // fixed degree: the loop over x vectorizes (lanes = voxels, same operations)
+          case 0: row_values<0>(coef, z0[0], count, values); break;
+          case 1: row_values<1>(coef, z0[0], count, values); break;
+          case 2: row_values<2>(coef, z0[0], count, values); break;
+          case 3: row_values<3>(coef, z0[0], count, values); break;
+          case 4: row_values<4>(coef, z0[0], count, values); break;
+          case 5: row_values<5>(coef, z0[0], count, values); break;
+          case 6: row_values<6>(coef, z0[0], count, values); break;
+          default:
+            for (int k = 0; k < count; ++k) {
+              double px = (z0[0] + k) * h;
+              if (centred) px = px - c.x();
+              values[k] = kernel.row_value(coef, px);
+            }
         }
-        grid.row(y, z)[w] |= bits;
+        std::uint64_t bits = 0;
+        for (int k = 0; k < count; ++k) bits |= std::uint64_t(values[k] <= 0.0) << k;
+        grid.row(y, z)[w] |= bits << (lx0 & 63);
       }
   }
 
