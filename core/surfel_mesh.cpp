@@ -266,7 +266,8 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   for (const auto& v : chunk_keys) F += v.size();
   if (F == 0)
     throw InputError("surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the box)");
-  if (F > (std::size_t{1} << 30)) throw InputError("surface extraction: more than 2^30 surfels");
+  // Corner occurrences 4 f + c must fit in 32 bits with one value left as the "none" marker.
+  if (F >= (std::size_t{1} << 30)) throw InputError("surface extraction: 2^30 or more surfels");
   lap("transitions");
 
   // 2. Face order (spec §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the

@@ -54,9 +54,9 @@ VoxelGrid::VoxelGrid(const Eigen::Vector3i& lower, const Eigen::Vector3i& upper,
   }
   words_per_row_ = (static_cast<std::size_t>(n.x()) + 63) / 64;
   const std::size_t words = words_per_row_ * static_cast<std::size_t>(n.y()) * static_cast<std::size_t>(n.z());
-  words_.reserve(words);
-  advise_huge_pages(words_.data(), words * sizeof(std::uint64_t));
-  words_.assign(words, 0);
+  // All zero without writing (see ZeroFilledAllocator): digitization then touches only the pages
+  // holding inside voxels.
+  words_.resize(words);
 }
 
 void VoxelGrid::set(int x, int y, int z, bool value) {
