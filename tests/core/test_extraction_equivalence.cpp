@@ -10,6 +10,7 @@
 
 #include <corrlap/core/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/threads.hpp>
 
 using namespace corrlap;
 
@@ -198,4 +199,27 @@ TEST_CASE("fast extraction equals the plain definition on random voxel sets (non
       check_edges(fast);
     }
   }
+}
+
+TEST_CASE("digitization, extraction and edges do not depend on the thread count") {
+  // The parallel work is split into fixed pieces (64^3 tiles, 64 row chunks, pointel slabs), so
+  // one thread and all threads must give identical meshes.
+  DigitizationParams p;
+  p.h = 0.25;
+  const ImplicitShape shape = make_implicit_shape("goursat", Eigen::Vector3d(0.05, -0.02, 0.07));
+  const int before = thread_count();
+  set_thread_count(1);
+  const SurfelMesh one = extract_surface(digitize(shape, p));
+  const EdgeTopology e1 = build_edges(one);
+  set_thread_count(0);
+  const SurfelMesh all = extract_surface(digitize(shape, p));
+  const EdgeTopology ea = build_edges(all);
+  set_thread_count(before);
+  REQUIRE(one.num_faces() == all.num_faces());
+  REQUIRE(one.num_vertices() == all.num_vertices());
+  CHECK(one.faces == all.faces);
+  CHECK(one.positions == all.positions);
+  CHECK(e1.edges == ea.edges);
+  CHECK(e1.face_edges == ea.face_edges);
+  CHECK(e1.faces_per_edge == ea.faces_per_edge);
 }
