@@ -1,50 +1,111 @@
 #include "mesh_topology.hpp"
 
-#include <tbb/parallel_sort.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <numeric>
+#include <sstream>
+
+#include "error.hpp"
 
 namespace corrlap {
 
 EdgeTopology build_edges(const SurfelMesh& mesh) {
+  // spec §0: undirected edges (min, max) numbered by lexicographic rank. Instead of sorting the 4F
+  // half-edges, bucket them by their smaller vertex (counting sort, stable in half-edge order),
+  // sort each short bucket by the larger vertex, and number edges by a prefix sum over buckets.
   const std::size_t F = std::size_t(mesh.num_faces());
-  // (min, max, half-edge id) sorted: edge ids are the ranks of distinct (min, max) pairs.
-  struct HalfEdge {
-    std::uint64_t key;
-    std::uint32_t id;
-    bool operator<(const HalfEdge& o) const { return key < o.key || (key == o.key && id < o.id); }
-  };
-  std::vector<HalfEdge> he(4 * F);
+  if (4 * F >= (std::size_t{1} << 32)) throw InputError("edges: too many faces");
+  int max_id = mesh.num_vertices() - 1;
   for (std::size_t f = 0; f < F; ++f)
     for (int i = 0; i < 4; ++i) {
-      const std::uint32_t a = std::uint32_t(mesh.faces(Eigen::Index(f), i));
-      const std::uint32_t b = std::uint32_t(mesh.faces(Eigen::Index(f), (i + 1) % 4));
-      he[4 * f + i] = {(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), std::uint32_t(4 * f + i)};
+      const int v = mesh.faces(Eigen::Index(f), i);
+      if (v < 0) {
+        std::ostringstream os;
+        os << "edges: face " << f << " has a negative vertex id " << v;
+        throw InputError(os.str());
+      }
+      max_id = std::max(max_id, v);
     }
-  tbb::parallel_sort(he.begin(), he.end());
+  const std::size_t V = std::size_t(max_id) + 1;
+  const int* fv = mesh.faces.data();  // row-major F x 4
+  std::vector<std::uint32_t> start(V + 1, 0);
+  for (std::size_t k = 0; k < 4 * F; ++k) {
+    const int a = fv[k], b = fv[(k & ~std::size_t{3}) + ((k + 1) & 3)];
+    ++start[std::size_t(std::min(a, b)) + 1];
+  }
+  for (std::size_t v = 0; v < V; ++v) start[v + 1] += start[v];
+  struct Slot {
+    std::uint32_t other;      // the larger vertex
+    std::uint32_t half_edge;  // 4 f + i
+  };
+  std::vector<Slot> slots;
+  slots.reserve(4 * F);
+  advise_huge_pages(slots.data(), 4 * F * sizeof(Slot));
+  slots.resize(4 * F);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < 4 * F; ++k) {
+      const int a = fv[k], b = fv[(k & ~std::size_t{3}) + ((k + 1) & 3)];
+      slots[fill[std::size_t(std::min(a, b))]++] = {std::uint32_t(std::max(a, b)), std::uint32_t(k)};
+    }
+  }
+  // Per bucket: stable insertion sort by the larger vertex (buckets hold a few entries), count
+  // distinct edges.
+  std::vector<std::uint32_t> edge_start(V + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, V, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      Slot* b = slots.data() + start[v];
+      const std::size_t m = start[v + 1] - start[v];
+      for (std::size_t x = 1; x < m; ++x) {
+        const Slot s = b[x];
+        std::size_t y = x;
+        while (y > 0 && b[y - 1].other > s.other) {
+          b[y] = b[y - 1];
+          --y;
+        }
+        b[y] = s;
+      }
+      std::uint32_t distinct = 0;
+      for (std::size_t x = 0; x < m; ++x)
+        if (x == 0 || b[x].other != b[x - 1].other) ++distinct;
+      edge_start[v + 1] = distinct;
+    }
+  });
+  for (std::size_t v = 0; v < V; ++v) edge_start[v + 1] += edge_start[v];
+  const std::size_t E = edge_start[V];
   EdgeTopology t;
   t.face_edges.resize(Eigen::Index(F), 4);
+  advise_huge_pages(t.face_edges.data(), 4 * F * sizeof(int));
   t.face_edge_signs.resize(Eigen::Index(F), 4);
-  std::vector<std::uint64_t> distinct;
-  distinct.reserve(2 * F + 8);
-  for (std::size_t k = 0; k < he.size(); ++k) {
-    if (k == 0 || he[k].key != he[k - 1].key) {
-      distinct.push_back(he[k].key);
-      t.faces_per_edge.push_back(0);
+  advise_huge_pages(t.face_edge_signs.data(), 4 * F);
+  t.edges.resize(Eigen::Index(E), 2);
+  advise_huge_pages(t.edges.data(), 2 * E * sizeof(int));
+  t.faces_per_edge.assign(E, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, V, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      const Slot* b = slots.data() + start[v];
+      const std::size_t m = start[v + 1] - start[v];
+      std::size_t e = std::size_t(edge_start[v]) - 1;
+      for (std::size_t x = 0; x < m; ++x) {
+        if (x == 0 || b[x].other != b[x - 1].other) {
+          ++e;
+          t.edges(Eigen::Index(e), 0) = int(v);
+          t.edges(Eigen::Index(e), 1) = int(b[x].other);
+        }
+        t.faces_per_edge[e] += 1;
+        const std::uint32_t k = b[x].half_edge;
+        t.face_edges(Eigen::Index(k / 4), Eigen::Index(k % 4)) = int(e);
+      }
     }
-    const int e = int(distinct.size() - 1);
-    t.faces_per_edge[std::size_t(e)] += 1;
-    const std::uint32_t f = he[k].id / 4, i = he[k].id % 4;
-    t.face_edges(f, i) = e;
-    t.face_edge_signs(f, i) =
-        mesh.faces(f, i) < mesh.faces(f, (i + 1) % 4) ? std::int8_t(1) : std::int8_t(-1);
-  }
-  t.edges.resize(Eigen::Index(distinct.size()), 2);
-  for (std::size_t e = 0; e < distinct.size(); ++e) {
-    t.edges(Eigen::Index(e), 0) = int(distinct[e] >> 32);
-    t.edges(Eigen::Index(e), 1) = int(distinct[e] & 0xffffffffu);
-  }
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f != r.end(); ++f)
+      for (int i = 0; i < 4; ++i)
+        t.face_edge_signs(Eigen::Index(f), i) =
+            fv[4 * f + std::size_t(i)] < fv[4 * f + std::size_t((i + 1) % 4)] ? std::int8_t(1) : std::int8_t(-1);
+  });
   return t;
 }
 

@@ -1,10 +1,48 @@
 #pragma once
 // Dense bit storage of a box of voxels (spec §0, §1.2).
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace corrlap {
+
+/// Asks the kernel to back the 2 MiB-aligned interior of [data, data + bytes) with transparent
+/// huge pages (madvise MADV_HUGEPAGE; no-op elsewhere or for small buffers). Call before the first
+/// write: first-touch page faults dominate the cost of filling buffers of hundreds of MB.
+void advise_huge_pages(void* data, std::size_t bytes);
+
+namespace detail {
+/// Allocator for large zero-filled bit buffers: calloc hands out fresh kernel pages that are
+/// already zero, and default construction writes nothing (calloc implicitly creates the trivial
+/// objects with value 0). Pages that stay all-zero (the outside of a shape) are then never
+/// written, so they cost neither a page clear nor memory. Copies construct values as usual.
+template <class T>
+struct ZeroFilledAllocator {
+  static_assert(std::is_trivial_v<T>);
+  using value_type = T;
+  ZeroFilledAllocator() = default;
+  template <class U>
+  ZeroFilledAllocator(const ZeroFilledAllocator<U>&) noexcept {}
+  T* allocate(std::size_t n) {
+    void* p = std::calloc(n == 0 ? 1 : n, sizeof(T));
+    if (!p) throw std::bad_alloc();
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, std::size_t) noexcept { std::free(p); }
+  template <class U>
+  void construct(U*) noexcept {}  // keep calloc's zeros
+  template <class U, class A0, class... A>
+  void construct(U* p, A0&& a0, A&&... a) {
+    ::new (static_cast<void*>(p)) U(std::forward<A0>(a0), std::forward<A>(a)...);
+  }
+  friend bool operator==(const ZeroFilledAllocator&, const ZeroFilledAllocator&) noexcept { return true; }
+};
+}  // namespace detail
 
 /// A box [lower, upper] (inclusive, on each axis) of digital points z in Z^3 with one bit per
 /// voxel ("inside"). Voxel z sits at world position h * z (spec §0).
@@ -52,7 +90,7 @@ class VoxelGrid {
   Eigen::Vector3i upper_ = -Eigen::Vector3i::Ones();
   double h_ = 1.0;
   std::size_t words_per_row_ = 0;
-  std::vector<std::uint64_t> words_;
+  std::vector<std::uint64_t, detail::ZeroFilledAllocator<std::uint64_t>> words_;
 };
 
 }  // namespace corrlap
