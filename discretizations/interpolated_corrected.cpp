@@ -1,0 +1,271 @@
+#include "interpolated_corrected.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include <corrlap/core/error.hpp>
+
+#include "normal_policy.hpp"
+
+namespace corrlap {
+
+Eigen::Matrix4d interpolated_local_mass(double h, const Eigen::Vector4d& uz) {
+  // 144 * int phi_g phi_l phi_k = a_s * a_t with a = 9 if the three share the parameter value
+  // (all 0 or all 1 along that axis), else 3 for... : the 1D integrals of three linear hat
+  // products are 1/4 (m = 0 or 3 factors s) and 1/12 (m = 1 or 2), hence 144 w in {9, 3, 1}.
+  static const int alpha[4] = {0, 1, 1, 0}, beta[4] = {0, 0, 1, 1};
+  auto w1 = [](int m) { return (m == 0 || m == 3) ? 3.0 : 1.0; };  // 12 * 1D integral
+  Eigen::Matrix4d M;
+  for (int g = 0; g < 4; ++g)
+    for (int l = g; l < 4; ++l) {
+      double s = 0.0;
+      for (int k = 0; k < 4; ++k)
+        s += w1(alpha[g] + alpha[l] + alpha[k]) * w1(beta[g] + beta[l] + beta[k]) * uz[k];
+      M(g, l) = M(l, g) = h * h * s / 144.0;
+    }
+  return M;
+}
+
+InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u, double lambda, double kappa) {
+  InterpolatedLocal r;
+  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/h, n = t1 x t2.
+  const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
+  const double h = e1.norm();
+  const Eigen::Vector3d t1 = e1 / h;
+  const Eigen::Vector3d t2 = (x.row(2) - x.row(1)).transpose().normalized();
+  const Eigen::Vector3d n = t1.cross(t2);
+  Eigen::Matrix3d R;
+  R.col(0) = t1;
+  R.col(1) = t2;
+  R.col(2) = n;
+  // Corner normals in frame components: ul(k, c) = u_k . (t1, t2, n)[c].
+  const Eigen::Matrix<double, 4, 3> ul = u * R;
+  // Edge-midpoint and face averages (spec §3.1).
+  Eigen::Matrix<double, 4, 3> ue;
+  for (int i = 0; i < 4; ++i) ue.row(i) = 0.5 * (ul.row(i) + ul.row((i + 1) % 4));
+  const Eigen::RowVector3d ub = 0.25 * (ul.row(0) + ul.row(1) + ul.row(2) + ul.row(3));
+  const double uz = ub.z();
+  r.area = h * h * uz;
+  r.ubar_z = uz;
+  r.mass = interpolated_local_mass(h, ul.col(2));
+  // spec §3.3 closed form of S.
+  r.S << uz, 0, -uz, 0,  //
+      0, uz, 0, -uz,     //
+      -ub.x(), -ub.y(), ub.x(), ub.y();
+  r.S /= 3.0;
+  Eigen::Matrix<double, 3, 4> S2;
+  S2 << ue(0, 2), 0, -ue(2, 2), 0,  //
+      0, ue(1, 2), 0, -ue(3, 2),     //
+      -ue(0, 0), -ue(1, 1), ue(2, 0), ue(3, 1);
+  r.S += S2 / 6.0;
+  r.sharp = R * r.S / (h * uz);
+  // spec §3.4 flat with correction factor kappa.
+  for (int i = 0; i < 4; ++i) {
+    const int b = (i + 1) % 4;
+    const Eigen::Vector3d ua = u.row(i).transpose(), ubv = u.row(b).transpose();
+    const Eigen::Vector3d d = (x.row(b) - x.row(i)).transpose();
+    const Eigen::Matrix3d Q = (2.0 * ua * ua.transpose() + ua * ubv.transpose() + ubv * ua.transpose() +
+                               2.0 * ubv * ubv.transpose()) / 6.0;
+    r.flat.row(i) = (d.transpose() * (Eigen::Matrix3d::Identity() - kappa * Q));
+  }
+  r.projection = Eigen::Matrix4d::Identity() - r.flat * r.sharp;
+  // spec §3.5: a_f U^T U = S^T S / ubar^z.
+  r.inner_product = r.S.transpose() * r.S / uz + lambda * r.projection.transpose() * r.projection;
+  const Eigen::Matrix4d& D = quad_difference();
+  r.laplacian = -D.transpose() * r.inner_product * D;
+  return r;
+}
+
+namespace {
+
+using RowMat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
+
+// Elements of the global-projection Laplacian (spec §3.6a): one per edge, on the union of the
+// vertices of the edge's faces (6 for an interior manifold edge), padded to a common size.
+struct EdgeElements {
+  int k = 0;                        // padded element size
+  std::vector<int> ids;             // #E x k vertex ids (padding repeats the first id)
+  std::vector<int> start;           // incidences of edge e: [start[e], start[e+1])
+  std::vector<int> inc_face;        // face of the incidence
+  std::vector<std::int8_t> inc_local;  // local edge index i in that face
+  std::vector<std::int8_t> inc_slot;   // 4 slots per incidence: element slot of corner j
+};
+
+EdgeElements build_edge_elements(const SurfelMesh& mesh, const EdgeTopology& t) {
+  EdgeElements el;
+  const int E = t.num_edges(), F = mesh.num_faces();
+  el.start.assign(std::size_t(E) + 1, 0);
+  for (int f = 0; f < F; ++f)
+    for (int i = 0; i < 4; ++i) ++el.start[std::size_t(t.face_edges(f, i)) + 1];
+  for (int e = 0; e < E; ++e) el.start[std::size_t(e) + 1] += el.start[std::size_t(e)];
+  el.inc_face.resize(std::size_t(F) * 4);
+  el.inc_local.resize(std::size_t(F) * 4);
+  std::vector<int> fill(el.start.begin(), el.start.end() - 1);
+  for (int f = 0; f < F; ++f)  // ascending face order inside every edge: deterministic
+    for (int i = 0; i < 4; ++i) {
+      const int e = t.face_edges(f, i);
+      el.inc_face[std::size_t(fill[std::size_t(e)])] = f;
+      el.inc_local[std::size_t(fill[std::size_t(e)]++)] = std::int8_t(i);
+    }
+  int k = 0;
+  for (int e = 0; e < E; ++e) k = std::max(k, 2 + 2 * (el.start[std::size_t(e) + 1] - el.start[std::size_t(e)]));
+  if (k > 127) throw InputError("interpolated: an edge has too many incident faces");
+  el.k = k;
+  el.ids.assign(std::size_t(E) * std::size_t(k), 0);
+  el.inc_slot.assign(std::size_t(F) * 16, 0);
+  for (int e = 0; e < E; ++e) {
+    int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
+    int used = 0;
+    for (int a = el.start[std::size_t(e)]; a < el.start[std::size_t(e) + 1]; ++a) {
+      const int f = el.inc_face[std::size_t(a)];
+      for (int j = 0; j < 4; ++j) {
+        const int v = mesh.faces(f, j);
+        int s = 0;
+        while (s < used && ids[s] != v) ++s;
+        if (s == used) ids[used++] = v;
+        el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
+      }
+    }
+    for (int s = used; s < k; ++s) ids[s] = ids[0];
+  }
+  return el;
+}
+
+class InterpolatedCorrected final : public Discretization {
+ public:
+  std::string name() const override { return "interpolated"; }
+  NormalKind required_normals() const override { return NormalKind::Vertex; }
+  std::vector<ParameterInfo> parameters() const override {
+    std::vector<ParameterInfo> p = {
+        {"lambda", "0.1", "stabilization weight of M1 (spec §3.5; DGtal constructor default)"},
+        {"kappa", "2", "flat correction factor (spec §3.4): 2 = DGtal, 1 = paper"},
+        {"assembly", "global", "global (spec §3.6a, DGtal L0(), 2-ring stencil) | local (§3.6b, sum of L_f)"},
+        extras_parameter()};
+    for (auto& q : normal_policy_parameters()) p.push_back(q);
+    return p;
+  }
+
+  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    std::vector<std::string> keys;
+    for (const auto& p : parameters()) keys.push_back(p.name);
+    params.check_keys(keys, "interpolated parameters");
+    const double lambda = params.get_double("lambda", 0.1);
+    const double kappa = params.get_double("kappa", 2.0);
+    if (!(std::isfinite(lambda) && lambda >= 0.0)) throw InputError("interpolated: lambda must be finite and >= 0");
+    if (!std::isfinite(kappa)) throw InputError("interpolated: kappa must be finite");
+    const std::string assembly = params.get_string("assembly", "global");
+    if (assembly != "global" && assembly != "local")
+      throw InputError("interpolated: assembly '" + assembly + "': expected global or local");
+    const bool global = assembly == "global";
+    const bool extras = params.get_bool("extras", false);
+    check_quad_mesh(mesh, "interpolated");
+
+    Operators ops;
+    const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
+    const int F = mesh.num_faces();
+    // Per face: [0,16) M0_f; [16,32) global: K1 = D^T (S^T S / ubar^z) D, local: L_f;
+    // [32,48) P_f D (global only); extras: [48,60) U_f, [60,72) V_f, [72,88) M1_f, [88] a_f.
+    const std::size_t stride = extras ? 89 : 48;
+    std::vector<double> data(std::size_t(F) * stride);
+    const Eigen::Matrix4d& D = quad_difference();
+    tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
+      for (int f = r.begin(); f != r.end(); ++f) {
+        const InterpolatedLocal loc =
+            interpolated_local(quad_corners(mesh, f), quad_corner_rows(mesh, u, f), lambda, kappa);
+        double* d = data.data() + std::size_t(f) * stride;
+        Eigen::Map<RowMat4>{d} = loc.mass;
+        if (global) {
+          Eigen::Map<RowMat4>{d + 16} = D.transpose() * (loc.S.transpose() * loc.S / loc.ubar_z) * D;
+          Eigen::Map<RowMat4>{d + 32} = loc.projection * D;
+        } else {
+          Eigen::Map<RowMat4>{d + 16} = loc.laplacian;
+        }
+        if (extras) {
+          Eigen::Map<QuadSharp>{d + 48} = loc.sharp;
+          Eigen::Map<QuadFlat>{d + 60} = loc.flat;
+          Eigen::Map<RowMat4>{d + 72} = loc.inner_product;
+          d[88] = loc.area;
+        }
+      }
+    });
+    const AssemblyPlan face_plan = quad_vertex_plan(mesh);
+    ops.M = corrlap::assemble(face_plan, [&](std::size_t b, std::size_t e, double* out) {
+      for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride, 16, out);
+    });
+    std::optional<EdgeTopology> topo;
+    if (global || extras) topo = build_edges(mesh);
+    if (global) {
+      // spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
+      // r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
+      // L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T: one element per edge on the
+      // union of the vertices of its faces; each face's first term goes to its local edge 0.
+      const EdgeElements el = build_edge_elements(mesh, *topo);
+      const int k = el.k;
+      const AssemblyPlan edge_plan(el.ids.data(), std::size_t(topo->num_edges()), k, mesh.num_vertices());
+      ops.L = corrlap::assemble(edge_plan, [&](std::size_t b, std::size_t e_end, double* out) {
+        double rv[128];
+        const std::size_t kk = std::size_t(k) * std::size_t(k);
+        for (std::size_t e = b; e < e_end; ++e, out += kk) {
+          std::fill(out, out + kk, 0.0);
+          std::fill(rv, rv + k, 0.0);
+          const int a0 = el.start[e], a1 = el.start[e + 1];
+          const double inv = 1.0 / double(a1 - a0);
+          for (int a = a0; a < a1; ++a) {
+            const int f = el.inc_face[std::size_t(a)];
+            const int i = el.inc_local[std::size_t(a)];
+            const std::int8_t* slot = el.inc_slot.data() + std::size_t(a) * 4;
+            const double* d = data.data() + std::size_t(f) * stride;
+            const double s = double(topo->face_edge_signs(f, i)) * inv;
+            for (int j = 0; j < 4; ++j) rv[slot[j]] += s * d[32 + 4 * i + j];
+            if (i == 0)
+              for (int p = 0; p < 4; ++p)
+                for (int q = 0; q < 4; ++q) out[std::size_t(slot[p]) * k + slot[q]] -= d[16 + 4 * p + q];
+          }
+          for (int p = 0; p < k; ++p)
+            for (int q = 0; q < k; ++q) out[std::size_t(p) * k + q] -= lambda * rv[p] * rv[q];
+        }
+      });
+    } else {
+      ops.L = corrlap::assemble(face_plan, [&](std::size_t b, std::size_t e, double* out) {
+        for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 16, 16, out);
+      });
+    }
+    if (extras) {
+      ops.M_lumped = row_sum_lumped(ops.M);  // spec §3.2: DGtal's lumpedM0() is not diagonal
+      ops.D0 = global_d0(*topo, mesh.num_vertices());
+      std::vector<double> sharp(std::size_t(F) * 12), flat(std::size_t(F) * 12);
+      for (int f = 0; f < F; ++f) {
+        std::copy_n(data.data() + std::size_t(f) * stride + 48, 12, sharp.data() + std::size_t(f) * 12);
+        std::copy_n(data.data() + std::size_t(f) * stride + 60, 12, flat.data() + std::size_t(f) * 12);
+      }
+      ops.sharp = global_sharp(*topo, sharp.data());
+      ops.flat = global_flat(*topo, flat.data());
+      if (global) {
+        Eigen::SparseMatrix<double> CA(3 * F, 3 * F);
+        CA.reserve(Eigen::VectorXi::Constant(3 * F, 1));
+        for (int f = 0; f < F; ++f)
+          for (int c = 0; c < 3; ++c) CA.insert(3 * f + c, 3 * f + c) = data[std::size_t(f) * stride + 88];
+        Eigen::SparseMatrix<double> I(topo->num_edges(), topo->num_edges());
+        I.setIdentity();
+        const Eigen::SparseMatrix<double> P = I - Eigen::SparseMatrix<double>(*ops.flat * *ops.sharp);
+        ops.M1 = Eigen::SparseMatrix<double>(ops.sharp->transpose() * CA * *ops.sharp) +
+                 lambda * Eigen::SparseMatrix<double>(P.transpose() * P);
+      } else {
+        ops.M1 = corrlap::assemble(quad_edge_plan(*topo), [&](std::size_t b, std::size_t e, double* out) {
+          for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 72, 16, out);
+        });
+      }
+    }
+    return ops;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Discretization> make_interpolated_corrected() { return std::make_unique<InterpolatedCorrected>(); }
+
+}  // namespace corrlap
