@@ -71,3 +71,62 @@ inline MatrixDiff compare_matrices(const Eigen::SparseMatrix<double>& A, const E
 }
 
 }  // namespace corrlap::test
+
+#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+
+namespace corrlap::test {
+
+/// sphere1 (centre c) digitized at h in the box -2..2, with true (radial) face and vertex normals
+/// (spec §12.3: u_v = x_v/|x_v|, u_f = b_f/|b_f|).
+struct SphereCase {
+  SurfelMesh mesh;
+  NormalFields normals;
+};
+inline SphereCase sphere_case(double h, const Eigen::Vector3d& center = Eigen::Vector3d::Zero()) {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = -2.0;
+  p.max_aabb = 2.0;
+  const ImplicitShape shape = make_implicit_shape("sphere1", center);
+  SphereCase s;
+  s.mesh = extract_surface(digitize(shape, p));
+  s.normals.face = true_face_normals(shape, s.mesh);
+  s.normals.vertex = true_vertex_normals(shape, s.mesh);
+  return s;
+}
+
+/// Flat square grid in the plane z = 0 with n x n quads of side h, counter-clockwise seen from +z
+/// (no surfel data), and u = e_z everywhere.
+inline SphereCase flat_grid(int n, double h) {
+  SphereCase s;
+  s.mesh.positions.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) s.mesh.positions.row(j * (n + 1) + i) = Eigen::RowVector3d(i * h, j * h, 0.0);
+  s.mesh.faces.resize(n * n, 4);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int v = j * (n + 1) + i;
+      s.mesh.faces.row(j * n + i) << v, v + 1, v + n + 2, v + n + 1;
+    }
+  s.mesh.h = h;
+  s.normals.face = Eigen::MatrixX3d::Zero(n * n, 3);
+  s.normals.face.col(2).setOnes();
+  s.normals.vertex = Eigen::MatrixX3d::Zero((n + 1) * (n + 1), 3);
+  s.normals.vertex.col(2).setOnes();
+  return s;
+}
+
+inline double max_abs(const Eigen::SparseMatrix<double>& A) {
+  double m = 0.0;
+  for (int c = 0; c < A.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it) m = std::max(m, std::abs(it.value()));
+  return m;
+}
+
+/// max |A - B| / max |B| (dense-free).
+inline double relative_difference(const Eigen::SparseMatrix<double>& A, const Eigen::SparseMatrix<double>& B) {
+  return max_abs(A - B) / std::max(max_abs(B), 1e-300);
+}
+
+}  // namespace corrlap::test
