@@ -6,6 +6,7 @@
 #include <corrlap/core/error.hpp>
 
 #include "normal_policy.hpp"
+#include "quad_row_gather.hpp"
 
 namespace corrlap {
 
@@ -35,6 +36,22 @@ inline void fem_stiffness_into(double x, double y, double z, double scale, doubl
                         o, o2, self, o1,  //
                         o2, oe, o1, s2};
   for (int k = 0; k < 16; ++k) K[k] = scale * v[k];
+}
+
+// Row i of L_f = -K_f from g = (x, y, z, area) (spec §4.3 pattern).
+inline void fem_stiffness_row(const double* g, int i, double* row) {
+  const double x = g[0], y = g[1], iz = 1.0 / g[2];
+  const double sx = 1.0 - x * x, sy = 1.0 - y * y, eta = x * y * 0.5 * iz;
+  const double self = eta + (sx + sy) / 3.0 * iz;
+  const double o1 = (-2.0 * sy + sx) / 6.0 * iz;
+  const double o2 = (-2.0 * sx + sy) / 6.0 * iz;
+  const double o = -eta - (sx + sy) / 6.0 * iz;
+  switch (i) {
+    case 0: row[0] = -self, row[1] = -o1, row[2] = -o, row[3] = -o2; break;
+    case 1: row[0] = -o1, row[1] = -(self - 2.0 * eta), row[2] = -o2, row[3] = -(o + 2.0 * eta); break;
+    case 2: row[0] = -o, row[1] = -o2, row[2] = -self, row[3] = -o1; break;
+    default: row[0] = -o2, row[1] = -(o + 2.0 * eta), row[2] = -o1, row[3] = -(self - 2.0 * eta); break;
+  }
 }
 
 inline void fem_mass_into(double area, double z, bool lumped, double* M) {
@@ -104,33 +121,35 @@ class CorrectedFem final : public Discretization {
         g[3] = fr.area;
       }
     });
-    const AssemblyPlan plan = quad_vertex_plan(mesh);
-    ops.L = corrlap::assemble(plan, [&](std::size_t b, std::size_t e, double* out) {
-      for (std::size_t f = b; f < e; ++f, out += 16) {
-        const double* g = geo.data() + f * 4;
-        fem_stiffness_into(g[0], g[1], g[2], -1.0, out);  // L_f = -K_f (spec §0)
-      }
-    });
-    auto mass_matrix = [&](bool lumped) {
-      if (lumped) {
-        const AssemblyPlan diag = quad_corner_diagonal_plan(mesh);
-        return corrlap::assemble(diag, [&](std::size_t b, std::size_t e, double* out) {
-          for (std::size_t c = b; c < e; ++c) {
-            const double* g = geo.data() + (c / 4) * 4;
-            *out++ = g[3] * g[2] / 4.0;
-          }
-        });
-      }
-      return corrlap::assemble(plan, [&](std::size_t b, std::size_t e, double* out) {
-        for (std::size_t f = b; f < e; ++f, out += 16) {
-          const double* g = geo.data() + f * 4;
-          fem_mass_into(g[3], g[2], false, out);
-        }
+    // Fused kernel + vertex-row gather: the local matrices depend only on (x, y, z, area), so each
+    // row is computed where it is summed and every matrix entry is written once (memory-bound).
+    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    const bool lumped = mass == "lumped";
+    auto lumped_mass = [&] {
+      return detail::gather_corner_diagonal(mesh, vc, [&](int f, int) {
+        const double* g = geo.data() + std::size_t(f) * 4;
+        return g[3] * g[2] / 4.0;
       });
     };
-    ops.M = mass_matrix(mass == "lumped");
+    if (lumped) {
+      detail::gather_quad_rows<1>(mesh, vc, [&](int f, int i, double* rows) { fem_stiffness_row(geo.data() + std::size_t(f) * 4, i, rows); },
+                                  {&ops.L});
+      ops.M = lumped_mass();
+    } else {
+      detail::gather_quad_rows<2>(
+          mesh, vc,
+          [&](int f, int i, double* rows) {
+            const double* g = geo.data() + std::size_t(f) * 4;
+            fem_stiffness_row(g, i, rows);
+            // spec §4.4 consistent mass row i: (area z / 36) [4 2 1 2] rotated.
+            const double sc = g[3] * g[2] / 36.0;
+            static const double w[4] = {4, 2, 1, 2};
+            for (int j = 0; j < 4; ++j) rows[4 + j] = sc * w[(j - i + 4) & 3];
+          },
+          {&ops.L, &ops.M});
+    }
     if (extras) {
-      ops.M_lumped = mass == "lumped" ? ops.M : mass_matrix(true);
+      ops.M_lumped = lumped ? ops.M : lumped_mass();
       ops.D0 = global_d0(build_edges(mesh), mesh.num_vertices());
     }
     return ops;

@@ -10,6 +10,7 @@
 #include <corrlap/core/error.hpp>
 
 #include "normal_policy.hpp"
+#include "quad_row_gather.hpp"
 
 namespace corrlap {
 
@@ -135,6 +136,109 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const EdgeTopology& t) 
   return el;
 }
 
+// spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
+// r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
+// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex rows: column v
+// sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
+// (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
+// P_f D at +32 (row-major 4x4).
+Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, const EdgeTopology& topo,
+                                                        const detail::VertexCorners& vc, const double* data,
+                                                        std::size_t stride, double lambda) {
+  const EdgeElements el = build_edge_elements(mesh, topo);
+  const int k = el.k, E = topo.num_edges(), V = mesh.num_vertices();
+  std::vector<double> r(std::size_t(E) * std::size_t(k), 0.0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, E, 8192), [&](const tbb::blocked_range<int>& range) {
+    for (int e = range.begin(); e != range.end(); ++e) {
+      double* re = r.data() + std::size_t(e) * std::size_t(k);
+      const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
+      const double inv = 1.0 / double(a1 - a0);
+      for (int a = a0; a < a1; ++a) {
+        const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
+        const std::int8_t* slot = el.inc_slot.data() + std::size_t(a) * 4;
+        const double sgn = double(topo.face_edge_signs(f, i)) * inv;
+        const double* pd = data + std::size_t(f) * stride + 32 + 4 * i;
+        for (int j = 0; j < 4; ++j) re[slot[j]] += sgn * pd[j];
+      }
+    }
+  });
+  const int* faces = mesh.faces.data();
+  const int* fe = topo.face_edges.data();
+  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
+  // Sorted distinct edges of the faces around v, then the sorted distinct vertices of their elements.
+  auto neighbourhood = [&](int v, int* edges, int& ne, int* nb) {
+    ne = 0;
+    for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+      const int f = vc.corner[std::size_t(a)] >> 2;
+      for (int i = 0; i < 4; ++i) {
+        const int e = fe[4 * f + i];
+        int p = ne;
+        while (p > 0 && edges[p - 1] > e) --p;
+        if (p > 0 && edges[p - 1] == e) continue;
+        for (int q = ne; q > p; --q) edges[q] = edges[q - 1];
+        edges[p] = e;
+        ++ne;
+      }
+    }
+    int n = 0;
+    for (int t = 0; t < ne; ++t) {
+      const int* ids = el.ids.data() + std::size_t(edges[t]) * std::size_t(k);
+      for (int s = 0; s < k; ++s) {
+        const int w = ids[s];
+        int p = n;
+        while (p > 0 && nb[p - 1] > w) --p;
+        if (p > 0 && nb[p - 1] == w) continue;
+        for (int q = n; q > p; --q) nb[q] = nb[q - 1];
+        nb[p] = w;
+        ++n;
+      }
+    }
+    return n;
+  };
+  std::vector<int> outer(std::size_t(V) + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
+    std::vector<int> edges(cap_e), nb(cap_n);
+    int ne = 0;
+    for (int v = range.begin(); v != range.end(); ++v)
+      outer[std::size_t(v) + 1] = neighbourhood(v, edges.data(), ne, nb.data());
+  });
+  for (int v = 0; v < V; ++v) outer[std::size_t(v) + 1] += outer[std::size_t(v)];
+  Eigen::SparseMatrix<double> L(V, V);
+  L.resizeNonZeros(outer[std::size_t(V)]);
+  std::copy(outer.begin(), outer.end(), L.outerIndexPtr());
+  int* inner = L.innerIndexPtr();
+  double* val = L.valuePtr();
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& range) {
+    std::vector<int> edges(cap_e), nb(cap_n);
+    int ne = 0;
+    for (int v = range.begin(); v != range.end(); ++v) {
+      const int n = neighbourhood(v, edges.data(), ne, nb.data());
+      const std::size_t o = std::size_t(outer[std::size_t(v)]);
+      std::copy_n(nb.data(), n, inner + o);
+      double* col = val + o;
+      std::fill_n(col, n, 0.0);
+      auto at = [&](int w) -> double& { return col[detail::find_sorted(nb.data(), n, w)]; };
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int c = vc.corner[std::size_t(a)];
+        const int f = c >> 2, i = c & 3;
+        const double* k1 = data + std::size_t(f) * stride + 16 + 4 * i;
+        for (int j = 0; j < 4; ++j) at(faces[4 * f + j]) -= k1[j];
+      }
+      for (int t = 0; t < ne; ++t) {
+        const std::size_t e = std::size_t(edges[t]);
+        const int* ids = el.ids.data() + e * std::size_t(k);
+        const double* re = r.data() + e * std::size_t(k);
+        int sv = 0;
+        while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
+        const double a = lambda * re[sv];
+        if (a == 0.0) continue;
+        for (int s = 0; s < k; ++s) at(ids[s]) -= a * re[s];
+      }
+    }
+  });
+  return L;
+}
+
 class InterpolatedCorrected final : public Discretization {
  public:
   std::string name() const override { return "interpolated"; }
@@ -192,47 +296,23 @@ class InterpolatedCorrected final : public Discretization {
         }
       }
     });
-    const AssemblyPlan face_plan = quad_vertex_plan(mesh);
-    ops.M = corrlap::assemble(face_plan, [&](std::size_t b, std::size_t e, double* out) {
-      for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride, 16, out);
-    });
+    const detail::VertexCorners vc = detail::vertex_corners(mesh);
     std::optional<EdgeTopology> topo;
     if (global || extras) topo = build_edges(mesh);
     if (global) {
-      // spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
-      // r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
-      // L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T: one element per edge on the
-      // union of the vertices of its faces; each face's first term goes to its local edge 0.
-      const EdgeElements el = build_edge_elements(mesh, *topo);
-      const int k = el.k;
-      const AssemblyPlan edge_plan(el.ids.data(), std::size_t(topo->num_edges()), k, mesh.num_vertices());
-      ops.L = corrlap::assemble(edge_plan, [&](std::size_t b, std::size_t e_end, double* out) {
-        double rv[128];
-        const std::size_t kk = std::size_t(k) * std::size_t(k);
-        for (std::size_t e = b; e < e_end; ++e, out += kk) {
-          std::fill(out, out + kk, 0.0);
-          std::fill(rv, rv + k, 0.0);
-          const int a0 = el.start[e], a1 = el.start[e + 1];
-          const double inv = 1.0 / double(a1 - a0);
-          for (int a = a0; a < a1; ++a) {
-            const int f = el.inc_face[std::size_t(a)];
-            const int i = el.inc_local[std::size_t(a)];
-            const std::int8_t* slot = el.inc_slot.data() + std::size_t(a) * 4;
-            const double* d = data.data() + std::size_t(f) * stride;
-            const double s = double(topo->face_edge_signs(f, i)) * inv;
-            for (int j = 0; j < 4; ++j) rv[slot[j]] += s * d[32 + 4 * i + j];
-            if (i == 0)
-              for (int p = 0; p < 4; ++p)
-                for (int q = 0; q < 4; ++q) out[std::size_t(slot[p]) * k + slot[q]] -= d[16 + 4 * p + q];
-          }
-          for (int p = 0; p < k; ++p)
-            for (int q = 0; q < k; ++q) out[std::size_t(p) * k + q] -= lambda * rv[p] * rv[q];
-        }
-      });
+      detail::gather_quad_rows<1>(
+          mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+          {&ops.M});
+      ops.L = global_projection_laplacian(mesh, *topo, vc, data.data(), stride, lambda);
     } else {
-      ops.L = corrlap::assemble(face_plan, [&](std::size_t b, std::size_t e, double* out) {
-        for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 16, 16, out);
-      });
+      detail::gather_quad_rows<2>(
+          mesh, vc,
+          [&](int f, int i, double* rows) {
+            const double* d = data.data() + std::size_t(f) * stride;
+            std::copy_n(d + 4 * i, 4, rows);
+            std::copy_n(d + 16 + 4 * i, 4, rows + 4);
+          },
+          {&ops.M, &ops.L});
     }
     if (extras) {
       ops.M_lumped = row_sum_lumped(ops.M);  // spec §3.2: DGtal's lumpedM0() is not diagonal

@@ -8,6 +8,7 @@
 #include <corrlap/core/error.hpp>
 
 #include "normal_policy.hpp"
+#include "quad_row_gather.hpp"
 
 namespace corrlap {
 
@@ -97,13 +98,12 @@ class PolyDec final : public Discretization {
         }
       }
     });
-    ops.L = corrlap::assemble(quad_vertex_plan(mesh), [&](std::size_t b, std::size_t e, double* out) {
-      for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride, 16, out);
-    });
+    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    detail::gather_quad_rows<1>(
+        mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+        {&ops.L});
     // spec §2.3: lumped mass M_vv = sum_f |a_f| / 4 (DGtal M0()).
-    ops.M = corrlap::assemble(quad_corner_diagonal_plan(mesh), [&](std::size_t b, std::size_t e, double* out) {
-      for (std::size_t c = b; c < e; ++c) *out++ = data[(c / 4) * stride + 16] / 4.0;
-    });
+    ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int) { return data[std::size_t(f) * stride + 16] / 4.0; });
     if (extras) {
       const EdgeTopology topo = build_edges(mesh);
       ops.M_lumped = ops.M;
