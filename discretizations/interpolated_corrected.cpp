@@ -1,6 +1,7 @@
 #include "interpolated_corrected.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -165,42 +166,39 @@ Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, 
   const int* faces = mesh.faces.data();
   const int* fe = topo.face_edges.data();
   const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
-  // Sorted distinct edges of the faces around v, then the sorted distinct vertices of their elements.
-  auto neighbourhood = [&](int v, int* edges, int& ne, int* nb) {
+  // Per thread: vertex stamps/positions (ColumnScratch) and edge stamps; the edges of the faces
+  // around v are listed in ascending order so the summation order is fixed.
+  struct Scratch {
+    detail::ColumnScratch col;
+    std::vector<int> edge_stamp, edges;
+    Scratch(int V, int E, std::size_t cap_n, std::size_t cap_e) : col(V, cap_n), edge_stamp(std::size_t(E), -1), edges(cap_e) {}
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(V, E, cap_n, cap_e); });
+  // Collects the edges of the faces around v (sorted) and the distinct vertices of their elements
+  // (unsorted, in list); returns the vertex count.
+  auto neighbourhood = [&](Scratch& sc, int v, int mark, int& ne) {
     ne = 0;
     for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-      const int f = vc.corner[std::size_t(a)] >> 2;
-      for (int i = 0; i < 4; ++i) {
-        const int e = fe[4 * f + i];
-        int p = ne;
-        while (p > 0 && edges[p - 1] > e) --p;
-        if (p > 0 && edges[p - 1] == e) continue;
-        for (int q = ne; q > p; --q) edges[q] = edges[q - 1];
-        edges[p] = e;
-        ++ne;
-      }
+      const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
+      for (int i = 0; i < 4; ++i)
+        if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
     }
+    std::sort(sc.edges.begin(), sc.edges.begin() + ne);
     int n = 0;
+    int* stamp = sc.col.stamp.data();
+    int* list = sc.col.list.data();
     for (int t = 0; t < ne; ++t) {
-      const int* ids = el.ids.data() + std::size_t(edges[t]) * std::size_t(k);
-      for (int s = 0; s < k; ++s) {
-        const int w = ids[s];
-        int p = n;
-        while (p > 0 && nb[p - 1] > w) --p;
-        if (p > 0 && nb[p - 1] == w) continue;
-        for (int q = n; q > p; --q) nb[q] = nb[q - 1];
-        nb[p] = w;
-        ++n;
-      }
+      const int* ids = el.ids.data() + std::size_t(sc.edges[std::size_t(t)]) * std::size_t(k);
+      for (int s = 0; s < k; ++s)
+        if (stamp[ids[s]] != mark) stamp[ids[s]] = mark, list[n++] = ids[s];
     }
     return n;
   };
   std::vector<int> outer(std::size_t(V) + 1, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
-    std::vector<int> edges(cap_e), nb(cap_n);
+    Scratch& sc = scratch.local();
     int ne = 0;
-    for (int v = range.begin(); v != range.end(); ++v)
-      outer[std::size_t(v) + 1] = neighbourhood(v, edges.data(), ne, nb.data());
+    for (int v = range.begin(); v != range.end(); ++v) outer[std::size_t(v) + 1] = neighbourhood(sc, v, v, ne);
   });
   for (int v = 0; v < V; ++v) outer[std::size_t(v) + 1] += outer[std::size_t(v)];
   Eigen::SparseMatrix<double> L(V, V);
@@ -209,30 +207,33 @@ Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, 
   int* inner = L.innerIndexPtr();
   double* val = L.valuePtr();
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& range) {
-    std::vector<int> edges(cap_e), nb(cap_n);
+    Scratch& sc = scratch.local();
+    int* pos = sc.col.pos.data();
+    int* list = sc.col.list.data();
     int ne = 0;
     for (int v = range.begin(); v != range.end(); ++v) {
-      const int n = neighbourhood(v, edges.data(), ne, nb.data());
+      const int n = neighbourhood(sc, v, V + v, ne);
+      std::sort(list, list + n);
+      for (int t = 0; t < n; ++t) pos[list[t]] = t;
       const std::size_t o = std::size_t(outer[std::size_t(v)]);
-      std::copy_n(nb.data(), n, inner + o);
+      std::copy_n(list, n, inner + o);
       double* col = val + o;
       std::fill_n(col, n, 0.0);
-      auto at = [&](int w) -> double& { return col[detail::find_sorted(nb.data(), n, w)]; };
       for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
         const int c = vc.corner[std::size_t(a)];
         const int f = c >> 2, i = c & 3;
         const double* k1 = data + std::size_t(f) * stride + 16 + 4 * i;
-        for (int j = 0; j < 4; ++j) at(faces[4 * f + j]) -= k1[j];
+        for (int j = 0; j < 4; ++j) col[pos[faces[4 * f + j]]] -= k1[j];
       }
       for (int t = 0; t < ne; ++t) {
-        const std::size_t e = std::size_t(edges[t]);
+        const std::size_t e = std::size_t(sc.edges[std::size_t(t)]);
         const int* ids = el.ids.data() + e * std::size_t(k);
         const double* re = r.data() + e * std::size_t(k);
         int sv = 0;
         while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
         const double a = lambda * re[sv];
         if (a == 0.0) continue;
-        for (int s = 0; s < k; ++s) at(ids[s]) -= a * re[s];
+        for (int s = 0; s < k; ++s) col[pos[ids[s]]] -= a * re[s];
       }
     }
   });

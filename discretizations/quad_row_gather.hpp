@@ -6,6 +6,7 @@
 // by the quad discretizations (the generic AssemblyPlan sorts every contribution). Internal header.
 #include <Eigen/Sparse>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -59,6 +60,15 @@ inline int vertex_neighbours(const int* faces, const VertexCorners& vc, int v, i
 
 inline int find_sorted(const int* buf, int n, int w) { return int(std::lower_bound(buf, buf + n, w) - buf); }
 
+/// Per-thread scratch for column assembly: stamp[w] marks vertex w as seen for the current
+/// column (stamps differ per column and per pass, so nothing is ever reset) and pos[w] is its
+/// position in the column. One allocation per thread, none per face or per vertex.
+struct ColumnScratch {
+  std::vector<int> stamp, pos, list;
+  ColumnScratch(int num_vertices, std::size_t list_capacity)
+      : stamp(std::size_t(num_vertices), -1), pos(std::size_t(num_vertices), 0), list(list_capacity) {}
+};
+
 /// Assembles Count symmetric matrices. kernel(f, i, rows) writes row i of the local matrix m of
 /// face f into rows[4 m .. 4 m + 3]. Local matrices must be symmetric (column v is row v).
 template <int Count, class RowKernel>
@@ -67,10 +77,19 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
   const int V = mesh.num_vertices();
   const int* faces = mesh.faces.data();
   const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
+  tbb::enumerable_thread_specific<ColumnScratch> scratch([&] { return ColumnScratch(V, cap); });
   std::vector<int> outer(std::size_t(V) + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 8192), [&](const tbb::blocked_range<int>& r) {
-    std::vector<int> buf(cap);
-    for (int v = r.begin(); v != r.end(); ++v) outer[std::size_t(v) + 1] = vertex_neighbours(faces, vc, v, buf.data());
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
+    int* stamp = scratch.local().stamp.data();
+    for (int v = r.begin(); v != r.end(); ++v) {
+      int n = 0;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j)
+          if (stamp[f[j]] != v) stamp[f[j]] = v, ++n;
+      }
+      outer[std::size_t(v) + 1] = n;
+    }
   });
   for (int v = 0; v < V; ++v) outer[std::size_t(v) + 1] += outer[std::size_t(v)];
   const Eigen::Index nnz = outer[std::size_t(V)];
@@ -80,7 +99,10 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
     std::copy(outer.begin(), outer.end(), A->outerIndexPtr());
   }
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
-    std::vector<int> buf(cap);
+    ColumnScratch& sc = scratch.local();
+    int* stamp = sc.stamp.data();
+    int* pos = sc.pos.data();
+    int* list = sc.list.data();
     std::array<int*, Count> inner;
     std::array<double*, Count> val;
     for (int m = 0; m < Count; ++m) {
@@ -89,10 +111,18 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
     }
     double rows[4 * Count];
     for (int v = r.begin(); v != r.end(); ++v) {
-      const int n = vertex_neighbours(faces, vc, v, buf.data());
+      const int mark = V + v;  // distinct from the first pass's stamps
+      int n = 0;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j)
+          if (stamp[f[j]] != mark) stamp[f[j]] = mark, list[n++] = f[j];
+      }
+      std::sort(list, list + n);
       const std::size_t o = std::size_t(outer[std::size_t(v)]);
+      for (int t = 0; t < n; ++t) pos[list[t]] = t;
       for (int m = 0; m < Count; ++m) {
-        std::copy_n(buf.data(), n, inner[std::size_t(m)] + o);
+        std::copy_n(list, n, inner[std::size_t(m)] + o);
         std::fill_n(val[std::size_t(m)] + o, n, 0.0);
       }
       for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
@@ -100,7 +130,7 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
         const int f = c >> 2, i = c & 3;
         kernel(f, i, rows);
         for (int j = 0; j < 4; ++j) {
-          const std::size_t k = o + std::size_t(find_sorted(buf.data(), n, faces[4 * f + j]));
+          const std::size_t k = o + std::size_t(pos[faces[4 * f + j]]);
           for (int m = 0; m < Count; ++m) val[std::size_t(m)][k] += rows[4 * m + j];
         }
       }
