@@ -95,45 +95,84 @@ struct EdgeElements {
   std::vector<int> inc_face;        // face of the incidence
   std::vector<std::int8_t> inc_local;  // local edge index i in that face
   std::vector<std::int8_t> inc_slot;   // 4 slots per incidence: element slot of corner j
+  std::vector<int> corner_edge;        // edge index of local edge (f, i), 4 #F
+  int num_edges = 0;
 };
 
-EdgeElements build_edge_elements(const SurfelMesh& mesh, const EdgeTopology& t) {
+// Edges found locally from the vertex -> corner incidence (no global sort): the faces sharing
+// local edge i of f are the faces around v_i that have v_{i+1} as a neighbouring corner. An edge
+// is represented by its incidence of smallest face; its index is the rank of that representative.
+EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
   EdgeElements el;
-  const int E = t.num_edges(), F = mesh.num_faces();
-  el.start.assign(std::size_t(E) + 1, 0);
-  for (int f = 0; f < F; ++f)
-    for (int i = 0; i < 4; ++i) ++el.start[std::size_t(t.face_edges(f, i)) + 1];
-  for (int e = 0; e < E; ++e) el.start[std::size_t(e) + 1] += el.start[std::size_t(e)];
-  el.inc_face.resize(std::size_t(F) * 4);
-  el.inc_local.resize(std::size_t(F) * 4);
-  std::vector<int> fill(el.start.begin(), el.start.end() - 1);
-  for (int f = 0; f < F; ++f)  // ascending face order inside every edge: deterministic
-    for (int i = 0; i < 4; ++i) {
-      const int e = t.face_edges(f, i);
-      el.inc_face[std::size_t(fill[std::size_t(e)])] = f;
-      el.inc_local[std::size_t(fill[std::size_t(e)]++)] = std::int8_t(i);
+  const int F = mesh.num_faces();
+  const int* faces = mesh.faces.data();
+  std::vector<int> key(std::size_t(F) * 4), count(std::size_t(F) * 4);
+  auto for_each_incidence = [&](int f, int i, auto&& visit) {
+    const int a = faces[4 * f + i], b = faces[4 * f + ((i + 1) & 3)];
+    for (int t = vc.start[std::size_t(a)]; t < vc.start[std::size_t(a) + 1]; ++t) {
+      const int c = vc.corner[std::size_t(t)];
+      const int g = c >> 2, j = c & 3;
+      if (faces[4 * g + ((j + 1) & 3)] == b) visit(g, j);
+      else if (faces[4 * g + ((j + 3) & 3)] == b) visit(g, (j + 3) & 3);
     }
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, F, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int f = r.begin(); f != r.end(); ++f)
+      for (int i = 0; i < 4; ++i) {
+        int best = -1, n = 0;
+        for_each_incidence(f, i, [&](int g, int j) {
+          ++n;
+          if (best < 0) best = 4 * g + j;  // corners around a are in ascending face order
+        });
+        key[std::size_t(4 * f + i)] = best;
+        count[std::size_t(4 * f + i)] = n;
+      }
+  });
+  el.corner_edge.resize(std::size_t(F) * 4);
+  std::vector<int> rep_of_edge;
+  rep_of_edge.reserve(std::size_t(F) * 2 + 4);
+  el.start.assign(1, 0);
+  for (int c = 0; c < 4 * F; ++c)
+    if (key[std::size_t(c)] == c) {
+      el.corner_edge[std::size_t(c)] = int(rep_of_edge.size());
+      rep_of_edge.push_back(c);
+      el.start.push_back(el.start.back() + count[std::size_t(c)]);
+    }
+  for (int c = 0; c < 4 * F; ++c) el.corner_edge[std::size_t(c)] = el.corner_edge[std::size_t(key[std::size_t(c)])];
+  const int E = int(rep_of_edge.size());
   int k = 0;
   for (int e = 0; e < E; ++e) k = std::max(k, 2 + 2 * (el.start[std::size_t(e) + 1] - el.start[std::size_t(e)]));
   if (k > 127) throw InputError("interpolated: an edge has too many incident faces");
   el.k = k;
+  el.num_edges = E;
+  const std::size_t total = std::size_t(el.start[std::size_t(E)]);
+  el.inc_face.resize(total);
+  el.inc_local.resize(total);
+  el.inc_slot.assign(total * 4, 0);
   el.ids.assign(std::size_t(E) * std::size_t(k), 0);
-  el.inc_slot.assign(std::size_t(F) * 16, 0);
-  for (int e = 0; e < E; ++e) {
-    int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
-    int used = 0;
-    for (int a = el.start[std::size_t(e)]; a < el.start[std::size_t(e) + 1]; ++a) {
-      const int f = el.inc_face[std::size_t(a)];
-      for (int j = 0; j < 4; ++j) {
-        const int v = mesh.faces(f, j);
-        int s = 0;
-        while (s < used && ids[s] != v) ++s;
-        if (s == used) ids[used++] = v;
-        el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
+  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int e = r.begin(); e != r.end(); ++e) {
+      const int rep = rep_of_edge[std::size_t(e)];
+      int a = el.start[std::size_t(e)];
+      for_each_incidence(rep >> 2, rep & 3, [&](int g, int j) {
+        el.inc_face[std::size_t(a)] = g;
+        el.inc_local[std::size_t(a++)] = std::int8_t(j);
+      });
+      int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
+      int used = 0;
+      for (a = el.start[std::size_t(e)]; a < el.start[std::size_t(e) + 1]; ++a) {
+        const int f = el.inc_face[std::size_t(a)];
+        for (int j = 0; j < 4; ++j) {
+          const int v = faces[4 * f + j];
+          int s = 0;
+          while (s < used && ids[s] != v) ++s;
+          if (s == used) ids[used++] = v;
+          el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
+        }
       }
+      for (int s = used; s < k; ++s) ids[s] = ids[0];
     }
-    for (int s = used; s < k; ++s) ids[s] = ids[0];
-  }
+  });
   return el;
 }
 
@@ -143,11 +182,11 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const EdgeTopology& t) 
 // sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
 // (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
 // P_f D at +32 (row-major 4x4).
-Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, const EdgeTopology& topo,
-                                                        const detail::VertexCorners& vc, const double* data,
-                                                        std::size_t stride, double lambda) {
-  const EdgeElements el = build_edge_elements(mesh, topo);
-  const int k = el.k, E = topo.num_edges(), V = mesh.num_vertices();
+Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, const detail::VertexCorners& vc,
+                                                        const double* data, std::size_t stride, double lambda) {
+  const EdgeElements el = build_edge_elements(mesh, vc);
+  const int k = el.k, E = el.num_edges, V = mesh.num_vertices();
+  const int* faces = mesh.faces.data();
   std::vector<double> r(std::size_t(E) * std::size_t(k), 0.0);
   tbb::parallel_for(tbb::blocked_range<int>(0, E, 8192), [&](const tbb::blocked_range<int>& range) {
     for (int e = range.begin(); e != range.end(); ++e) {
@@ -157,14 +196,14 @@ Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, 
       for (int a = a0; a < a1; ++a) {
         const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
         const std::int8_t* slot = el.inc_slot.data() + std::size_t(a) * 4;
-        const double sgn = double(topo.face_edge_signs(f, i)) * inv;
+        // spec §0 edge sign: +1 if v_i < v_{i+1}.
+        const double sgn = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
         const double* pd = data + std::size_t(f) * stride + 32 + 4 * i;
         for (int j = 0; j < 4; ++j) re[slot[j]] += sgn * pd[j];
       }
     }
   });
-  const int* faces = mesh.faces.data();
-  const int* fe = topo.face_edges.data();
+  const int* fe = el.corner_edge.data();
   const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
   // Per thread: vertex stamps/positions (ColumnScratch) and edge stamps; the edges of the faces
   // around v are listed in ascending order so the summation order is fixed.
@@ -299,12 +338,12 @@ class InterpolatedCorrected final : public Discretization {
     });
     const detail::VertexCorners vc = detail::vertex_corners(mesh);
     std::optional<EdgeTopology> topo;
-    if (global || extras) topo = build_edges(mesh);
+    if (extras) topo = build_edges(mesh);
     if (global) {
       detail::gather_quad_rows<1>(
           mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
           {&ops.M});
-      ops.L = global_projection_laplacian(mesh, *topo, vc, data.data(), stride, lambda);
+      ops.L = global_projection_laplacian(mesh, vc, data.data(), stride, lambda);
     } else {
       detail::gather_quad_rows<2>(
           mesh, vc,
