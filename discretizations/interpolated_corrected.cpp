@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <optional>
 
@@ -316,10 +317,21 @@ class InterpolatedCorrected final : public Discretization {
     const std::size_t stride = extras ? 89 : 48;
     std::vector<double> data(std::size_t(F) * stride);
     const Eigen::Matrix4d& D = quad_difference();
+    std::atomic<int> non_square{-1};
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
       for (int f = r.begin(); f != r.end(); ++f) {
-        const InterpolatedLocal loc =
-            interpolated_local(quad_corners(mesh, f), quad_corner_rows(mesh, u, f), lambda, kappa);
+        const QuadCorners x = quad_corners(mesh, f);
+        // The closed forms of spec §3.2-§3.4 hold on surfels (squares); reject other quads.
+        const Eigen::Vector3d e0 = (x.row(1) - x.row(0)).transpose(), e1 = (x.row(2) - x.row(1)).transpose();
+        const Eigen::Vector3d e2 = (x.row(3) - x.row(2)).transpose();
+        const double l0 = e0.norm();
+        if (!(std::abs(e1.norm() - l0) <= 1e-6 * l0 && std::abs(e0.dot(e1)) <= 1e-6 * l0 * l0 &&
+              (e0 + e2).norm() <= 1e-6 * l0)) {
+          int cur = non_square.load();
+          while ((cur < 0 || f < cur) && !non_square.compare_exchange_weak(cur, f)) {}
+          continue;
+        }
+        const InterpolatedLocal loc = interpolated_local(x, quad_corner_rows(mesh, u, f), lambda, kappa);
         double* d = data.data() + std::size_t(f) * stride;
         Eigen::Map<RowMat4>{d} = loc.mass;
         if (global) {
@@ -336,6 +348,9 @@ class InterpolatedCorrected final : public Discretization {
         }
       }
     });
+    if (non_square.load() >= 0)
+      throw InputError("interpolated: face " + std::to_string(non_square.load()) +
+                       " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
     const detail::VertexCorners vc = detail::vertex_corners(mesh);
     std::optional<EdgeTopology> topo;
     if (extras) topo = build_edges(mesh);

@@ -232,3 +232,20 @@ TEST_CASE("corrected methods: inconsistent orientation follows the policy error 
     CHECK((c.L * Eigen::VectorXd::Ones(c.L.cols())).cwiseAbs().maxCoeff() <= 1e-12 * max_abs(c.L));
   }
 }
+
+TEST_CASE("interpolated rejects a non-square face naming it; empty meshes are rejected by every quad method") {
+  SphereCase s = flat_grid(3, 1.0);
+  s.mesh.positions(5, 0) += 0.2;  // vertex 5 is a corner of faces 0, 1, 3, 4
+  try {
+    make_discretization("interpolated")->assemble(s.mesh, s.normals, Config{});
+    FAIL("non-square face accepted");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("face 0") != std::string::npos);
+  }
+  // fem and polydec handle general planar quads (spec §4.2 frame, §2.2 polygon formulas).
+  CHECK_NOTHROW(make_discretization("fem")->assemble(s.mesh, s.normals, Config{}));
+  CHECK_NOTHROW(make_discretization("polydec")->assemble(s.mesh, s.normals, Config{}));
+  SurfelMesh empty;
+  for (const std::string name : {"fem", "polydec", "projected-polydec", "interpolated"})
+    CHECK_THROWS_AS(make_discretization(name)->assemble(empty, NormalFields{}, Config{}), InputError);
+}
