@@ -42,6 +42,17 @@ TEST_CASE("corrlap operators --shape --normals true reproduces the reference mes
     CHECK(read_matrix_market(all + "/" + f + ".mtx").rows() > 0);
 }
 
+TEST_CASE("corrlap operators passes --mass, --assembly, --lambda and --param to the method") {
+  const std::string a = tmp_path("ops_lumped"), b = tmp_path("ops_local"), c = tmp_path("ops_param");
+  REQUIRE(run_cli("operators --method fem --shape sphere1 --h 0.5 --normals true --mass lumped --out " + a) == 0);
+  CHECK(read_matrix_market(a + "/M.mtx").nonZeros() == 80);  // 80 vertices at h = 0.5: diagonal
+  REQUIRE(run_cli("operators --method interpolated --shape sphere1 --h 0.5 --normals true --assembly local --lambda 0.2 --out " + b) == 0);
+  REQUIRE(run_cli("operators --method interpolated --shape sphere1 --h 0.5 --normals true --param assembly=local --param lambda=0.2 --out " + c) == 0);
+  const Eigen::SparseMatrix<double> Lb = read_matrix_market(b + "/L.mtx"), Lc = read_matrix_market(c + "/L.mtx");
+  CHECK(compare_matrices(Lb, Lc).relative == 0.0);
+  CHECK(Lb.nonZeros() == read_matrix_market(a + "/L.mtx").nonZeros());  // local variant: FEM's 9-point pattern
+}
+
 TEST_CASE("corrlap operators reports bad input with exit code 1 and a message") {
   std::string err;
   CHECK(run_cli("operators --method fem --mesh " + sphere_ref("mesh.obj") + " --out " + tmp_path("x"), nullptr, &err) == 1);
