@@ -130,3 +130,21 @@ inline double relative_difference(const Eigen::SparseMatrix<double>& A, const Ei
 }
 
 }  // namespace corrlap::test
+
+#ifdef CORRLAP_CLI
+namespace corrlap::test {
+/// Like run_cli, but with output files named after `tag`: ctest runs test cases in parallel
+/// processes whose run_cli counters collide on the same scratch file names.
+inline int run_cli_tagged(const std::string& tag, const std::string& args, std::string* out = nullptr,
+                          std::string* err = nullptr) {
+  static int counter = 0;
+  const std::string base = tmp_path("cli_" + tag + "_" + std::to_string(++counter));
+  const std::string cmd =
+      std::string(CORRLAP_CLI) + " " + args + " >" + base + ".out 2>" + base + ".err </dev/null";
+  const int status = std::system(cmd.c_str());
+  if (out) *out = read_text(base + ".out");
+  if (err) *err = read_text(base + ".err");
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+}  // namespace corrlap::test
+#endif
