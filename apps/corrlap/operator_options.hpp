@@ -1,0 +1,40 @@
+#pragma once
+// Options shared by `corrlap operators` and `corrlap eigs`: surface source, method, normals and
+// method parameters; builds the operators and reports warnings on stderr.
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <corrlap/core/discretization.hpp>
+
+#include "surface_source.hpp"
+
+namespace corrlap::cli {
+
+struct OperatorOptions {
+  SurfaceSource source;
+  std::string method;
+  std::string face_normals_file, vertex_normals_file;
+  std::string normals = "auto";  ///< auto | true | trivial
+  std::optional<double> lambda, kappa;
+  std::string assembly, mass, orientation, config_file;
+  std::vector<std::string> params;  ///< key=value
+  int threads = 0;
+
+  void add_options(CLI::App& cmd);
+
+  /// Mesh, normals and parameters ready for the discretization.
+  struct Input {
+    SurfelMesh mesh;
+    NormalFields normals;
+    Config params;
+  };
+  /// `extras`: also request D0/sharp/flat/M1/M_lumped when the method supports it.
+  Input prepare(bool extras = false) const;
+  /// Builds the operators; warnings go to stderr.
+  Operators build(bool extras = false) const;
+};
+
+}  // namespace corrlap::cli

@@ -1,0 +1,80 @@
+// Assembly throughput (surfels/s) of L and M for every registered discretization on sphere1 at
+// h = 0.01 and 0.005 (box -1.5..1.5, true normals), with 1 and 2 threads, and peak memory.
+// Goals (issue 3): fem >= 20 M surfels/s; interpolated >= 3 M surfels/s on 1 thread and >= 1.7x
+// on 2 threads. Run: ./build/bench/bench_assembly [--benchmark_filter=fem]
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/core/threads.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+
+#include "support.hpp"
+
+using namespace corrlap;
+
+namespace {
+
+struct Input {
+  SurfelMesh mesh;
+  NormalFields normals;
+};
+
+const Input& sphere(double h) {
+  static std::map<double, std::unique_ptr<Input>> cache;
+  auto& slot = cache[h];
+  if (!slot) {
+    slot = std::make_unique<Input>();
+    DigitizationParams p;
+    p.h = h;
+    p.min_aabb = -1.5;
+    p.max_aabb = 1.5;
+    const ImplicitShape shape = make_implicit_shape("sphere1");
+    slot->mesh = extract_surface(digitize(shape, p));
+    slot->normals.face = true_face_normals(shape, slot->mesh);
+    slot->normals.vertex = true_vertex_normals(shape, slot->mesh);
+  }
+  return *slot;
+}
+
+void run(benchmark::State& state, const std::string& method, double h, int threads) {
+  const Input& in = sphere(h);
+  set_thread_count(threads);
+  const auto d = make_discretization(method);
+  bench::reset_peak_rss();
+  for (auto _ : state) {
+    Operators ops = d->assemble(in.mesh, in.normals, Config{});
+    benchmark::DoNotOptimize(ops.L.valuePtr());
+    benchmark::DoNotOptimize(ops.M.valuePtr());
+  }
+  const double F = double(in.mesh.num_faces());
+  state.counters["surfels"] = F;
+  state.counters["threads"] = threads;
+  state.counters["Msurfels_per_s"] =
+      benchmark::Counter(F * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["peak_rss_MiB"] = bench::peak_rss_mib();
+  set_thread_count(0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  for (const auto& method : discretization_registry().names())
+    for (double h : {0.01, 0.005})
+      for (int threads : {1, 2}) {
+        const std::string name = "assembly/" + method + "/h=" + (h == 0.01 ? "0.01" : "0.005") +
+                                 "/threads=" + std::to_string(threads);
+        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) { run(s, method, h, threads); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinTime(0.5);
+      }
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,406 @@
+#include "interpolated_corrected.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <optional>
+
+#include <corrlap/core/error.hpp>
+
+#include "normal_policy.hpp"
+#include "quad_row_gather.hpp"
+
+namespace corrlap {
+
+Eigen::Matrix4d interpolated_local_mass(double h, const Eigen::Vector4d& uz) {
+  // 144 * int phi_g phi_l phi_k = a_s * a_t with a = 9 if the three share the parameter value
+  // (all 0 or all 1 along that axis), else 3 for... : the 1D integrals of three linear hat
+  // products are 1/4 (m = 0 or 3 factors s) and 1/12 (m = 1 or 2), hence 144 w in {9, 3, 1}.
+  static const int alpha[4] = {0, 1, 1, 0}, beta[4] = {0, 0, 1, 1};
+  auto w1 = [](int m) { return (m == 0 || m == 3) ? 3.0 : 1.0; };  // 12 * 1D integral
+  Eigen::Matrix4d M;
+  for (int g = 0; g < 4; ++g)
+    for (int l = g; l < 4; ++l) {
+      double s = 0.0;
+      for (int k = 0; k < 4; ++k)
+        s += w1(alpha[g] + alpha[l] + alpha[k]) * w1(beta[g] + beta[l] + beta[k]) * uz[k];
+      M(g, l) = M(l, g) = h * h * s / 144.0;
+    }
+  return M;
+}
+
+InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u, double lambda, double kappa) {
+  InterpolatedLocal r;
+  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/h, n = t1 x t2.
+  const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
+  const double h = e1.norm();
+  const Eigen::Vector3d t1 = e1 / h;
+  const Eigen::Vector3d t2 = (x.row(2) - x.row(1)).transpose().normalized();
+  const Eigen::Vector3d n = t1.cross(t2);
+  Eigen::Matrix3d R;
+  R.col(0) = t1;
+  R.col(1) = t2;
+  R.col(2) = n;
+  // Corner normals in frame components: ul(k, c) = u_k . (t1, t2, n)[c].
+  const Eigen::Matrix<double, 4, 3> ul = u * R;
+  // Edge-midpoint and face averages (spec §3.1).
+  Eigen::Matrix<double, 4, 3> ue;
+  for (int i = 0; i < 4; ++i) ue.row(i) = 0.5 * (ul.row(i) + ul.row((i + 1) % 4));
+  const Eigen::RowVector3d ub = 0.25 * (ul.row(0) + ul.row(1) + ul.row(2) + ul.row(3));
+  const double uz = ub.z();
+  r.area = h * h * uz;
+  r.ubar_z = uz;
+  r.mass = interpolated_local_mass(h, ul.col(2));
+  // spec §3.3 closed form of S.
+  r.S << uz, 0, -uz, 0,  //
+      0, uz, 0, -uz,     //
+      -ub.x(), -ub.y(), ub.x(), ub.y();
+  r.S /= 3.0;
+  Eigen::Matrix<double, 3, 4> S2;
+  S2 << ue(0, 2), 0, -ue(2, 2), 0,  //
+      0, ue(1, 2), 0, -ue(3, 2),     //
+      -ue(0, 0), -ue(1, 1), ue(2, 0), ue(3, 1);
+  r.S += S2 / 6.0;
+  r.sharp = R * r.S / (h * uz);
+  // spec §3.4 flat with correction factor kappa.
+  for (int i = 0; i < 4; ++i) {
+    const int b = (i + 1) % 4;
+    const Eigen::Vector3d ua = u.row(i).transpose(), ubv = u.row(b).transpose();
+    const Eigen::Vector3d d = (x.row(b) - x.row(i)).transpose();
+    const Eigen::Matrix3d Q = (2.0 * ua * ua.transpose() + ua * ubv.transpose() + ubv * ua.transpose() +
+                               2.0 * ubv * ubv.transpose()) / 6.0;
+    r.flat.row(i) = (d.transpose() * (Eigen::Matrix3d::Identity() - kappa * Q));
+  }
+  r.projection = Eigen::Matrix4d::Identity() - r.flat * r.sharp;
+  // spec §3.5: a_f U^T U = S^T S / ubar^z.
+  r.inner_product = r.S.transpose() * r.S / uz + lambda * r.projection.transpose() * r.projection;
+  const Eigen::Matrix4d& D = quad_difference();
+  r.laplacian = -D.transpose() * r.inner_product * D;
+  return r;
+}
+
+namespace {
+
+using RowMat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
+
+// Elements of the global-projection Laplacian (spec §3.6a): one per edge, on the union of the
+// vertices of the edge's faces (6 for an interior manifold edge), padded to a common size.
+struct EdgeElements {
+  int k = 0;                        // padded element size
+  std::vector<int> ids;             // #E x k vertex ids (padding repeats the first id)
+  std::vector<int> start;           // incidences of edge e: [start[e], start[e+1])
+  std::vector<int> inc_face;        // face of the incidence
+  std::vector<std::int8_t> inc_local;  // local edge index i in that face
+  std::vector<std::int8_t> inc_slot;   // 4 slots per incidence: element slot of corner j
+  std::vector<int> corner_edge;        // edge index of local edge (f, i), 4 #F
+  int num_edges = 0;
+};
+
+// Edges found locally from the vertex -> corner incidence (no global sort): the faces sharing
+// local edge i of f are the faces around v_i that have v_{i+1} as a neighbouring corner. An edge
+// is represented by its incidence of smallest face; its index is the rank of that representative.
+EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
+  EdgeElements el;
+  const int F = mesh.num_faces();
+  const int* faces = mesh.faces.data();
+  std::vector<int> key(std::size_t(F) * 4), count(std::size_t(F) * 4);
+  auto for_each_incidence = [&](int f, int i, auto&& visit) {
+    const int a = faces[4 * f + i], b = faces[4 * f + ((i + 1) & 3)];
+    for (int t = vc.start[std::size_t(a)]; t < vc.start[std::size_t(a) + 1]; ++t) {
+      const int c = vc.corner[std::size_t(t)];
+      const int g = c >> 2, j = c & 3;
+      if (faces[4 * g + ((j + 1) & 3)] == b) visit(g, j);
+      else if (faces[4 * g + ((j + 3) & 3)] == b) visit(g, (j + 3) & 3);
+    }
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, F, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int f = r.begin(); f != r.end(); ++f)
+      for (int i = 0; i < 4; ++i) {
+        int best = -1, n = 0;
+        for_each_incidence(f, i, [&](int g, int j) {
+          ++n;
+          if (best < 0) best = 4 * g + j;  // corners around a are in ascending face order
+        });
+        key[std::size_t(4 * f + i)] = best;
+        count[std::size_t(4 * f + i)] = n;
+      }
+  });
+  el.corner_edge.resize(std::size_t(F) * 4);
+  std::vector<int> rep_of_edge;
+  rep_of_edge.reserve(std::size_t(F) * 2 + 4);
+  el.start.assign(1, 0);
+  for (int c = 0; c < 4 * F; ++c)
+    if (key[std::size_t(c)] == c) {
+      el.corner_edge[std::size_t(c)] = int(rep_of_edge.size());
+      rep_of_edge.push_back(c);
+      el.start.push_back(el.start.back() + count[std::size_t(c)]);
+    }
+  for (int c = 0; c < 4 * F; ++c) el.corner_edge[std::size_t(c)] = el.corner_edge[std::size_t(key[std::size_t(c)])];
+  const int E = int(rep_of_edge.size());
+  int k = 0;
+  for (int e = 0; e < E; ++e) k = std::max(k, 2 + 2 * (el.start[std::size_t(e) + 1] - el.start[std::size_t(e)]));
+  if (k > 127) throw InputError("interpolated: an edge has too many incident faces");
+  el.k = k;
+  el.num_edges = E;
+  const std::size_t total = std::size_t(el.start[std::size_t(E)]);
+  el.inc_face.resize(total);
+  el.inc_local.resize(total);
+  el.inc_slot.assign(total * 4, 0);
+  el.ids.assign(std::size_t(E) * std::size_t(k), 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int e = r.begin(); e != r.end(); ++e) {
+      const int rep = rep_of_edge[std::size_t(e)];
+      int a = el.start[std::size_t(e)];
+      for_each_incidence(rep >> 2, rep & 3, [&](int g, int j) {
+        el.inc_face[std::size_t(a)] = g;
+        el.inc_local[std::size_t(a++)] = std::int8_t(j);
+      });
+      int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
+      int used = 0;
+      for (a = el.start[std::size_t(e)]; a < el.start[std::size_t(e) + 1]; ++a) {
+        const int f = el.inc_face[std::size_t(a)];
+        for (int j = 0; j < 4; ++j) {
+          const int v = faces[4 * f + j];
+          int s = 0;
+          while (s < used && ids[s] != v) ++s;
+          if (s == used) ids[used++] = v;
+          el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
+        }
+      }
+      for (int s = used; s < k; ++s) ids[s] = ids[0];
+    }
+  });
+  return el;
+}
+
+// spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
+// r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
+// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex rows: column v
+// sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
+// (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
+// P_f D at +32 (row-major 4x4).
+Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, const detail::VertexCorners& vc,
+                                                        const double* data, std::size_t stride, double lambda) {
+  const EdgeElements el = build_edge_elements(mesh, vc);
+  const int k = el.k, E = el.num_edges, V = mesh.num_vertices();
+  const int* faces = mesh.faces.data();
+  std::vector<double> r(std::size_t(E) * std::size_t(k), 0.0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, E, 8192), [&](const tbb::blocked_range<int>& range) {
+    for (int e = range.begin(); e != range.end(); ++e) {
+      double* re = r.data() + std::size_t(e) * std::size_t(k);
+      const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
+      const double inv = 1.0 / double(a1 - a0);
+      for (int a = a0; a < a1; ++a) {
+        const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
+        const std::int8_t* slot = el.inc_slot.data() + std::size_t(a) * 4;
+        // spec §0 edge sign: +1 if v_i < v_{i+1}.
+        const double sgn = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
+        const double* pd = data + std::size_t(f) * stride + 32 + 4 * i;
+        for (int j = 0; j < 4; ++j) re[slot[j]] += sgn * pd[j];
+      }
+    }
+  });
+  const int* fe = el.corner_edge.data();
+  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
+  // Per thread: vertex stamps/positions (ColumnScratch) and edge stamps; the edges of the faces
+  // around v are listed in ascending order so the summation order is fixed.
+  struct Scratch {
+    detail::ColumnScratch col;
+    std::vector<int> edge_stamp, edges;
+    Scratch(int V, int E, std::size_t cap_n, std::size_t cap_e) : col(V, cap_n), edge_stamp(std::size_t(E), -1), edges(cap_e) {}
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(V, E, cap_n, cap_e); });
+  // Collects the edges of the faces around v (sorted) and the distinct vertices of their elements
+  // (unsorted, in list); returns the vertex count.
+  auto neighbourhood = [&](Scratch& sc, int v, int mark, int& ne) {
+    ne = 0;
+    for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+      const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
+      for (int i = 0; i < 4; ++i)
+        if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
+    }
+    std::sort(sc.edges.begin(), sc.edges.begin() + ne);
+    int n = 0;
+    int* stamp = sc.col.stamp.data();
+    int* list = sc.col.list.data();
+    for (int t = 0; t < ne; ++t) {
+      const int* ids = el.ids.data() + std::size_t(sc.edges[std::size_t(t)]) * std::size_t(k);
+      for (int s = 0; s < k; ++s)
+        if (stamp[ids[s]] != mark) stamp[ids[s]] = mark, list[n++] = ids[s];
+    }
+    return n;
+  };
+  std::vector<int> outer(std::size_t(V) + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
+    Scratch& sc = scratch.local();
+    int ne = 0;
+    for (int v = range.begin(); v != range.end(); ++v) outer[std::size_t(v) + 1] = neighbourhood(sc, v, v, ne);
+  });
+  for (int v = 0; v < V; ++v) outer[std::size_t(v) + 1] += outer[std::size_t(v)];
+  Eigen::SparseMatrix<double> L(V, V);
+  L.resizeNonZeros(outer[std::size_t(V)]);
+  std::copy(outer.begin(), outer.end(), L.outerIndexPtr());
+  int* inner = L.innerIndexPtr();
+  double* val = L.valuePtr();
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& range) {
+    Scratch& sc = scratch.local();
+    int* pos = sc.col.pos.data();
+    int* list = sc.col.list.data();
+    int ne = 0;
+    for (int v = range.begin(); v != range.end(); ++v) {
+      const int n = neighbourhood(sc, v, V + v, ne);
+      std::sort(list, list + n);
+      for (int t = 0; t < n; ++t) pos[list[t]] = t;
+      const std::size_t o = std::size_t(outer[std::size_t(v)]);
+      std::copy_n(list, n, inner + o);
+      double* col = val + o;
+      std::fill_n(col, n, 0.0);
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int c = vc.corner[std::size_t(a)];
+        const int f = c >> 2, i = c & 3;
+        const double* k1 = data + std::size_t(f) * stride + 16 + 4 * i;
+        for (int j = 0; j < 4; ++j) col[pos[faces[4 * f + j]]] -= k1[j];
+      }
+      for (int t = 0; t < ne; ++t) {
+        const std::size_t e = std::size_t(sc.edges[std::size_t(t)]);
+        const int* ids = el.ids.data() + e * std::size_t(k);
+        const double* re = r.data() + e * std::size_t(k);
+        int sv = 0;
+        while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
+        const double a = lambda * re[sv];
+        if (a == 0.0) continue;
+        for (int s = 0; s < k; ++s) col[pos[ids[s]]] -= a * re[s];
+      }
+    }
+  });
+  return L;
+}
+
+class InterpolatedCorrected final : public Discretization {
+ public:
+  std::string name() const override { return "interpolated"; }
+  NormalKind required_normals() const override { return NormalKind::Vertex; }
+  std::vector<ParameterInfo> parameters() const override {
+    std::vector<ParameterInfo> p = {
+        {"lambda", "0.1", "stabilization weight of M1 (spec §3.5; DGtal constructor default)"},
+        {"kappa", "2", "flat correction factor (spec §3.4): 2 = DGtal, 1 = paper"},
+        {"assembly", "global", "global (spec §3.6a, DGtal L0(), 2-ring stencil) | local (§3.6b, sum of L_f)"},
+        extras_parameter()};
+    for (auto& q : normal_policy_parameters()) p.push_back(q);
+    return p;
+  }
+
+  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    std::vector<std::string> keys;
+    for (const auto& p : parameters()) keys.push_back(p.name);
+    params.check_keys(keys, "interpolated parameters");
+    const double lambda = params.get_double("lambda", 0.1);
+    const double kappa = params.get_double("kappa", 2.0);
+    if (!(std::isfinite(lambda) && lambda >= 0.0)) throw InputError("interpolated: lambda must be finite and >= 0");
+    if (!std::isfinite(kappa)) throw InputError("interpolated: kappa must be finite");
+    const std::string assembly = params.get_string("assembly", "global");
+    if (assembly != "global" && assembly != "local")
+      throw InputError("interpolated: assembly '" + assembly + "': expected global or local");
+    const bool global = assembly == "global";
+    const bool extras = params.get_bool("extras", false);
+    check_quad_mesh(mesh, "interpolated");
+
+    Operators ops;
+    const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
+    const int F = mesh.num_faces();
+    // Per face: [0,16) M0_f; [16,32) global: K1 = D^T (S^T S / ubar^z) D, local: L_f;
+    // [32,48) P_f D (global only); extras: [48,60) U_f, [60,72) V_f, [72,88) M1_f, [88] a_f.
+    const std::size_t stride = extras ? 89 : 48;
+    std::vector<double> data(std::size_t(F) * stride);
+    const Eigen::Matrix4d& D = quad_difference();
+    std::atomic<int> non_square{-1};
+    tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
+      for (int f = r.begin(); f != r.end(); ++f) {
+        const QuadCorners x = quad_corners(mesh, f);
+        // The closed forms of spec §3.2-§3.4 hold on surfels (squares); reject other quads.
+        const Eigen::Vector3d e0 = (x.row(1) - x.row(0)).transpose(), e1 = (x.row(2) - x.row(1)).transpose();
+        const Eigen::Vector3d e2 = (x.row(3) - x.row(2)).transpose();
+        const double l0 = e0.norm();
+        if (!(std::abs(e1.norm() - l0) <= 1e-6 * l0 && std::abs(e0.dot(e1)) <= 1e-6 * l0 * l0 &&
+              (e0 + e2).norm() <= 1e-6 * l0)) {
+          int cur = non_square.load();
+          while ((cur < 0 || f < cur) && !non_square.compare_exchange_weak(cur, f)) {}
+          continue;
+        }
+        const InterpolatedLocal loc = interpolated_local(x, quad_corner_rows(mesh, u, f), lambda, kappa);
+        double* d = data.data() + std::size_t(f) * stride;
+        Eigen::Map<RowMat4>{d} = loc.mass;
+        if (global) {
+          Eigen::Map<RowMat4>{d + 16} = D.transpose() * (loc.S.transpose() * loc.S / loc.ubar_z) * D;
+          Eigen::Map<RowMat4>{d + 32} = loc.projection * D;
+        } else {
+          Eigen::Map<RowMat4>{d + 16} = loc.laplacian;
+        }
+        if (extras) {
+          Eigen::Map<QuadSharp>{d + 48} = loc.sharp;
+          Eigen::Map<QuadFlat>{d + 60} = loc.flat;
+          Eigen::Map<RowMat4>{d + 72} = loc.inner_product;
+          d[88] = loc.area;
+        }
+      }
+    });
+    if (non_square.load() >= 0)
+      throw InputError("interpolated: face " + std::to_string(non_square.load()) +
+                       " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
+    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    std::optional<EdgeTopology> topo;
+    if (extras) topo = build_edges(mesh);
+    if (global) {
+      detail::gather_quad_rows<1>(
+          mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+          {&ops.M});
+      ops.L = global_projection_laplacian(mesh, vc, data.data(), stride, lambda);
+    } else {
+      detail::gather_quad_rows<2>(
+          mesh, vc,
+          [&](int f, int i, double* rows) {
+            const double* d = data.data() + std::size_t(f) * stride;
+            std::copy_n(d + 4 * i, 4, rows);
+            std::copy_n(d + 16 + 4 * i, 4, rows + 4);
+          },
+          {&ops.M, &ops.L});
+    }
+    if (extras) {
+      ops.M_lumped = row_sum_lumped(ops.M);  // spec §3.2: DGtal's lumpedM0() is not diagonal
+      ops.D0 = global_d0(*topo, mesh.num_vertices());
+      std::vector<double> sharp(std::size_t(F) * 12), flat(std::size_t(F) * 12);
+      for (int f = 0; f < F; ++f) {
+        std::copy_n(data.data() + std::size_t(f) * stride + 48, 12, sharp.data() + std::size_t(f) * 12);
+        std::copy_n(data.data() + std::size_t(f) * stride + 60, 12, flat.data() + std::size_t(f) * 12);
+      }
+      ops.sharp = global_sharp(*topo, sharp.data());
+      ops.flat = global_flat(*topo, flat.data());
+      if (global) {
+        Eigen::SparseMatrix<double> CA(3 * F, 3 * F);
+        CA.reserve(Eigen::VectorXi::Constant(3 * F, 1));
+        for (int f = 0; f < F; ++f)
+          for (int c = 0; c < 3; ++c) CA.insert(3 * f + c, 3 * f + c) = data[std::size_t(f) * stride + 88];
+        Eigen::SparseMatrix<double> I(topo->num_edges(), topo->num_edges());
+        I.setIdentity();
+        const Eigen::SparseMatrix<double> P = I - Eigen::SparseMatrix<double>(*ops.flat * *ops.sharp);
+        ops.M1 = Eigen::SparseMatrix<double>(ops.sharp->transpose() * CA * *ops.sharp) +
+                 lambda * Eigen::SparseMatrix<double>(P.transpose() * P);
+      } else {
+        ops.M1 = corrlap::assemble(quad_edge_plan(*topo), [&](std::size_t b, std::size_t e, double* out) {
+          for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 72, 16, out);
+        });
+      }
+    }
+    return ops;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Discretization> make_interpolated_corrected() { return std::make_unique<InterpolatedCorrected>(); }
+
+}  // namespace corrlap
