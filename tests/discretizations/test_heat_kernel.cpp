@@ -122,20 +122,42 @@ TEST_CASE("heat kernel input errors") {
   CHECK_THROWS_WITH_AS(heat_kernel_matrix(x, Eigen::Vector3d(1, 0, 1), 0.1), doctest::Contains("point 1"), InputError);
 }
 
-TEST_CASE("heat kernel backward Poisson on sphere1 (dual, true normals): errors and observed order") {
+namespace {
+double heat_poisson_error(double h, double cutoff) {
+  const SurfelMesh mesh = test::sphere1_surface(h);
+  NormalFields nf;
+  nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
+  Config c;
+  c.set("cutoff", cutoff);
+  const Operators ops = make_discretization("heat-kernel")->assemble(mesh, nf, c);
+  return test::backward_poisson_error(ops.L, ops.M, test::radial(mesh.face_centroids()), true);
+}
+}  // namespace
+
+// Why no order 1.5 here: the heat-kernel operator has two consistency errors that the grid does
+// not remove. (1) The cut-off keeps only the fraction phi(K) = 1 - exp(-K^2/2)(1 + K^2/2) of the
+// kernel's second moment, so with a fixed K it converges to phi(K) Delta, not Delta
+// (phi(3) = 0.9389: a 6.5% error floor). (2) The smoothing bias is O(t) = O(h^{2/3}) for
+// t = 0.1 h^{2/3}. The tests check both predictions instead of an order it cannot have.
+TEST_CASE("heat kernel backward Poisson (spec 10.4), default K = 3: errors decrease toward the cut-off floor") {
   const double hs[3] = {0.1, 0.05, 0.025};
   double err[3];
-  const ImplicitShape sphere = make_implicit_shape("sphere1");
-  const auto d = make_discretization("heat-kernel");
-  for (int i = 0; i < 3; ++i) {
-    const SurfelMesh mesh = test::sphere1_surface(hs[i]);
-    NormalFields nf;
-    nf.face = true_face_normals(sphere, mesh);
-    const Operators ops = d->assemble(mesh, nf, Config());
-    err[i] = test::backward_poisson_error(ops.L, ops.M, test::radial(mesh.face_centroids()), true);
-  }
-  const double o1 = std::log(err[0] / err[1]) / std::log(2.0), o2 = std::log(err[1] / err[2]) / std::log(2.0);
-  MESSAGE("heat-kernel backward L2 errors " << err[0] << " " << err[1] << " " << err[2] << ", orders " << o1 << " " << o2);
+  for (int i = 0; i < 3; ++i) err[i] = heat_poisson_error(hs[i], 3.0);
+  const double phi = 1 - std::exp(-4.5) * 5.5;
+  // limit: g = f / phi, error = (1/phi - 1) ||f - mean f||, ||x^2 - 1/3||_{L2, normalized} = sqrt(4/45)
+  const double floor = (1 / phi - 1) * std::sqrt(4.0 / 45.0);
+  MESSAGE("heat-kernel (K = 3) backward L2 errors " << err[0] << " " << err[1] << " " << err[2]
+                                                    << ", predicted floor " << floor);
   CHECK(err[1] < err[0]);
   CHECK(err[2] < err[1]);
+  CHECK(err[2] > floor);
+  CHECK(err[2] - floor < 0.75 * (err[1] - floor));  // the excess over the floor shrinks
+}
+
+TEST_CASE("heat kernel backward Poisson with a wide cut-off (K = 6) converges like t = O(h^{2/3})") {
+  const double e1 = heat_poisson_error(0.1, 6.0), e2 = heat_poisson_error(0.05, 6.0);
+  const double order = std::log(e1 / e2) / std::log(2.0);
+  MESSAGE("heat-kernel (K = 6) backward L2 errors " << e1 << " " << e2 << ", order " << order);
+  CHECK(order > 0.55);
+  CHECK(order < 1.0);
 }
