@@ -86,40 +86,57 @@ struct Neighbour {
   bool operator<(const Neighbour& o) const { return index < o.index; }
 };
 
-// Thread-local scratch: grows to the largest neighbourhood once, then is reused.
+// Thread-local scratch: grows to the largest neighbourhood once, then is reused (no per-point
+// allocation). n = number of valid entries in a.
 struct Scratch {
   std::vector<Neighbour> a, b;
+  std::size_t n = 0;
   std::vector<std::size_t> runs, runs2;
 };
 
-// Neighbours of point i (excluding i) within distance R, sorted by index, in s.a.
+// Grid cells are R / kCellsPerRadius wide: the search covers (2 kCellsPerRadius + 1)^3 cells.
+// Finer cells mean fewer candidates to reject (on a surface: (2.5R)^2 instead of (3R)^2 for 2).
+constexpr int kCellsPerRadius = 2;
+
+// Neighbours of point i (excluding i) strictly within distance R (R2 = R^2), in s.a[0, s.n);
+// sorted by index when `sorted`.
 void neighbours(const Eigen::MatrixX3d& x, const CellGrid& grid, Eigen::Index i, double R2, Scratch& s,
                 bool sorted = true) {
-  s.a.clear();
   s.runs.clear();
   const Eigen::Vector3i c = grid.cell_of(i);
   const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2);
-  for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz) {
-        const auto [first, last] = grid.cell(c + Eigen::Vector3i(dx, dy, dz));
-        if (first == last) continue;
-        s.runs.push_back(s.a.size());
-        for (std::int64_t e = first; e != last; ++e) {
-          const double* y = grid.coords(e);
-          const double ex = y[0] - xi, ey = y[1] - yi, ez = y[2] - zi;
-          const double d2 = ex * ex + ey * ey + ez * ez;
-          if (d2 < R2) {
-            const int q = grid.index(e);
-            if (q != i) s.a.push_back({q, d2});
-          }
-        }
+  std::pair<std::int64_t, std::int64_t> ranges[(2 * kCellsPerRadius + 1) * (2 * kCellsPerRadius + 1) *
+                                               (2 * kCellsPerRadius + 1)];
+  int nr = 0;
+  std::size_t total = 0;
+  for (int dx = -kCellsPerRadius; dx <= kCellsPerRadius; ++dx)
+    for (int dy = -kCellsPerRadius; dy <= kCellsPerRadius; ++dy)
+      for (int dz = -kCellsPerRadius; dz <= kCellsPerRadius; ++dz) {
+        const auto r = grid.cell(c + Eigen::Vector3i(dx, dy, dz));
+        if (r.first == r.second) continue;
+        ranges[nr++] = r;
+        total += std::size_t(r.second - r.first);
       }
-  s.runs.push_back(s.a.size());
+  if (s.a.size() < total) s.a.resize(total);
+  Neighbour* out = s.a.data();
+  std::size_t n = 0;
+  for (int k = 0; k < nr; ++k) {
+    s.runs.push_back(n);
+    for (std::int64_t e = ranges[k].first; e != ranges[k].second; ++e) {
+      const double* y = grid.coords(e);
+      const double ex = y[0] - xi, ey = y[1] - yi, ez = y[2] - zi;
+      const double d2 = ex * ex + ey * ey + ez * ez;
+      const int q = grid.index(e);
+      out[n] = {q, d2};
+      n += std::size_t((d2 < R2) & (q != i));  // branch-free: about half the candidates are rejected
+    }
+  }
+  s.runs.push_back(n);
+  s.n = n;
   if (!sorted) return;
   // Bottom-up merge of the sorted runs (one per cell): O(n log #cells), cheaper than a sort.
+  if (s.b.size() < s.a.size()) s.b.resize(s.a.size());
   while (s.runs.size() > 2) {
-    s.b.resize(s.a.size());
     s.runs2.clear();
     std::size_t r = 0;
     for (; r + 2 < s.runs.size(); r += 2) {
@@ -133,7 +150,7 @@ void neighbours(const Eigen::MatrixX3d& x, const CellGrid& grid, Eigen::Index i,
                 s.b.begin() + std::ptrdiff_t(s.runs[r]));
       s.runs2.push_back(s.runs[r]);
     }
-    s.runs2.push_back(s.a.size());
+    s.runs2.push_back(n);
     std::swap(s.a, s.b);
     std::swap(s.runs, s.runs2);
   }
@@ -151,14 +168,14 @@ void check_inputs(const Eigen::MatrixX3d& points, double t, double cutoff) {
 std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff) {
   check_inputs(points, t, cutoff);
   const double R = cutoff * std::sqrt(2.0 * t);
-  const CellGrid grid(points, R);
+  const CellGrid grid(points, R / kCellsPerRadius);
   tbb::enumerable_thread_specific<Scratch> scratch;
   std::vector<std::int64_t> count(std::size_t(points.rows()));
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, points.rows(), 256), [&](const auto& r) {
     Scratch& s = scratch.local();
     for (Eigen::Index i = r.begin(); i != r.end(); ++i) {
       neighbours(points, grid, i, R * R, s, false);
-      count[std::size_t(i)] = std::int64_t(s.a.size()) + 1;
+      count[std::size_t(i)] = std::int64_t(s.n) + 1;
     }
   });
   std::int64_t total = 0;
@@ -181,7 +198,7 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   const double R = cutoff * std::sqrt(2.0 * t);
   const double R2 = R * R, inv4t = 1.0 / (4.0 * t);
   const double c = 1.0 / (4.0 * std::numbers::pi * t * t);  // spec §6: 1 / (t (4 pi t)^{d/2}), d = 2
-  const CellGrid grid(points, R);
+  const CellGrid grid(points, R / kCellsPerRadius);
   tbb::enumerable_thread_specific<Scratch> scratch;
 
   // Pass 1: column counts (neighbours + the diagonal).
@@ -190,7 +207,7 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
     Scratch& s = scratch.local();
     for (Eigen::Index i = r.begin(); i != r.end(); ++i) {
       neighbours(points, grid, i, R2, s, false);
-      outer[std::size_t(i) + 1] = std::int64_t(s.a.size()) + 1;
+      outer[std::size_t(i) + 1] = std::int64_t(s.n) + 1;
     }
   });
   for (Eigen::Index i = 0; i < n; ++i) outer[std::size_t(i) + 1] += outer[std::size_t(i)];
@@ -224,7 +241,8 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
       std::int64_t diag_pos = -1;
       double row_sum = 0.0;  // sum_i c mu_i g(d_ij), in ascending i (deterministic)
       const double muj = mu[j];
-      for (const Neighbour& nb : s.a) {
+      for (std::size_t k = 0; k < s.n; ++k) {
+        const Neighbour& nb = s.a[k];
         if (diag_pos < 0 && nb.index > j) diag_pos = out++;
         const double g = c * std::exp(-nb.d2 * inv4t);
         row_sum += mu[nb.index] * g;
@@ -310,7 +328,11 @@ class HeatKernel final : public Discretization {
       ops.domain = Operators::Domain::Vertices;
     }
     const bool symmetric = mass == "measure";
-    ops.L = heat_kernel_matrix(points, m, t, cutoff, symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise);
+    // swap, not assign: Eigen 3.4's SparseMatrix has no move assignment, and a copy would double
+    // the peak memory of the largest operator (9 GB at h = 0.01).
+    Eigen::SparseMatrix<double> L =
+        heat_kernel_matrix(points, m, t, cutoff, symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise);
+    ops.L.swap(L);
     Eigen::SparseMatrix<double> D(m.size(), m.size());
     D.reserve(Eigen::VectorXi::Ones(m.size()));
     for (Eigen::Index i = 0; i < m.size(); ++i) D.insert(i, i) = symmetric ? m[i] : 1.0;
