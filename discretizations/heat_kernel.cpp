@@ -1,0 +1,349 @@
+#include "heat_kernel.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <new>
+#include <numbers>
+#include <sstream>
+#include <vector>
+
+#include <corrlap/core/error.hpp>
+
+#include "normal_policy.hpp"
+
+namespace corrlap {
+
+double heat_kernel_time(double h, double k, double alpha) { return k * std::pow(h, alpha); }
+
+namespace {
+
+// Uniform grid of cell size R over the points: cells sorted by key, each cell's points in
+// ascending index order (so candidate runs come out sorted).
+class CellGrid {
+ public:
+  CellGrid(const Eigen::MatrixX3d& x, double R) : x_(x), R_(R) {
+    const Eigen::Index n = x.rows();
+    lower_ = x.colwise().minCoeff().transpose();
+    const Eigen::Vector3d extent = x.colwise().maxCoeff().transpose() - lower_;
+    for (int a = 0; a < 3; ++a)
+      if (extent[a] / R > double(1 << 20)) throw InputError("heat kernel: cut-off radius too small for the extent of the points");
+    std::vector<std::pair<std::int64_t, int>> keyed(static_cast<std::size_t>(n));
+    tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) { keyed[std::size_t(i)] = {key(cell_of(i)), int(i)}; });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    order_.resize(std::size_t(n));
+    xyz_.resize(3 * std::size_t(n));
+    for (std::size_t i = 0; i < keyed.size(); ++i) {
+      order_[i] = keyed[i].second;
+      for (int a = 0; a < 3; ++a) xyz_[3 * i + std::size_t(a)] = x(keyed[i].second, a);
+      if (i == 0 || keyed[i].first != keyed[i - 1].first) {
+        keys_.push_back(keyed[i].first);
+        begin_.push_back(std::int64_t(i));
+      }
+    }
+    begin_.push_back(std::int64_t(n));
+  }
+
+  Eigen::Vector3i cell_of(Eigen::Index i) const {
+    Eigen::Vector3i c;
+    for (int a = 0; a < 3; ++a) c[a] = int(std::floor((x_(i, a) - lower_[a]) / R_));
+    return c;
+  }
+  static std::int64_t key(const Eigen::Vector3i& c) {
+    return (std::int64_t(c[0] + 1) << 42) | (std::int64_t(c[1] + 1) << 21) | std::int64_t(c[2] + 1);
+  }
+  /// Range [first, last) of the cell in the cell-sorted order (empty if none).
+  std::pair<std::int64_t, std::int64_t> cell(const Eigen::Vector3i& c) const {
+    for (int a = 0; a < 3; ++a)
+      if (c[a] < 0) return {0, 0};
+    const std::int64_t k = key(c);
+    auto it = std::lower_bound(keys_.begin(), keys_.end(), k);
+    if (it == keys_.end() || *it != k) return {0, 0};
+    const std::size_t id = std::size_t(it - keys_.begin());
+    return {begin_[id], begin_[id + 1]};
+  }
+  /// Point index and coordinates (contiguous, so the candidate scan streams) of sorted entry e.
+  int index(std::int64_t e) const { return order_[std::size_t(e)]; }
+  const double* coords(std::int64_t e) const { return xyz_.data() + 3 * e; }
+
+ private:
+  const Eigen::MatrixX3d& x_;
+  double R_;
+  Eigen::Vector3d lower_;
+  std::vector<std::int64_t> keys_, begin_;
+  std::vector<int> order_;
+  std::vector<double> xyz_;
+};
+
+struct Neighbour {
+  int index;
+  double d2;
+  bool operator<(const Neighbour& o) const { return index < o.index; }
+};
+
+// Thread-local scratch: grows to the largest neighbourhood once, then is reused (no per-point
+// allocation). n = number of valid entries in a.
+struct Scratch {
+  std::vector<Neighbour> a, b;
+  std::size_t n = 0;
+  std::vector<std::size_t> runs, runs2;
+};
+
+// Grid cells are R / kCellsPerRadius wide: the search covers (2 kCellsPerRadius + 1)^3 cells.
+// Finer cells mean fewer candidates to reject (on a surface: (2.5R)^2 instead of (3R)^2 for 2).
+constexpr int kCellsPerRadius = 2;
+
+// Neighbours of point i (excluding i) strictly within distance R (R2 = R^2), in s.a[0, s.n);
+// sorted by index when `sorted`.
+void neighbours(const Eigen::MatrixX3d& x, const CellGrid& grid, Eigen::Index i, double R2, Scratch& s,
+                bool sorted = true) {
+  s.runs.clear();
+  const Eigen::Vector3i c = grid.cell_of(i);
+  const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2);
+  std::pair<std::int64_t, std::int64_t> ranges[(2 * kCellsPerRadius + 1) * (2 * kCellsPerRadius + 1) *
+                                               (2 * kCellsPerRadius + 1)];
+  int nr = 0;
+  std::size_t total = 0;
+  for (int dx = -kCellsPerRadius; dx <= kCellsPerRadius; ++dx)
+    for (int dy = -kCellsPerRadius; dy <= kCellsPerRadius; ++dy)
+      for (int dz = -kCellsPerRadius; dz <= kCellsPerRadius; ++dz) {
+        const auto r = grid.cell(c + Eigen::Vector3i(dx, dy, dz));
+        if (r.first == r.second) continue;
+        ranges[nr++] = r;
+        total += std::size_t(r.second - r.first);
+      }
+  if (s.a.size() < total) s.a.resize(total);
+  Neighbour* out = s.a.data();
+  std::size_t n = 0;
+  for (int k = 0; k < nr; ++k) {
+    s.runs.push_back(n);
+    for (std::int64_t e = ranges[k].first; e != ranges[k].second; ++e) {
+      const double* y = grid.coords(e);
+      const double ex = y[0] - xi, ey = y[1] - yi, ez = y[2] - zi;
+      const double d2 = ex * ex + ey * ey + ez * ez;
+      const int q = grid.index(e);
+      out[n] = {q, d2};
+      n += std::size_t((d2 < R2) & (q != i));  // branch-free: about half the candidates are rejected
+    }
+  }
+  s.runs.push_back(n);
+  s.n = n;
+  if (!sorted) return;
+  // Bottom-up merge of the sorted runs (one per cell): O(n log #cells), cheaper than a sort.
+  if (s.b.size() < s.a.size()) s.b.resize(s.a.size());
+  while (s.runs.size() > 2) {
+    s.runs2.clear();
+    std::size_t r = 0;
+    for (; r + 2 < s.runs.size(); r += 2) {
+      std::merge(s.a.begin() + std::ptrdiff_t(s.runs[r]), s.a.begin() + std::ptrdiff_t(s.runs[r + 1]),
+                 s.a.begin() + std::ptrdiff_t(s.runs[r + 1]), s.a.begin() + std::ptrdiff_t(s.runs[r + 2]),
+                 s.b.begin() + std::ptrdiff_t(s.runs[r]));
+      s.runs2.push_back(s.runs[r]);
+    }
+    if (r + 1 < s.runs.size()) {  // odd run out: copy
+      std::copy(s.a.begin() + std::ptrdiff_t(s.runs[r]), s.a.begin() + std::ptrdiff_t(s.runs[r + 1]),
+                s.b.begin() + std::ptrdiff_t(s.runs[r]));
+      s.runs2.push_back(s.runs[r]);
+    }
+    s.runs2.push_back(n);
+    std::swap(s.a, s.b);
+    std::swap(s.runs, s.runs2);
+  }
+}
+
+void check_inputs(const Eigen::MatrixX3d& points, double t, double cutoff) {
+  if (points.rows() == 0) throw InputError("heat kernel: no point");
+  if (!points.allFinite()) throw InputError("heat kernel: non-finite point position");
+  if (!(t > 0.0) || !std::isfinite(t)) throw InputError("heat kernel: t must be a positive number");
+  if (!(cutoff > 0.0) || !std::isfinite(cutoff)) throw InputError("heat kernel: cutoff must be a positive number");
+}
+
+}  // namespace
+
+std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff) {
+  check_inputs(points, t, cutoff);
+  const double R = cutoff * std::sqrt(2.0 * t);
+  const CellGrid grid(points, R / kCellsPerRadius);
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  std::vector<std::int64_t> count(std::size_t(points.rows()));
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, points.rows(), 256), [&](const auto& r) {
+    Scratch& s = scratch.local();
+    for (Eigen::Index i = r.begin(); i != r.end(); ++i) {
+      neighbours(points, grid, i, R * R, s, false);
+      count[std::size_t(i)] = std::int64_t(s.n) + 1;
+    }
+  });
+  std::int64_t total = 0;
+  for (auto c : count) total += c;
+  return total;
+}
+
+Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
+                                               double cutoff, HeatKernelForm form) {
+  check_inputs(points, t, cutoff);
+  const Eigen::Index n = points.rows();
+  if (mu.size() != n) throw InputError("heat kernel: " + std::to_string(mu.size()) + " measures for " + std::to_string(n) + " points");
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (!std::isfinite(mu[i]) || !(mu[i] > 0.0)) {
+      std::ostringstream os;
+      os << "heat kernel: measure of point " << i << " is " << mu[i] << " (must be positive)";
+      throw InputError(os.str());
+    }
+  if (n > INT_MAX) throw InputError("heat kernel: too many points");
+  const double R = cutoff * std::sqrt(2.0 * t);
+  const double R2 = R * R, inv4t = 1.0 / (4.0 * t);
+  const double c = 1.0 / (4.0 * std::numbers::pi * t * t);  // spec §6: 1 / (t (4 pi t)^{d/2}), d = 2
+  const CellGrid grid(points, R / kCellsPerRadius);
+  tbb::enumerable_thread_specific<Scratch> scratch;
+
+  // Pass 1: column counts (neighbours + the diagonal).
+  std::vector<std::int64_t> outer(std::size_t(n) + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, 256), [&](const auto& r) {
+    Scratch& s = scratch.local();
+    for (Eigen::Index i = r.begin(); i != r.end(); ++i) {
+      neighbours(points, grid, i, R2, s, false);
+      outer[std::size_t(i) + 1] = std::int64_t(s.n) + 1;
+    }
+  });
+  for (Eigen::Index i = 0; i < n; ++i) outer[std::size_t(i) + 1] += outer[std::size_t(i)];
+  const std::int64_t nnz = outer[std::size_t(n)];
+  if (nnz > std::int64_t(INT_MAX)) {
+    std::ostringstream os;
+    os << "heat kernel: " << nnz << " nonzeros exceed the 32-bit sparse index range; use a larger h or a smaller t/cutoff";
+    throw NumericalError(os.str());
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  try {
+    A.resizeNonZeros(Eigen::Index(nnz));
+  } catch (const std::bad_alloc&) {
+    std::ostringstream os;
+    os << "heat kernel: " << nnz << " nonzeros (" << double(nnz) * 12.0 / 1e9 << " GB) do not fit in memory";
+    throw NumericalError(os.str());
+  }
+  for (Eigen::Index i = 0; i <= n; ++i) A.outerIndexPtr()[i] = int(outer[std::size_t(i)]);
+  int* inner = A.innerIndexPtr();
+  double* values = A.valuePtr();
+
+  // Pass 2: column j, written once. The neighbour relation is symmetric (bitwise-equal distances),
+  // so column j's pattern is j's neighbourhood. Symmetric form: L[i][j] = c mu_i mu_j g(d),
+  // L[j][j] = -mu_j sum_i c mu_i g. Pointwise form: A[i][j] = c mu_j g, and the diagonal is
+  // minus the ROW sum of row j, -sum_i c mu_i g(d_ij): also computable from j's neighbourhood.
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, 256), [&](const auto& r) {
+    Scratch& s = scratch.local();
+    for (Eigen::Index j = r.begin(); j != r.end(); ++j) {
+      neighbours(points, grid, j, R2, s);
+      std::int64_t out = outer[std::size_t(j)];
+      std::int64_t diag_pos = -1;
+      double row_sum = 0.0;  // sum_i c mu_i g(d_ij), in ascending i (deterministic)
+      const double muj = mu[j];
+      for (std::size_t k = 0; k < s.n; ++k) {
+        const Neighbour& nb = s.a[k];
+        if (diag_pos < 0 && nb.index > j) diag_pos = out++;
+        const double g = c * std::exp(-nb.d2 * inv4t);
+        row_sum += mu[nb.index] * g;
+        inner[out] = nb.index;
+        values[out] = form == HeatKernelForm::Symmetric ? mu[nb.index] * muj * g : muj * g;
+        ++out;
+      }
+      if (diag_pos < 0) diag_pos = out++;
+      inner[diag_pos] = int(j);
+      values[diag_pos] = form == HeatKernelForm::Symmetric ? -muj * row_sum : -row_sum;
+    }
+  });
+  return A;
+}
+
+namespace {
+
+class HeatKernel final : public Discretization {
+ public:
+  std::string name() const override { return "heat-kernel"; }
+  NormalKind required_normals() const override { return NormalKind::Face; }
+  std::vector<ParameterInfo> parameters() const override {
+    std::vector<ParameterInfo> p = {
+        {"t", "k*h^alpha", "diffusion time (spec §6); when absent, t = k h^alpha"},
+        {"k", "0.1", "t = k h^alpha"},
+        {"alpha", "0.6666666666666666", "t = k h^alpha"},
+        {"cutoff", "3", "couple points closer than cutoff * sqrt(2t) (spec §6, K)"},
+        {"variant", "dual", "dual: surfel values (domain Faces) | primal: vertex values"},
+        {"mass", "measure", "measure: L = diag(mu) A symmetric, M = diag(mu) | identity: L = A pointwise, M = I"}};
+    for (auto& q : normal_policy_parameters()) p.push_back(q);
+    return p;
+  }
+
+  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    std::vector<std::string> keys;
+    for (const auto& p : parameters()) keys.push_back(p.name);
+    params.check_keys(keys, name());
+    mesh.validate("heat-kernel");
+    const std::string variant = params.get_string("variant", "dual");
+    const std::string mass = params.get_string("mass", "measure");
+    if (variant != "dual" && variant != "primal") throw InputError("heat-kernel: variant '" + variant + "': expected dual or primal");
+    if (mass != "measure" && mass != "identity") throw InputError("heat-kernel: mass '" + mass + "': expected measure or identity");
+    const double h = mesh.grid_step();
+    double t = params.get_double("t", -1.0);
+    if (params.has("t")) {
+      if (!(t > 0)) throw InputError("heat-kernel: t must be positive");
+    } else {
+      t = heat_kernel_time(h, params.get_double("k", 0.1), params.get_double("alpha", 2.0 / 3.0));
+      if (!(t > 0) || !std::isfinite(t)) throw InputError("heat-kernel: k h^alpha must be positive");
+    }
+    const double cutoff = params.get_double("cutoff", 3.0);
+
+    Operators ops;
+    const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops.warnings);
+    const Eigen::MatrixX3d n = trivial_face_normals(mesh);
+    const int F = mesh.num_faces();
+    // spec §6: mu(s) = h^2 |u_s . n_s| (DGtal takes the absolute value); h^2 = |(x1-x0) x (x3-x0)|.
+    Eigen::VectorXd mu(F);
+    for (int f = 0; f < F; ++f) {
+      const Eigen::Vector3d x0 = mesh.positions.row(mesh.faces(f, 0)), x1 = mesh.positions.row(mesh.faces(f, 1)),
+                            x3 = mesh.positions.row(mesh.faces(f, 3));
+      mu[f] = (x1 - x0).cross(x3 - x0).norm() * std::abs(u.row(f).dot(n.row(f)));
+      if (!(mu[f] > 0)) {
+        std::ostringstream os;
+        os << "heat-kernel: face " << f << " has zero measure (normal tangent to the surfel or degenerate face)";
+        throw InputError(os.str());
+      }
+    }
+    Eigen::MatrixX3d points;
+    Eigen::VectorXd m;
+    if (variant == "dual") {
+      points = mesh.face_centroids();
+      m = mu;
+      ops.domain = Operators::Domain::Faces;
+    } else {
+      // spec §6 PRIMAL: vertices, mu(v) = sum_{s ni v} mu(s)/4
+      points = mesh.positions;
+      m = Eigen::VectorXd::Zero(mesh.num_vertices());
+      for (int f = 0; f < F; ++f)
+        for (int k = 0; k < 4; ++k) m[mesh.faces(f, k)] += 0.25 * mu[f];
+      for (int v = 0; v < mesh.num_vertices(); ++v)
+        if (!(m[v] > 0)) throw InputError("heat-kernel: vertex " + std::to_string(v) + " belongs to no face");
+      ops.domain = Operators::Domain::Vertices;
+    }
+    const bool symmetric = mass == "measure";
+    // swap, not assign: Eigen 3.4's SparseMatrix has no move assignment, and a copy would double
+    // the peak memory of the largest operator (9 GB at h = 0.01).
+    Eigen::SparseMatrix<double> L =
+        heat_kernel_matrix(points, m, t, cutoff, symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise);
+    ops.L.swap(L);
+    Eigen::SparseMatrix<double> D(m.size(), m.size());
+    D.reserve(Eigen::VectorXi::Ones(m.size()));
+    for (Eigen::Index i = 0; i < m.size(); ++i) D.insert(i, i) = symmetric ? m[i] : 1.0;
+    D.makeCompressed();
+    ops.M = D;
+    return ops;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Discretization> make_heat_kernel() { return std::make_unique<HeatKernel>(); }
+
+}  // namespace corrlap

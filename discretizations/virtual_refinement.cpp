@@ -1,0 +1,460 @@
+#include "virtual_refinement.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/parallel_assembly.hpp>
+
+#include "normal_policy.hpp"
+
+namespace corrlap {
+
+// ------------------------------------------------------------------------ triangle kernels
+
+double heron_area(double l0, double l1, double l2) {
+  // Kahan's ordering a >= b >= c avoids the cancellation of the textbook formula for needles.
+  double a = l0, b = l1, c = l2;
+  if (a < b) std::swap(a, b);
+  if (b < c) std::swap(b, c);
+  if (a < b) std::swap(a, b);
+  const double p = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c));
+  return p > 0.0 ? 0.25 * std::sqrt(p) : 0.0;
+}
+
+bool cotan_triangle_stiffness(double l0, double l1, double l2, Eigen::Matrix3d& K) {
+  K.setZero();
+  const double A = heron_area(l0, l1, l2);
+  if (!(A > DBL_MIN)) return false;  // spec §5.1 step 3: pmp skips the triangle
+  const double s0 = l0 * l0, s1 = l1 * l1, s2 = l2 * l2;
+  // gamma_k = (l_i^2 + l_j^2 - l_k^2) / (8A) = cot(theta_k) / 2
+  const double g0 = (s1 + s2 - s0) / (8.0 * A), g1 = (s0 + s2 - s1) / (8.0 * A), g2 = (s0 + s1 - s2) / (8.0 * A);
+  K(0, 1) = K(1, 0) = -g2;
+  K(0, 2) = K(2, 0) = -g1;
+  K(1, 2) = K(2, 1) = -g0;
+  K(0, 0) = g1 + g2;
+  K(1, 1) = g0 + g2;
+  K(2, 2) = g0 + g1;
+  return true;
+}
+
+Eigen::Vector3d mixed_voronoi_triangle_mass(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                                            const Eigen::Vector3d& x2) {
+  // spec §5.1 step 4 (pmp): e_i = x_{i+1} - x_i, delta_i = -e_i . e_{i+2} (corner i's dot product).
+  const Eigen::Vector3d x[3] = {x0, x1, x2};
+  Eigen::Vector3d e[3];
+  for (int i = 0; i < 3; ++i) e[i] = x[(i + 1) % 3] - x[i];
+  const double area2 = e[0].cross(e[1]).norm();
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  if (!(area2 > DBL_MIN)) return m;
+  double delta[3];
+  for (int i = 0; i < 3; ++i) delta[i] = -e[i].dot(e[(i + 2) % 3]);
+  const bool any_obtuse = delta[0] < 0.0 || delta[1] < 0.0 || delta[2] < 0.0;
+  for (int i = 0; i < 3; ++i) {
+    if (delta[i] < 0.0)
+      m[i] = 0.25 * area2;
+    else if (any_obtuse)
+      m[i] = 0.125 * area2;
+    else
+      m[i] = 0.125 * (e[i].squaredNorm() * delta[(i + 2) % 3] / area2 +
+                      e[(i + 2) % 3].squaredNorm() * delta[(i + 1) % 3] / area2);
+  }
+  return m;
+}
+
+namespace {
+
+// K_f = P^T K_fan P with P = [I_4; w^T] (refined index 4 = virtual point), spec §5.1 step 5.
+Eigen::Matrix4d restrict_fan(const Eigen::Matrix<double, 5, 5>& F, const Eigen::Vector4d& w) {
+  Eigen::Matrix4d R;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) R(a, b) = F(a, b) + w[b] * F(a, 4) + w[a] * F(4, b) + w[a] * w[b] * F(4, 4);
+  return R;
+}
+
+Eigen::Matrix4d row_sum_lump(const Eigen::Matrix4d& M) {
+  return M.rowwise().sum().asDiagonal();
+}
+
+Eigen::Vector4d bilinear_basis(double s, double t) {
+  return {(1 - s) * (1 - t), s * (1 - t), s * t, (1 - s) * t};
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------- uncorrected VRM
+
+Eigen::Vector4d vrm_virtual_weights(const QuadPositions& Xin) {
+  // spec §5.1 step 1: A_ij = sum_k (x_j x d_k).(x_i x d_k), b_i = sum_k (x_i x d_k).(x_k x d_k),
+  // plus the row sum_j w_j = 1, solved by complete orthogonal decomposition (least squares,
+  // minimum norm), as pmp does. Centring keeps the entries O(h^4) instead of O(|x|^2 h^2).
+  const Eigen::RowVector3d c = Xin.colwise().mean();
+  QuadPositions X = Xin.rowwise() - c;
+  Eigen::Matrix<double, 5, 4> A = Eigen::Matrix<double, 5, 4>::Zero();
+  Eigen::Matrix<double, 5, 1> b = Eigen::Matrix<double, 5, 1>::Zero();
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d dk = (X.row((k + 1) % 4) - X.row(k)).transpose();
+    Eigen::Vector3d cr[4];
+    for (int j = 0; j < 4; ++j) cr[j] = X.row(j).transpose().cross(dk);
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) A(i, j) += cr[j].dot(cr[i]);
+      b[i] += cr[i].dot(cr[k]);
+    }
+  }
+  A.row(4).setOnes();
+  b[4] = 1.0;
+  // Scale the geometric rows to O(1) so the rank decision of the decomposition is relative.
+  const double scale = A.topRows<4>().cwiseAbs().maxCoeff();
+  if (scale > 0.0) {
+    A.topRows<4>() /= scale;
+    b.head<4>() /= scale;
+  }
+  Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 5, 4>> cod(A);
+  cod.setThreshold(1e-10);
+  return cod.solve(b);
+}
+
+VrmLocal vrm_local(const QuadPositions& X) {
+  VrmLocal out;
+  out.w = vrm_virtual_weights(X);
+  const Eigen::Vector3d p = X.transpose() * out.w;
+  Eigen::Matrix<double, 5, 5> Kfan = Eigen::Matrix<double, 5, 5>::Zero();
+  Eigen::Matrix<double, 5, 1> mfan = Eigen::Matrix<double, 5, 1>::Zero();
+  for (int i = 0; i < 4; ++i) {
+    const int id[3] = {i, (i + 1) % 4, 4};
+    const Eigen::Vector3d y0 = X.row(i).transpose(), y1 = X.row((i + 1) % 4).transpose();
+    Eigen::Matrix3d Kt;
+    if (!cotan_triangle_stiffness((p - y1).norm(), (p - y0).norm(), (y1 - y0).norm(), Kt)) {
+      ++out.skipped_triangles;
+      continue;
+    }
+    const Eigen::Vector3d m = mixed_voronoi_triangle_mass(y0, y1, p);
+    for (int a = 0; a < 3; ++a) {
+      mfan[id[a]] += m[a];
+      for (int b = 0; b < 3; ++b) Kfan(id[a], id[b]) += Kt(a, b);
+    }
+  }
+  out.K = restrict_fan(Kfan, out.w);
+  // M_f = diag(row sums of P^T M_fan P) (spec §5.1 step 5)
+  out.M = row_sum_lump(restrict_fan(Eigen::Matrix<double, 5, 5>(mfan.asDiagonal()), out.w));
+  return out;
+}
+
+// ------------------------------------------------------------------------- corrected VRM
+
+Eigen::Vector4d corrected_fan_areas(const Eigen::Vector4d& uz, double s, double t,
+                                    Eigen::Matrix<double, 4, 2>* gradient, Eigen::Matrix2d* hessians) {
+  // spec §5.2: U(s,t) = a + b s + c t + d s t (bilinear interpolation of uz). Triangle T_i =
+  // (q_i, q_{i+1}, p); its integral of U is |T_i|/3 times the sum of U at the three side midpoints
+  // (exact for degree <= 2). |T_i| = cross(q_{i+1} - q_i, p - q_i)/2 is affine in p.
+  static const double q[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  const double a = uz[0], b = uz[1] - uz[0], c = uz[3] - uz[0], d = uz[0] - uz[1] + uz[2] - uz[3];
+  auto U = [&](double x, double y) { return a + b * x + c * y + d * x * y; };
+  Eigen::Vector4d A;
+  for (int i = 0; i < 4; ++i) {
+    const double* q0 = q[i];
+    const double* q1 = q[(i + 1) % 4];
+    const double ex = q1[0] - q0[0], ey = q1[1] - q0[1];
+    const double area = 0.5 * (ex * (t - q0[1]) - ey * (s - q0[0]));
+    const double mb[2] = {0.5 * (q1[0] + s), 0.5 * (q1[1] + t)};
+    const double mc[2] = {0.5 * (q0[0] + s), 0.5 * (q0[1] + t)};
+    const double S = U(0.5 * (q0[0] + q1[0]), 0.5 * (q0[1] + q1[1])) + U(mb[0], mb[1]) + U(mc[0], mc[1]);
+    A[i] = area * S / 3.0;
+    if (gradient || hessians) {
+      const Eigen::Vector2d ga(-0.5 * ey, 0.5 * ex);
+      // grad S = (grad U(mb) + grad U(mc)) / 2, grad U(x, y) = (b + d y, c + d x)
+      const Eigen::Vector2d gs(0.5 * (2 * b + d * (mb[1] + mc[1])), 0.5 * (2 * c + d * (mb[0] + mc[0])));
+      if (gradient) gradient->row(i) = ((ga * S + area * gs) / 3.0).transpose();
+      if (hessians) {
+        Eigen::Matrix2d HS;
+        HS << 0, 0.5 * d, 0.5 * d, 0;
+        hessians[i] = (ga * gs.transpose() + gs * ga.transpose() + area * HS) / 3.0;
+      }
+    }
+  }
+  return A;
+}
+
+double corrected_fan_energy(const Eigen::Vector4d& uz, double s, double t, Eigen::Vector2d* gradient,
+                            Eigen::Matrix2d* hessian) {
+  Eigen::Matrix<double, 4, 2> G;
+  Eigen::Matrix2d H[4];
+  const bool derivs = gradient || hessian;
+  const Eigen::Vector4d A = corrected_fan_areas(uz, s, t, derivs ? &G : nullptr, hessian ? H : nullptr);
+  if (gradient) *gradient = 2.0 * G.transpose() * A;
+  if (hessian) {
+    hessian->setZero();
+    for (int i = 0; i < 4; ++i) *hessian += 2.0 * (G.row(i).transpose() * G.row(i) + A[i] * H[i]);
+  }
+  return A.squaredNorm();
+}
+
+VirtualPoint minimize_virtual_point(const Eigen::Vector4d& uz, const VirtualPointOptions& opt) {
+  const double lo = opt.clamp, hi = 1.0 - opt.clamp;
+  VirtualPoint vp;
+  double s = 0.5, t = 0.5;
+  Eigen::Vector2d g;
+  Eigen::Matrix2d H;
+  double E = corrected_fan_energy(uz, s, t, &g, &H);
+  const double ubar = uz.mean();
+  const double gstep = std::abs(ubar) > 1e-3 ? 1.0 / (ubar * ubar) : 1e6;
+  // Gradient projected on the box: a component pushing outward at an active bound is dropped.
+  auto projected = [&](const Eigen::Vector2d& grad) {
+    Eigen::Vector2d pg = grad;
+    const double x[2] = {s, t};
+    for (int k = 0; k < 2; ++k)
+      if ((x[k] <= lo && grad[k] > 0) || (x[k] >= hi && grad[k] < 0)) pg[k] = 0;
+    return pg;
+  };
+  bool stationary = false;
+  int it = 0;
+  for (; it < opt.max_iterations; ++it) {
+    if (projected(g).norm() < opt.gradient_tolerance) break;
+    Eigen::Vector2d dir;
+    const double det = H.determinant();
+    bool newton = H(0, 0) > 0 && det > 0;
+    if (newton) {
+      dir = -H.inverse() * g;  // spec §5.2: Newton with the analytic Hessian
+    } else {
+      dir = -gstep * g;  // fallback: gradient step 1/ubar^2
+    }
+    if (dir.dot(g) >= 0) {
+      dir = -gstep * g;
+      newton = false;
+    }
+    double alpha = 1.0;
+    bool accepted = false;
+    double s1 = s, t1 = t, E1 = E;
+    Eigen::Vector2d g1;
+    for (int bt = 0; bt < 60; ++bt, alpha *= 0.5) {  // backtracking
+      s1 = std::clamp(s + alpha * dir[0], lo, hi);
+      t1 = std::clamp(t + alpha * dir[1], lo, hi);
+      if (s1 == s && t1 == t) break;
+      E1 = corrected_fan_energy(uz, s1, t1, &g1);
+      if (E1 < E) {
+        accepted = true;
+        break;
+      }
+      // Near the minimum the decrease of E (~|g|^2/|H|) falls below the resolution of E while
+      // |g| is still ~1e-9: accept a full Newton step that keeps E within round-off and reduces
+      // the gradient, so Newton's quadratic convergence reaches the 1e-12 tolerance.
+      if (newton && bt == 0 && E1 <= E * (1.0 + 8.0 * DBL_EPSILON) && g1.norm() < 0.5 * g.norm()) {
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {  // no representable decrease: stationary up to round-off
+      stationary = true;
+      break;
+    }
+    s = s1;
+    t = t1;
+    E = corrected_fan_energy(uz, s, t, &g, &H);
+  }
+  const double pg = projected(g).norm();
+  vp.s = s;
+  vp.t = t;
+  vp.iterations = it;
+  vp.energy = E;
+  vp.gradient_norm = pg;
+  vp.converged = std::isfinite(E) && (pg < opt.gradient_tolerance || (stationary && pg < 1e-9));
+  return vp;
+}
+
+CorrectedVrmLocal corrected_vrm_local(const QuadPositions& X, const QuadPositions& U, const Eigen::Vector3d& n,
+                                      bool lumped_mass, const VirtualPointOptions& options) {
+  CorrectedVrmLocal out;
+  Eigen::Vector4d uz;
+  for (int k = 0; k < 4; ++k) uz[k] = U.row(k).dot(n);
+  // Parametric Jacobian of the bilinear quad: h^2 on a surfel (spec §5.2, A_i = h^2 iint_{T_i} U).
+  const double J = (X.row(1) - X.row(0)).cross(X.row(3) - X.row(0)).norm();
+  out.point = minimize_virtual_point(uz, options);
+  out.w = bilinear_basis(out.point.s, out.point.t);
+  out.areas = J * corrected_fan_areas(uz, out.point.s, out.point.t);
+  const Eigen::Vector3d p = X.transpose() * out.w;
+  const Eigen::Vector3d up = U.transpose() * out.w;
+  Eigen::Matrix<double, 5, 5> Kfan = Eigen::Matrix<double, 5, 5>::Zero();
+  Eigen::Matrix<double, 5, 5> Mfan = Eigen::Matrix<double, 5, 5>::Zero();
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) % 4;
+    const int id[3] = {i, j, 4};
+    const Eigen::Vector3d y0 = X.row(i).transpose(), y1 = X.row(j).transpose();
+    // triangle normal (choice, spec §5.2): normalize(u_i + u_{i+1} + u_p)
+    Eigen::Vector3d uT = U.row(i).transpose() + U.row(j).transpose() + up;
+    const double un = uT.norm();
+    // lumped barycentric triangle mass with the integral area A_i (spec §5.2)
+    for (int a = 0; a < 3; ++a) Mfan(id[a], id[a]) += out.areas[i] / 3.0;
+    Eigen::Matrix3d Kt;
+    if (!(un > 0.0) || !cotan_triangle_stiffness((p - y1).cross(uT / un).norm(), (p - y0).cross(uT / un).norm(),
+                                                 (y1 - y0).cross(uT / un).norm(), Kt)) {
+      ++out.skipped_triangles;
+      continue;
+    }
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) Kfan(id[a], id[b]) += Kt(a, b);
+  }
+  out.K = restrict_fan(Kfan, out.w);
+  out.M = restrict_fan(Mfan, out.w);
+  if (lumped_mass) out.M = row_sum_lump(out.M);
+  return out;
+}
+
+// ------------------------------------------------------------------------- discretizations
+
+namespace {
+
+QuadPositions corners_of(const SurfelMesh& mesh, int f) {
+  QuadPositions X;
+  for (int k = 0; k < 4; ++k) X.row(k) = mesh.positions.row(mesh.faces(f, k));
+  return X;
+}
+
+Eigen::SparseMatrix<double> diagonal_matrix(const Eigen::VectorXd& d) {
+  Eigen::SparseMatrix<double> D(d.size(), d.size());
+  D.reserve(Eigen::VectorXi::Ones(d.size()));
+  for (Eigen::Index i = 0; i < d.size(); ++i) D.insert(i, i) = d[i];
+  D.makeCompressed();
+  return D;
+}
+
+// Row sums of a sparse matrix, as a diagonal (row-sum lumping).
+Eigen::SparseMatrix<double> lumped(const Eigen::SparseMatrix<double>& M) {
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(M.rows());
+  for (int c = 0; c < M.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(M, c); it; ++it) d[it.row()] += it.value();
+  return diagonal_matrix(d);
+}
+
+class Vrm final : public Discretization {
+ public:
+  explicit Vrm(bool corrected) : corrected_(corrected) {}
+  std::string name() const override { return corrected_ ? "corrected-vrm" : "vrm"; }
+  NormalKind required_normals() const override { return corrected_ ? NormalKind::Vertex : NormalKind::None; }
+  std::vector<ParameterInfo> parameters() const override {
+    if (!corrected_) return {};
+    std::vector<ParameterInfo> p = {
+        {"mass", "full", "full: M_f = P^T M_fan P (4x4, spec §5.2); lumped: its row sums"},
+        {"max_iterations", "50", "virtual-point minimizer: iteration limit (spec §5.2)"},
+        {"gradient_tolerance", "1e-12", "virtual-point minimizer: stop when |grad E/h^4| is below"}};
+    for (auto& q : normal_policy_parameters()) p.push_back(q);
+    return p;
+  }
+
+  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    std::vector<std::string> keys;
+    for (const auto& p : parameters()) keys.push_back(p.name);
+    params.check_keys(keys, name());
+    mesh.validate(name().c_str());
+    Operators ops;
+    const int F = mesh.num_faces(), V = mesh.num_vertices();
+    if (F == 0) throw InputError(name() + ": the mesh has no face");
+    const AssemblyPlan plan(mesh.faces.data(), std::size_t(F), 4, V);
+    std::vector<double> Kloc(std::size_t(F) * 16), Mloc(std::size_t(F) * 16);
+    std::vector<int> skipped(std::size_t(F), 0);
+    std::vector<VirtualPoint> points(corrected_ ? std::size_t(F) : 0);
+
+    bool lumped_mass = false;
+    VirtualPointOptions vopt;
+    Eigen::MatrixX3d u, n;
+    std::string policy = "warn";
+    if (corrected_) {
+      const std::string mass = params.get_string("mass", "full");
+      if (mass != "full" && mass != "lumped") throw InputError(name() + ": mass '" + mass + "': expected full or lumped");
+      lumped_mass = mass == "lumped";
+      vopt.max_iterations = params.get_int("max_iterations", 50);
+      vopt.gradient_tolerance = params.get_double("gradient_tolerance", 1e-12);
+      if (vopt.max_iterations < 1) throw InputError(name() + ": max_iterations must be >= 1");
+      if (!(vopt.gradient_tolerance > 0)) throw InputError(name() + ": gradient_tolerance must be > 0");
+      policy = params.get_string("orientation", "warn");
+      u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops.warnings);
+      n = trivial_face_normals(mesh);  // spec §1.3/§1.5: outward trivial normal
+    }
+
+    // One parallel pass computes both local matrices of each face (no per-face allocation);
+    // the plan's gather then sums them in a fixed order: bitwise identical for any thread count.
+    tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
+      for (int f = r.begin(); f != r.end(); ++f) {
+        const QuadPositions X = corners_of(mesh, f);
+        Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> K(&Kloc[std::size_t(f) * 16]);
+        Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> M(&Mloc[std::size_t(f) * 16]);
+        if (corrected_) {
+          QuadPositions Uf;
+          for (int k = 0; k < 4; ++k) Uf.row(k) = u.row(mesh.faces(f, k));
+          const CorrectedVrmLocal loc = corrected_vrm_local(X, Uf, n.row(f).transpose(), lumped_mass, vopt);
+          K = loc.K;
+          M = loc.M;
+          skipped[std::size_t(f)] = loc.skipped_triangles;
+          points[std::size_t(f)] = loc.point;
+        } else {
+          const VrmLocal loc = vrm_local(X);
+          K = loc.K;
+          M = loc.M;
+          skipped[std::size_t(f)] = loc.skipped_triangles;
+        }
+      }
+    });
+
+    ops.L = plan.gather(Kloc.data());
+    ops.L *= -1.0;  // spec §5.1 step 6: L = -sum K_f (negative semi-definite)
+    ops.M = plan.gather(Mloc.data());
+    if (!corrected_ || lumped_mass) ops.M = lumped(ops.M);  // diagonal: drop the structural zeros
+    else
+      ops.M_lumped = lumped(ops.M);
+
+    // Reports, in face order (deterministic).
+    int nskip = 0, first_skip = -1;
+    for (int f = 0; f < F; ++f)
+      if (skipped[std::size_t(f)]) {
+        nskip += skipped[std::size_t(f)];
+        if (first_skip < 0) first_skip = f;
+      }
+    if (nskip > 0) {
+      std::ostringstream os;
+      os << name() << ": " << nskip << " degenerate fan triangle(s) (zero " << (corrected_ ? "corrected " : "")
+         << "area) skipped, first in face " << first_skip;
+      if (policy == "error") throw InputError(os.str());
+      ops.warnings.push_back(os.str());
+    }
+    if (corrected_) {
+      int bad = 0, worst = -1;
+      double worst_g = -1;
+      for (int f = 0; f < F; ++f) {
+        const VirtualPoint& vp = points[std::size_t(f)];
+        if (!vp.converged) {
+          ++bad;
+          if (!(vp.gradient_norm <= worst_g)) {
+            worst_g = vp.gradient_norm;
+            worst = f;
+          }
+        }
+      }
+      if (bad > 0) {
+        std::ostringstream os;
+        os.precision(3);
+        os << name() << ": the virtual-point minimizer did not converge on " << bad << " of " << F
+           << " faces (worst: face " << worst << ", |grad E/h^4| = " << worst_g << ", (s0, t0) = ("
+           << points[std::size_t(worst)].s << ", " << points[std::size_t(worst)].t << "))";
+        if (policy == "error") throw NumericalError(os.str());
+        ops.warnings.push_back(os.str());
+      }
+    }
+    return ops;
+  }
+
+ private:
+  bool corrected_;
+};
+
+}  // namespace
+
+std::unique_ptr<Discretization> make_vrm() { return std::make_unique<Vrm>(false); }
+std::unique_ptr<Discretization> make_corrected_vrm() { return std::make_unique<Vrm>(true); }
+
+}  // namespace corrlap
