@@ -146,43 +146,79 @@ RowRuns encode_runs(const VoxelGrid& grid) {
   return rr;
 }
 
-BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& kernel, const Eigen::Vector3i& c) {
-  BallMoments m;
+/// Kernel rows grouped by plane dz (rows of a plane are consecutive, dy ascending).
+struct KernelPlane {
+  int dz;
+  std::size_t begin, end;
+};
+std::vector<KernelPlane> kernel_planes(const std::vector<KernelRow>& rows) {
+  std::vector<KernelPlane> planes;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (planes.empty() || planes.back().dz != rows[i].dz) planes.push_back({rows[i].dz, i, i});
+    planes.back().end = i + 1;
+  }
+  return planes;
+}
+
+BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& kernel,
+                            const std::vector<KernelPlane>& planes, const Eigen::Vector3i& c) {
   const int ylo = rr.lower.y(), yhi = rr.lower.y() + rr.size.y() - 1;
   const int zlo = rr.lower.z(), zhi = rr.lower.z() + rr.size.z() - 1;
+  const std::int32_t* runs = rr.runs.data();
   std::int64_t m0 = 0, sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-  for (const KernelRow& k : kernel) {
-    const int y = c.y() + k.dy, z = c.z() + k.dz;
-    if (y < ylo || y > yhi || z < zlo || z > zhi) continue;
-    const std::size_t ri = rr.row_index(y, z);
-    const std::int32_t* r = rr.runs.data() + rr.offset[ri];
-    const std::int32_t* rend = rr.runs.data() + rr.offset[ri + 1];
-    if (r == rend) continue;
-    const int lo = c.x() - k.w, hi = c.x() + k.w;
-    std::int64_t s0 = 0, s1 = 0, s2 = 0;
-    for (; r != rend; r += 2) {
-      if (r[0] > hi) break;
-      if (r[1] < lo) continue;
-      const std::int64_t p = std::max<int>(r[0], lo) - c.x();
-      const std::int64_t q = std::min<int>(r[1], hi) - c.x();
-      const std::int64_t n = q - p + 1;
-      s0 += n;
-      s1 += (p + q) * n / 2;
-      s2 += G(q) - G(p - 1);
+  for (const KernelPlane& pl : planes) {
+    const int z = c.z() + pl.dz;
+    if (z < zlo || z > zhi) continue;
+    // Per-plane sums: S0, S1, S2 of the rows and their dy-weighted versions (fewer multiplies).
+    std::int64_t P0 = 0, P1 = 0, P2 = 0, Q0 = 0, Q1 = 0, R0 = 0;
+    for (std::size_t k = pl.begin; k < pl.end; ++k) {
+      const KernelRow& kr = kernel[k];
+      const int y = c.y() + kr.dy;
+      if (y < ylo || y > yhi) continue;
+      const std::size_t ri = rr.row_index(y, z);
+      const std::int32_t* r = runs + rr.offset[ri];
+      const std::int32_t* rend = runs + rr.offset[ri + 1];
+      const int lo = c.x() - kr.w, hi = c.x() + kr.w;
+      while (r != rend && r[1] < lo) r += 2;  // skip runs left of the chord
+      if (r == rend || r[0] > hi) continue;   // chord entirely outside
+      std::int64_t s0, s1, s2;
+      if (r[0] <= lo && r[1] >= hi) {
+        // Chord entirely inside one run (the common case away from the surface): closed form.
+        s0 = 2 * std::int64_t(kr.w) + 1;
+        s1 = 0;
+        s2 = 2 * G(kr.w);
+      } else {
+        s0 = s1 = s2 = 0;
+        for (; r != rend && r[0] <= hi; r += 2) {
+          const std::int64_t p = std::max<int>(r[0], lo) - c.x();
+          const std::int64_t q = std::min<int>(r[1], hi) - c.x();
+          const std::int64_t n = q - p + 1;
+          s0 += n;
+          s1 += (p + q) * n / 2;
+          s2 += G(q) - G(p - 1);
+        }
+      }
+      const std::int64_t dy = kr.dy;
+      P0 += s0;
+      P1 += s1;
+      P2 += s2;
+      Q0 += dy * s0;
+      Q1 += dy * s1;
+      R0 += dy * dy * s0;
     }
-    if (s0 == 0) continue;
-    const std::int64_t dy = k.dy, dz = k.dz;
-    m0 += s0;
-    sx += s1;
-    sy += dy * s0;
-    sz += dz * s0;
-    xx += s2;
-    xy += dy * s1;
-    xz += dz * s1;
-    yy += dy * dy * s0;
-    yz += dy * dz * s0;
-    zz += dz * dz * s0;
+    const std::int64_t dz = pl.dz;
+    m0 += P0;
+    sx += P1;
+    sy += Q0;
+    sz += dz * P0;
+    xx += P2;
+    xy += Q1;
+    xz += dz * P1;
+    yy += R0;
+    yz += dz * Q0;
+    zz += dz * dz * P0;
   }
+  BallMoments m;
   m.m0 = m0;
   m.m1[0] = sx, m.m1[1] = sy, m.m1[2] = sz;
   m.m2[0] = xx, m.m2[1] = xy, m.m2[2] = xz, m.m2[3] = yy, m.m2[4] = yz, m.m2[5] = zz;
@@ -219,13 +255,14 @@ std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius
                                     const std::vector<Eigen::Vector3i>& centres, const ProgressFn& progress) {
   const RowRuns rr = encode_runs(grid);
   const std::vector<KernelRow> kernel = kernel_rows(digital_radius, h);
+  const std::vector<KernelPlane> planes = kernel_planes(kernel);
   std::vector<BallMoments> out(centres.size());
   std::atomic<std::int64_t> done{0};
   const std::int64_t total = std::int64_t(centres.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, centres.size(), 256),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i)
-                        out[i] = moments_by_rows(rr, kernel, centres[i]);
+                        out[i] = moments_by_rows(rr, kernel, planes, centres[i]);
                       if (progress) progress(done += std::int64_t(range.size()), total);
                     });
   return out;
