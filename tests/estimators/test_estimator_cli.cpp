@@ -3,7 +3,9 @@
 
 #include <cmath>
 
+#include <corrlap/core/implicit_shape.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/io/volume_io.hpp>
 
 #include "test_support.hpp"
 
@@ -66,4 +68,29 @@ TEST_CASE("cli estimators reject bad input with clear errors") {
   CHECK(err.find("larger than the mesh") != std::string::npos);
   CHECK(run_cli("normals --mesh " + dir + "mesh.obj --estimator ii --out " + test::tmp_path("x.txt"), nullptr, &err) == 1);
   CHECK(err.find("need voxels") != std::string::npos);
+}
+
+TEST_CASE("cli normals on a volume file gives the reference II normals; empty volumes are rejected") {
+  DigitizationParams p;
+  p.h = 0.2;
+  p.min_aabb = -1.5;
+  p.max_aabb = 1.5;
+  const std::string vol = test::tmp_path("est_sphere_h02.vol");
+  write_volume(vol, voxels_to_volume(digitize(make_implicit_shape("sphere1"), p)));
+  const std::string out = test::tmp_path("est_ii_vol.txt");
+  std::string err;
+  REQUIRE(run_cli("normals --volume " + vol + " --h 0.2 --estimator ii --alpha 0.3333333333333333 --out " + out, nullptr, &err) == 0);
+  const Eigen::MatrixX3d n = read_normals(out);
+  const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");
+  REQUIRE(n.rows() == ref.rows());  // translation keeps the face order (spec §1.4 sort key)
+  CHECK((n - ref).cwiseAbs().maxCoeff() < 1e-12);
+  Volume empty;
+  empty.size = Eigen::Vector3i(8, 8, 8);
+  empty.values.assign(512, 0);
+  const std::string evol = test::tmp_path("est_empty.vol");
+  write_volume(evol, empty);
+  CHECK(run_cli("normals --volume " + evol + " --out " + test::tmp_path("x.txt"), nullptr, &err) == 1);
+  CHECK(err.find("empty") != std::string::npos);
+  CHECK(run_cli("curvature --volume " + evol + " --out " + test::tmp_path("c_empty"), nullptr, &err) == 1);
+  CHECK(err.find("empty") != std::string::npos);
 }
