@@ -124,6 +124,66 @@ void CorrectedCurvature::build_adjacency() {
   vertex_face_.assign(std::size_t(V), -1);
   for (int f = F - 1; f >= 0; --f)
     for (int k = 0; k < 4; ++k) vertex_face_[std::size_t(faces_(f, k))] = f;
+  build_grid();
+}
+
+void CorrectedCurvature::build_grid() {
+  const Eigen::Index F = centroids_.rows();
+  double edge = 0;
+  for (Eigen::Index f = 0; f < F; ++f)
+    edge += (positions_.row(faces_(f, 1)) - positions_.row(faces_(f, 0))).norm();
+  grid_cell_ = std::max(edge / double(F), 1e-12) * 2.0;
+  const Eigen::Vector3d lo = centroids_.colwise().minCoeff().transpose(), hi = centroids_.colwise().maxCoeff().transpose();
+  grid_origin_ = lo;
+  const Eigen::Vector3d ext = (hi - lo) / grid_cell_;
+  for (int a = 0; a < 3; ++a) grid_dims_[a] = std::clamp(int(std::floor(ext[a])) + 1, 1, 4096);
+  auto cell_of = [&](const V3& x) {
+    Eigen::Vector3i c;
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::clamp(int(std::floor((x[a] - grid_origin_[a]) / grid_cell_)), 0, grid_dims_[a] - 1);
+    return (std::size_t(c.z()) * std::size_t(grid_dims_.y()) + std::size_t(c.y())) * std::size_t(grid_dims_.x()) +
+           std::size_t(c.x());
+  };
+  const std::size_t ncells = std::size_t(grid_dims_.prod());
+  grid_start_.assign(ncells + 1, 0);
+  std::vector<std::size_t> cell(static_cast<std::size_t>(F));
+  for (Eigen::Index f = 0; f < F; ++f) {
+    cell[std::size_t(f)] = cell_of(centroids_.row(f).transpose());
+    ++grid_start_[cell[std::size_t(f)] + 1];
+  }
+  for (std::size_t i = 0; i < ncells; ++i) grid_start_[i + 1] += grid_start_[i];
+  grid_faces_.resize(std::size_t(F));
+  std::vector<int> fill(grid_start_.begin(), grid_start_.end() - 1);
+  for (Eigen::Index f = 0; f < F; ++f) grid_faces_[std::size_t(fill[cell[std::size_t(f)]]++)] = int(f);
+}
+
+int CorrectedCurvature::nearest_face(const Eigen::Vector3d& x) const {
+  Eigen::Vector3i c;
+  for (int a = 0; a < 3; ++a)
+    c[a] = std::clamp(int(std::floor((x[a] - grid_origin_[a]) / grid_cell_)), 0, grid_dims_[a] - 1);
+  int best = -1;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  const int max_shell = grid_dims_.maxCoeff();
+  for (int s = 0; s <= max_shell; ++s) {
+    // Cells of the shell at Chebyshev distance s; stop once no closer face can exist beyond it.
+    for (int dz = -s; dz <= s; ++dz)
+      for (int dy = -s; dy <= s; ++dy)
+        for (int dx = -s; dx <= s; ++dx) {
+          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != s) continue;
+          const int X = c.x() + dx, Y = c.y() + dy, Z = c.z() + dz;
+          if (X < 0 || Y < 0 || Z < 0 || X >= grid_dims_.x() || Y >= grid_dims_.y() || Z >= grid_dims_.z()) continue;
+          const std::size_t cell = (std::size_t(Z) * std::size_t(grid_dims_.y()) + std::size_t(Y)) * std::size_t(grid_dims_.x()) + std::size_t(X);
+          for (int i = grid_start_[cell]; i < grid_start_[cell + 1]; ++i) {
+            const int f = grid_faces_[std::size_t(i)];
+            const double d2 = (centroids_.row(f).transpose() - x).squaredNorm();
+            if (d2 < best_d2) best_d2 = d2, best = f;
+          }
+        }
+    // Unvisited cells are at least s * cell away from x (also when x lies outside the grid box:
+    // projecting x onto the box does not increase distances to points of the box).
+    if (best >= 0 && std::sqrt(best_d2) <= double(s) * grid_cell_) break;
+  }
+  return best;
 }
 
 CorrectedCurvature CorrectedCurvature::interpolated(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals) {
@@ -307,6 +367,18 @@ CurvatureEstimates CorrectedCurvature::at_vertices(double r) const {
     }
     // spec §8.3 (choice): ball at the vertex, seed = an incident face.
     estimate(positions_.row(v).transpose(), r, seed, vertex_normals_.row(v).transpose(), out, v);
+  });
+  return out;
+}
+
+CurvatureEstimates CorrectedCurvature::at_points(const Eigen::MatrixX3d& points, double r) const {
+  check_radius(r, positions_);
+  const Eigen::Index P = points.rows();
+  CurvatureEstimates out = make_estimates(P);
+  tbb::parallel_for(Eigen::Index(0), P, [&](Eigen::Index i) {
+    const Eigen::Vector3d x = points.row(i).transpose();
+    const int seed = nearest_face(x);
+    estimate(x, r, seed, face_normals_.row(seed).transpose(), out, i);
   });
   return out;
 }

@@ -43,6 +43,11 @@ class CorrectedCurvature {
   /// Estimates with balls centred at vertices (seed = an incident face; N = vertex normal, or the
   /// normalized sum of incident face normals in the constant variant).
   CurvatureEstimates at_vertices(double r) const;
+  /// Estimates with balls centred at arbitrary points (#P x 3): the seed is the face with the
+  /// nearest centroid, found through a uniform grid of face centroids; N = that face's normal.
+  CurvatureEstimates at_points(const Eigen::MatrixX3d& points, double r) const;
+  /// Face whose centroid is nearest to x (grid hashing, expanding shells of cells).
+  int nearest_face(const Eigen::Vector3d& x) const;
 
  private:
   void build_adjacency();
@@ -54,6 +59,12 @@ class CorrectedCurvature {
   Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces_;
   std::vector<std::vector<int>> face_neighbours_;
   std::vector<int> vertex_face_;  // one incident face per vertex (-1 if none)
+  // Uniform grid over the face centroids (cell size ~ mean edge length), CSR layout.
+  Eigen::Vector3d grid_origin_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3i grid_dims_ = Eigen::Vector3i::Ones();
+  double grid_cell_ = 1.0;
+  std::vector<int> grid_start_, grid_faces_;
+  void build_grid();
   // Edges (constant variant): vertex pair (a < b), mu1, and the face where it appears as a -> b.
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> edges_;
   std::vector<std::vector<int>> face_left_edges_;

@@ -135,3 +135,22 @@ TEST_CASE("curvature rejects normals of the wrong length and bad radii") {
   CHECK_THROWS_WITH_AS(cc.at_faces(-1.0), doctest::Contains("radius"), InputError);
   CHECK_THROWS_WITH_AS(cc.at_faces(100.0), doctest::Contains("larger than the mesh"), InputError);
 }
+
+TEST_CASE("curvature at arbitrary points: grid nearest-face search equals brute force, at_points = at_faces") {
+  const SurfelMesh m = surface("goursat", 0.5, -10, 10);
+  const auto cc = CorrectedCurvature::interpolated(m, m.positions.rowwise().normalized());
+  const Eigen::MatrixX3d c = m.face_centroids();
+  std::srand(7);
+  int mismatches = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3d x = 12.0 * Eigen::Vector3d::Random();  // inside and outside the grid box
+    const int f = cc.nearest_face(x);
+    Eigen::Index best;
+    (c.rowwise() - x.transpose()).rowwise().squaredNorm().minCoeff(&best);
+    mismatches += std::abs((c.row(f).transpose() - x).norm() - (c.row(best).transpose() - x).norm()) > 1e-12;
+  }
+  CHECK(mismatches == 0);
+  const CurvatureEstimates a = cc.at_faces(1.0), b = cc.at_points(c, 1.0);
+  CHECK((a.H - b.H).cwiseAbs().maxCoeff() < 1e-14);
+  CHECK((a.k1 - b.k1).cwiseAbs().maxCoeff() < 1e-12);
+}
