@@ -80,6 +80,7 @@ void CorrectedCurvature::build_adjacency() {
   face_left_edges_.assign(std::size_t(F), {});
   std::vector<std::array<int, 2>> edges;
   std::vector<double> emu1;
+  std::vector<Eigen::Matrix3d> emuxy;
   for (std::size_t i = 0; i < recs.size();) {
     std::size_t j = i;
     while (j < recs.size() && recs[j].a == recs[i].a && recs[j].b == recs[i].b) ++j;
@@ -94,16 +95,28 @@ void CorrectedCurvature::build_adjacency() {
         else right = recs[p].f, ++nr;
       }
       double m = 0.0;
+      Eigen::Matrix3d mxy = Eigen::Matrix3d::Zero();
       if (nl == 1 && nr == 1) {
+        // Dihedral edge measures of the reference (CorrectedNormalCurrentFormula, constant u):
+        // psi = angle between the right and left normals, e1 = unit(ur x ul).
         const V3 e = positions_.row(recs[i].b) - positions_.row(recs[i].a);
         const V3 ur = face_normals_.row(right), ul = face_normals_.row(left);
         V3 e1 = ur.cross(ul);
         const double l1 = std::min(e1.norm(), 1.0);
         if (l1 >= 1e-10) {
           e1 /= l1;
-          m = -std::asin(l1) * e.dot(e1);
+          const double psi = std::asin(l1);
+          m = -psi * e.dot(e1);
+          const double s1 = std::sin(psi), s2 = std::sin(2.0 * psi);
+          const V3 e_ur = e.cross(ur), e1_ur = e1.cross(ur), e_e1_ur = e.cross(e1_ur);
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+              mxy(a, b) = -0.5 * ((-psi - 0.5 * s2) * e_ur[a] * e1_ur[b] +
+                                  s1 * s1 * (e_ur[a] * ur[b] - e_e1_ur[a] * e1_ur[b]) +
+                                  (psi - 0.5 * s2) * e_e1_ur[a] * ur[b]);
         }
       }
+      emuxy.push_back(mxy);
       if (left >= 0) face_left_edges_[std::size_t(left)].push_back(int(edges.size()));
       edges.push_back({recs[i].a, recs[i].b});
       emu1.push_back(m);
@@ -121,6 +134,7 @@ void CorrectedCurvature::build_adjacency() {
     edges_(Eigen::Index(e), 1) = edges[e][1];
     edge_mu1_[Eigen::Index(e)] = emu1[e];
   }
+  edge_muxy_ = std::move(emuxy);
   vertex_face_.assign(std::size_t(V), -1);
   for (int f = F - 1; f >= 0; --f)
     for (int k = 0; k < 4; ++k) vertex_face_[std::size_t(faces_(f, k))] = f;
@@ -246,13 +260,55 @@ CorrectedCurvature CorrectedCurvature::constant(const SurfelMesh& mesh, const Ei
     c.mu0_[f] = a;
   }
   c.build_adjacency();
+  c.compute_vertex_mu2();
   // Vertex normals for vertex-centred balls: normalized sum of incident face normals (spec §1.5).
   c.vertex_normals_ = vertex_normals_from_face_normals(c.face_normals_, c.faces_, int(c.positions_.rows()));
   return c;
 }
 
+void CorrectedCurvature::compute_vertex_mu2() {
+  // Constant normals: mu2 lives on vertices, the algebraic area of the spherical polygon of the
+  // normals of the faces around the vertex, fanned around their mean (reference: 0 at
+  // non-manifold vertices, i.e. when the faces cannot be ordered as an umbrella).
+  const int V = int(positions_.rows()), F = int(faces_.rows());
+  std::vector<std::vector<int>> vf(static_cast<std::size_t>(V));
+  for (int f = 0; f < F; ++f)
+    for (int k = 0; k < 4; ++k) vf[std::size_t(faces_(f, k))].push_back(f);
+  vertex_mu2_ = Eigen::VectorXd::Zero(V);
+  tbb::parallel_for(0, V, [&](int v) {
+    std::vector<int> fs, prev, next;
+    for (int f : vf[std::size_t(v)]) {
+      int j = 0;
+      while (j < 4 && faces_(f, j) != v) ++j;
+      fs.push_back(f);
+      prev.push_back(faces_(f, (j + 3) % 4));
+      next.push_back(faces_(f, (j + 1) % 4));
+    }
+    const std::size_t n = fs.size();
+    for (std::size_t i = 1; i < n; ++i) {
+      std::size_t j = i;
+      while (j < n && next[j] != prev[i - 1]) ++j;
+      if (j == n) return;  // not an umbrella: measure 0
+      std::swap(fs[i], fs[j]), std::swap(next[i], next[j]), std::swap(prev[i], prev[j]);
+    }
+    V3 avg = V3::Zero();
+    for (int f : fs) avg += face_normals_.row(f).transpose();
+    const double l = avg.norm();
+    if (l < 1e-10) return;
+    avg /= l;
+    double mu2 = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const V3 a = avg, b = face_normals_.row(fs[i]), c = face_normals_.row(fs[(i + 1) % n]);
+      // Signed area of the spherical triangle (a, b, c) (Van Oosterom & Strackee).
+      mu2 += 2.0 * std::atan2(a.dot(b.cross(c)), 1.0 + a.dot(b) + b.dot(c) + c.dot(a));
+    }
+    vertex_mu2_[v] = mu2;
+  });
+}
+
 Eigen::Vector3d CorrectedCurvature::totals() const {
-  return {mu0_.sum(), interpolated_ ? mu1_.sum() : edge_mu1_.sum(), mu2_.sum()};
+  if (!interpolated_) return {mu0_.sum(), edge_mu1_.sum(), vertex_mu2_.sum()};
+  return {mu0_.sum(), mu1_.sum(), mu2_.sum()};
 }
 
 std::vector<std::pair<int, double>> CorrectedCurvature::faces_in_ball(const Eigen::Vector3d& x, double r,
@@ -294,6 +350,12 @@ std::vector<std::pair<int, double>> CorrectedCurvature::faces_in_ball(const Eige
 void CorrectedCurvature::estimate(const Eigen::Vector3d& x, double r, int seed, const Eigen::Vector3d& N,
                                   CurvatureEstimates& out, Eigen::Index i) const {
   const auto faces = faces_in_ball(x, r, seed);
+  thread_local std::vector<std::uint32_t> vstamp;
+  thread_local std::uint32_t vgeneration = 0;
+  if (!interpolated_ && (vstamp.size() != std::size_t(positions_.rows()) || ++vgeneration == 0)) {
+    vstamp.assign(std::size_t(positions_.rows()), 0);
+    vgeneration = 1;
+  }
   double m0 = 0, m1 = 0, m2 = 0;
   Eigen::Matrix3d mxy = Eigen::Matrix3d::Zero();
   for (const auto& [f, w] : faces) {
@@ -301,23 +363,26 @@ void CorrectedCurvature::estimate(const Eigen::Vector3d& x, double r, int seed, 
     m1 += w * mu1_[f];
     m2 += w * mu2_[f];
     mxy += w * muxy_[std::size_t(f)];
-    if (!interpolated_ && r >= 1e-6)
+    if (!interpolated_ && r >= 1e-6) {
+      // Constant normals: edges (counted from their left face) and vertices of the faces met.
       for (int e : face_left_edges_[std::size_t(f)]) {
         const V3 a = positions_.row(edges_(e, 0)), b = positions_.row(edges_(e, 1));
         const double d0 = (a - x).norm(), d1 = (b - x).norm(), dm = (0.5 * (a + b) - x).norm();
-        m1 += inclusion_ratio(std::min({d0, d1, dm}), std::max({d0, d1, dm}), r) * edge_mu1_[e];
+        const double we = inclusion_ratio(std::min({d0, d1, dm}), std::max({d0, d1, dm}), r);
+        m1 += we * edge_mu1_[e];
+        mxy += we * edge_muxy_[std::size_t(e)];
       }
+      for (int k = 0; k < 4; ++k) {
+        const int v = faces_(f, k);
+        if (vstamp[std::size_t(v)] == vgeneration) continue;
+        vstamp[std::size_t(v)] = vgeneration;
+        if ((positions_.row(v).transpose() - x).norm() <= r) m2 += vertex_mu2_[v];
+      }
+    }
   }
   out.area[i] = m0;
   // spec §8.3: H = mu1 / (2 mu0), G = mu2 / mu0 (0 if mu0 = 0).
   out.H[i] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);
-  if (!interpolated_) {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    out.G[i] = out.k1[i] = out.k2[i] = nan;
-    out.d1.row(i).setConstant(nan);
-    out.d2.row(i).setConstant(nan);
-    return;
-  }
   out.G[i] = m0 == 0.0 ? 0.0 : m2 / m0;
   const Eigen::Matrix3d T = 0.5 * (mxy + mxy.transpose()) + 1000.0 * m0 * N * N.transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(T);

@@ -22,8 +22,8 @@ class CorrectedCurvature {
  public:
   /// Interpolated normals (spec §8.1/8.2): vertex_normals #V x 3 (unit, checked).
   static CorrectedCurvature interpolated(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals);
-  /// Constant per-face normals (reference fallback): mu0 per face, mu1 per edge (dihedral angle);
-  /// mu2 and muXY are not computed in this variant (G, k1, k2 are then NaN).
+  /// Constant per-face normals (reference fallback): mu0 per face, mu1 and muXY per edge
+  /// (dihedral angle), mu2 per vertex (spherical polygon of the surrounding face normals).
   static CorrectedCurvature constant(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals);
 
   bool interpolated_normals() const { return interpolated_; }
@@ -31,7 +31,9 @@ class CorrectedCurvature {
   const Eigen::VectorXd& face_mu1() const { return mu1_; }  ///< zero in the constant variant
   const Eigen::VectorXd& face_mu2() const { return mu2_; }
   const std::vector<Eigen::Matrix3d>& face_muXY() const { return muxy_; }
-  const Eigen::VectorXd& edge_mu1() const { return edge_mu1_; }  ///< constant variant only
+  const Eigen::VectorXd& edge_mu1() const { return edge_mu1_; }      ///< constant variant only
+  const Eigen::VectorXd& vertex_mu2() const { return vertex_mu2_; }  ///< constant variant only
+  const std::vector<Eigen::Matrix3d>& edge_muXY() const { return edge_muxy_; }  ///< constant variant only
   /// Totals over the whole mesh (mu0, mu1, mu2).
   Eigen::Vector3d totals() const;
 
@@ -51,6 +53,7 @@ class CorrectedCurvature {
 
  private:
   void build_adjacency();
+  void compute_vertex_mu2();
   void estimate(const Eigen::Vector3d& x, double r, int seed, const Eigen::Vector3d& N, CurvatureEstimates& out,
                 Eigen::Index i) const;
 
@@ -68,7 +71,8 @@ class CorrectedCurvature {
   // Edges (constant variant): vertex pair (a < b), mu1, and the face where it appears as a -> b.
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> edges_;
   std::vector<std::vector<int>> face_left_edges_;
-  Eigen::VectorXd mu0_, mu1_, mu2_, edge_mu1_;
+  Eigen::VectorXd mu0_, mu1_, mu2_, edge_mu1_, vertex_mu2_;
+  std::vector<Eigen::Matrix3d> edge_muxy_;
   std::vector<Eigen::Matrix3d> muxy_;
 };
 
