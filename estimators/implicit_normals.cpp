@@ -8,15 +8,17 @@ namespace corrlap {
 
 Eigen::Vector3d project_onto_surface(const ImplicitShape& shape, const Eigen::Vector3d& x,
                                      const ProjectionParams& params) {
+  // spec §1.5, the reference's ImplicitPolynomial3Shape::nearestPoint as documented there:
+  // x_n = x_{n-1} - gamma * P(x_{n-1}) * grad P / |grad P|^2, stopped after max_iterations steps
+  // or as soon as |P(x_n)| < accuracy (a criterion on the value of P, not on the step length).
   Eigen::Vector3d p = x;
   for (int it = 0; it < params.max_iterations; ++it) {
     const double value = shape.value(p);
+    if (std::abs(value) < params.accuracy) break;
     const Eigen::Vector3d g = shape.gradient(p);
     const double g2 = g.squaredNorm();
     if (g2 == 0.0 || !std::isfinite(g2)) break;
-    const Eigen::Vector3d step = (params.gamma * value / g2) * g;
-    p -= step;
-    if (step.norm() < params.accuracy) break;
+    p -= (params.gamma * value / g2) * g;
   }
   return p;
 }

@@ -1,0 +1,451 @@
+#include "corrected_curvature.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/normal_fields.hpp>
+
+namespace corrlap {
+
+namespace {
+using V3 = Eigen::Vector3d;
+
+// spec §8.1, triangle (a, b, c) with normals (ua, ub, uc); uM = mean normal, not normalized.
+struct TriangleMeasures {
+  double mu0 = 0, mu1 = 0, mu2 = 0;
+  Eigen::Matrix3d muxy = Eigen::Matrix3d::Zero();
+};
+
+void add_triangle(const V3& a, const V3& b, const V3& c, const V3& ua, const V3& ub, const V3& uc,
+                  TriangleMeasures& m) {
+  const V3 uM = (ua + ub + uc) / 3.0;
+  m.mu0 += 0.5 * (b - a).cross(c - a).dot(uM);
+  m.mu1 += 0.5 * (uM.cross(uc - ub).dot(a) + uM.cross(ua - uc).dot(b) + uM.cross(ub - ua).dot(c));
+  m.mu2 += 0.5 * ua.cross(ub).dot(uc);
+  const V3 dc = uc - ua, db = ub - ua;
+  for (int i = 0; i < 3; ++i) {
+    const V3 ei = V3::Unit(i);
+    const double p = uM.dot(ei.cross(b - a)), q = uM.dot(ei.cross(c - a));
+    for (int j = 0; j < 3; ++j) m.muxy(i, j) += 0.5 * (dc[j] * p - db[j] * q);
+  }
+}
+
+double inclusion_ratio(double d_min, double d_max, double r) {
+  // spec §8.3: 1 inside, 0 outside, linear in between.
+  if (d_max <= r) return 1.0;
+  if (r <= d_min) return 0.0;
+  return (r - d_min) / (d_max - d_min);
+}
+
+void check_mesh(const SurfelMesh& mesh) {
+  if (mesh.num_faces() == 0) throw InputError("curvature: the mesh has no face");
+  mesh.validate("curvature mesh");
+}
+}  // namespace
+
+void CorrectedCurvature::build_adjacency() {
+  const int F = int(faces_.rows()), V = int(positions_.rows());
+  centroids_.resize(F, 3);
+  for (int f = 0; f < F; ++f) {
+    V3 c = V3::Zero();
+    for (int k = 0; k < 4; ++k) c += positions_.row(faces_(f, k)).transpose();
+    centroids_.row(f) = (c / 4.0).transpose();
+  }
+  // Edge-adjacent faces (sharing two consecutive corners), via sorted (min, max, face) records.
+  struct Rec {
+    int a, b, f, dir;
+  };
+  std::vector<Rec> recs;
+  recs.reserve(std::size_t(4 * F));
+  for (int f = 0; f < F; ++f)
+    for (int k = 0; k < 4; ++k) {
+      const int u = faces_(f, k), v = faces_(f, (k + 1) % 4);
+      recs.push_back({std::min(u, v), std::max(u, v), f, u < v ? 1 : -1});
+    }
+  std::sort(recs.begin(), recs.end(), [](const Rec& x, const Rec& y) {
+    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.f < y.f);
+  });
+  face_neighbours_.assign(std::size_t(F), {});
+  face_left_edges_.assign(std::size_t(F), {});
+  std::vector<std::array<int, 2>> edges;
+  std::vector<double> emu1;
+  std::vector<Eigen::Matrix3d> emuxy;
+  for (std::size_t i = 0; i < recs.size();) {
+    std::size_t j = i;
+    while (j < recs.size() && recs[j].a == recs[i].a && recs[j].b == recs[i].b) ++j;
+    for (std::size_t p = i; p < j; ++p)
+      for (std::size_t q = i; q < j; ++q)
+        if (p != q) face_neighbours_[std::size_t(recs[p].f)].push_back(recs[q].f);
+    if (!interpolated_) {
+      // Constant normals: mu1 lives on the edge (a < b), between its left face (a -> b) and right face.
+      int left = -1, right = -1, nl = 0, nr = 0;
+      for (std::size_t p = i; p < j; ++p) {
+        if (recs[p].dir > 0) left = recs[p].f, ++nl;
+        else right = recs[p].f, ++nr;
+      }
+      double m = 0.0;
+      Eigen::Matrix3d mxy = Eigen::Matrix3d::Zero();
+      if (nl == 1 && nr == 1) {
+        // Dihedral edge measures of the reference (CorrectedNormalCurrentFormula, constant u):
+        // psi = angle between the right and left normals, e1 = unit(ur x ul).
+        const V3 e = positions_.row(recs[i].b) - positions_.row(recs[i].a);
+        const V3 ur = face_normals_.row(right), ul = face_normals_.row(left);
+        V3 e1 = ur.cross(ul);
+        const double l1 = std::min(e1.norm(), 1.0);
+        if (l1 >= 1e-10) {
+          e1 /= l1;
+          const double psi = std::asin(l1);
+          m = -psi * e.dot(e1);
+          const double s1 = std::sin(psi), s2 = std::sin(2.0 * psi);
+          const V3 e_ur = e.cross(ur), e1_ur = e1.cross(ur), e_e1_ur = e.cross(e1_ur);
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+              mxy(a, b) = -0.5 * ((-psi - 0.5 * s2) * e_ur[a] * e1_ur[b] +
+                                  s1 * s1 * (e_ur[a] * ur[b] - e_e1_ur[a] * e1_ur[b]) +
+                                  (psi - 0.5 * s2) * e_e1_ur[a] * ur[b]);
+        }
+      }
+      emuxy.push_back(mxy);
+      if (left >= 0) face_left_edges_[std::size_t(left)].push_back(int(edges.size()));
+      edges.push_back({recs[i].a, recs[i].b});
+      emu1.push_back(m);
+    }
+    i = j;
+  }
+  for (auto& n : face_neighbours_) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  edges_.resize(Eigen::Index(edges.size()), 2);
+  edge_mu1_.resize(Eigen::Index(edges.size()));
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    edges_(Eigen::Index(e), 0) = edges[e][0];
+    edges_(Eigen::Index(e), 1) = edges[e][1];
+    edge_mu1_[Eigen::Index(e)] = emu1[e];
+  }
+  edge_muxy_ = std::move(emuxy);
+  vertex_face_.assign(std::size_t(V), -1);
+  for (int f = F - 1; f >= 0; --f)
+    for (int k = 0; k < 4; ++k) vertex_face_[std::size_t(faces_(f, k))] = f;
+  build_grid();
+}
+
+void CorrectedCurvature::build_grid() {
+  const Eigen::Index F = centroids_.rows();
+  double edge = 0;
+  for (Eigen::Index f = 0; f < F; ++f)
+    edge += (positions_.row(faces_(f, 1)) - positions_.row(faces_(f, 0))).norm();
+  grid_cell_ = std::max(edge / double(F), 1e-12) * 2.0;
+  const Eigen::Vector3d lo = centroids_.colwise().minCoeff().transpose(), hi = centroids_.colwise().maxCoeff().transpose();
+  grid_origin_ = lo;
+  const Eigen::Vector3d ext = (hi - lo) / grid_cell_;
+  for (int a = 0; a < 3; ++a) grid_dims_[a] = std::clamp(int(std::floor(ext[a])) + 1, 1, 4096);
+  auto cell_of = [&](const V3& x) {
+    Eigen::Vector3i c;
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::clamp(int(std::floor((x[a] - grid_origin_[a]) / grid_cell_)), 0, grid_dims_[a] - 1);
+    return (std::size_t(c.z()) * std::size_t(grid_dims_.y()) + std::size_t(c.y())) * std::size_t(grid_dims_.x()) +
+           std::size_t(c.x());
+  };
+  const std::size_t ncells = std::size_t(grid_dims_.prod());
+  grid_start_.assign(ncells + 1, 0);
+  std::vector<std::size_t> cell(static_cast<std::size_t>(F));
+  for (Eigen::Index f = 0; f < F; ++f) {
+    cell[std::size_t(f)] = cell_of(centroids_.row(f).transpose());
+    ++grid_start_[cell[std::size_t(f)] + 1];
+  }
+  for (std::size_t i = 0; i < ncells; ++i) grid_start_[i + 1] += grid_start_[i];
+  grid_faces_.resize(std::size_t(F));
+  std::vector<int> fill(grid_start_.begin(), grid_start_.end() - 1);
+  for (Eigen::Index f = 0; f < F; ++f) grid_faces_[std::size_t(fill[cell[std::size_t(f)]]++)] = int(f);
+}
+
+int CorrectedCurvature::nearest_face(const Eigen::Vector3d& x) const {
+  Eigen::Vector3i c;
+  for (int a = 0; a < 3; ++a)
+    c[a] = std::clamp(int(std::floor((x[a] - grid_origin_[a]) / grid_cell_)), 0, grid_dims_[a] - 1);
+  int best = -1;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  const int max_shell = grid_dims_.maxCoeff();
+  for (int s = 0; s <= max_shell; ++s) {
+    // Cells of the shell at Chebyshev distance s; stop once no closer face can exist beyond it.
+    for (int dz = -s; dz <= s; ++dz)
+      for (int dy = -s; dy <= s; ++dy)
+        for (int dx = -s; dx <= s; ++dx) {
+          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != s) continue;
+          const int X = c.x() + dx, Y = c.y() + dy, Z = c.z() + dz;
+          if (X < 0 || Y < 0 || Z < 0 || X >= grid_dims_.x() || Y >= grid_dims_.y() || Z >= grid_dims_.z()) continue;
+          const std::size_t cell = (std::size_t(Z) * std::size_t(grid_dims_.y()) + std::size_t(Y)) * std::size_t(grid_dims_.x()) + std::size_t(X);
+          for (int i = grid_start_[cell]; i < grid_start_[cell + 1]; ++i) {
+            const int f = grid_faces_[std::size_t(i)];
+            const double d2 = (centroids_.row(f).transpose() - x).squaredNorm();
+            if (d2 < best_d2) best_d2 = d2, best = f;
+          }
+        }
+    // Unvisited cells are at least s * cell away from x (also when x lies outside the grid box:
+    // projecting x onto the box does not increase distances to points of the box).
+    if (best >= 0 && std::sqrt(best_d2) <= double(s) * grid_cell_) break;
+  }
+  return best;
+}
+
+CorrectedCurvature CorrectedCurvature::interpolated(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals) {
+  check_mesh(mesh);
+  CorrectedCurvature c;
+  c.interpolated_ = true;
+  c.positions_ = mesh.positions;
+  c.faces_ = mesh.faces;
+  c.vertex_normals_ = vertex_normals;
+  validate_normals(c.vertex_normals_, mesh.num_vertices(), "vertex normals");
+  const int F = mesh.num_faces();
+  c.mu0_.resize(F), c.mu1_.resize(F), c.mu2_.resize(F);
+  c.muxy_.resize(std::size_t(F));
+  c.face_normals_.resize(F, 3);
+  tbb::parallel_for(0, F, [&](int f) {
+    // spec §8.2: fan around the barycentre b with u_b = normalized sum of the corner normals.
+    V3 b = V3::Zero(), ub = V3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      b += c.positions_.row(mesh.faces(f, k)).transpose();
+      ub += c.vertex_normals_.row(mesh.faces(f, k)).transpose();
+    }
+    b /= 4.0;
+    const double l = ub.norm();
+    if (l > 0) ub /= l;
+    TriangleMeasures m;
+    for (int k = 0; k < 4; ++k) {
+      const int v0 = mesh.faces(f, k), v1 = mesh.faces(f, (k + 1) % 4);
+      add_triangle(b, c.positions_.row(v0).transpose(), c.positions_.row(v1).transpose(), ub,
+                   c.vertex_normals_.row(v0).transpose(), c.vertex_normals_.row(v1).transpose(), m);
+    }
+    c.mu0_[f] = m.mu0, c.mu1_[f] = m.mu1, c.mu2_[f] = m.mu2;
+    c.muxy_[std::size_t(f)] = m.muxy;
+    c.face_normals_.row(f) = ub.transpose();
+  });
+  c.build_adjacency();
+  return c;
+}
+
+CorrectedCurvature CorrectedCurvature::constant(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals) {
+  check_mesh(mesh);
+  CorrectedCurvature c;
+  c.interpolated_ = false;
+  c.positions_ = mesh.positions;
+  c.faces_ = mesh.faces;
+  c.face_normals_ = face_normals;
+  validate_normals(c.face_normals_, mesh.num_faces(), "face normals");
+  const int F = mesh.num_faces();
+  c.mu0_.resize(F), c.mu1_ = Eigen::VectorXd::Zero(F), c.mu2_ = Eigen::VectorXd::Zero(F);
+  c.muxy_.assign(std::size_t(F), Eigen::Matrix3d::Zero());
+  for (int f = 0; f < F; ++f) {
+    V3 b = V3::Zero();
+    for (int k = 0; k < 4; ++k) b += c.positions_.row(mesh.faces(f, k)).transpose();
+    b /= 4.0;
+    const V3 u = c.face_normals_.row(f).transpose();
+    double a = 0;
+    for (int k = 0; k < 4; ++k) {
+      const V3 x0 = c.positions_.row(mesh.faces(f, k)), x1 = c.positions_.row(mesh.faces(f, (k + 1) % 4));
+      a += 0.5 * (x0 - b).cross(x1 - b).dot(u);
+    }
+    c.mu0_[f] = a;
+  }
+  c.build_adjacency();
+  c.compute_vertex_mu2();
+  // Vertex normals for vertex-centred balls: normalized sum of incident face normals (spec §1.5).
+  c.vertex_normals_ = vertex_normals_from_face_normals(c.face_normals_, c.faces_, int(c.positions_.rows()));
+  return c;
+}
+
+void CorrectedCurvature::compute_vertex_mu2() {
+  // Constant normals: mu2 lives on vertices, the algebraic area of the spherical polygon of the
+  // normals of the faces around the vertex, fanned around their mean (reference: 0 at
+  // non-manifold vertices, i.e. when the faces cannot be ordered as an umbrella).
+  const int V = int(positions_.rows()), F = int(faces_.rows());
+  std::vector<std::vector<int>> vf(static_cast<std::size_t>(V));
+  for (int f = 0; f < F; ++f)
+    for (int k = 0; k < 4; ++k) vf[std::size_t(faces_(f, k))].push_back(f);
+  vertex_mu2_ = Eigen::VectorXd::Zero(V);
+  tbb::parallel_for(0, V, [&](int v) {
+    std::vector<int> fs, prev, next;
+    for (int f : vf[std::size_t(v)]) {
+      int j = 0;
+      while (j < 4 && faces_(f, j) != v) ++j;
+      fs.push_back(f);
+      prev.push_back(faces_(f, (j + 3) % 4));
+      next.push_back(faces_(f, (j + 1) % 4));
+    }
+    const std::size_t n = fs.size();
+    for (std::size_t i = 1; i < n; ++i) {
+      std::size_t j = i;
+      while (j < n && next[j] != prev[i - 1]) ++j;
+      if (j == n) return;  // not an umbrella: measure 0
+      std::swap(fs[i], fs[j]), std::swap(next[i], next[j]), std::swap(prev[i], prev[j]);
+    }
+    V3 avg = V3::Zero();
+    for (int f : fs) avg += face_normals_.row(f).transpose();
+    const double l = avg.norm();
+    if (l < 1e-10) return;
+    avg /= l;
+    double mu2 = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const V3 a = avg, b = face_normals_.row(fs[i]), c = face_normals_.row(fs[(i + 1) % n]);
+      // Signed area of the spherical triangle (a, b, c) (Van Oosterom & Strackee).
+      mu2 += 2.0 * std::atan2(a.dot(b.cross(c)), 1.0 + a.dot(b) + b.dot(c) + c.dot(a));
+    }
+    vertex_mu2_[v] = mu2;
+  });
+}
+
+Eigen::Vector3d CorrectedCurvature::totals() const {
+  if (!interpolated_) return {mu0_.sum(), edge_mu1_.sum(), vertex_mu2_.sum()};
+  return {mu0_.sum(), mu1_.sum(), mu2_.sum()};
+}
+
+std::vector<std::pair<int, double>> CorrectedCurvature::faces_in_ball(const Eigen::Vector3d& x, double r,
+                                                                      int seed) const {
+  std::vector<std::pair<int, double>> result;
+  if (r < 1e-6) {  // spec §8.3
+    result.emplace_back(seed, 1e-6);
+    return result;
+  }
+  // Visited marks: one stamp per face and per thread, so a walk costs O(faces in the ball).
+  thread_local std::vector<std::uint32_t> stamp;
+  thread_local std::uint32_t generation = 0;
+  if (stamp.size() != std::size_t(faces_.rows()) || ++generation == 0) {
+    stamp.assign(std::size_t(faces_.rows()), 0);
+    generation = 1;
+  }
+  stamp[std::size_t(seed)] = generation;
+  std::vector<int> queue{seed};
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int f = queue[head];
+    const V3 b = centroids_.row(f);
+    double dmin = (b - x).norm(), dmax = dmin;
+    for (int k = 0; k < 4; ++k) {
+      const double d = (positions_.row(faces_(f, k)).transpose() - x).norm();
+      dmin = std::min(dmin, d), dmax = std::max(dmax, d);
+    }
+    const double w = inclusion_ratio(dmin, dmax, r);
+    if (w <= 0.0) continue;  // the walk does not expand from faces of weight 0
+    result.emplace_back(f, w);
+    for (int n : face_neighbours_[std::size_t(f)])
+      if (stamp[std::size_t(n)] != generation) {
+        stamp[std::size_t(n)] = generation;
+        queue.push_back(n);
+      }
+  }
+  return result;
+}
+
+void CorrectedCurvature::estimate(const Eigen::Vector3d& x, double r, int seed, const Eigen::Vector3d& N,
+                                  CurvatureEstimates& out, Eigen::Index i) const {
+  const auto faces = faces_in_ball(x, r, seed);
+  thread_local std::vector<std::uint32_t> vstamp;
+  thread_local std::uint32_t vgeneration = 0;
+  if (!interpolated_ && (vstamp.size() != std::size_t(positions_.rows()) || ++vgeneration == 0)) {
+    vstamp.assign(std::size_t(positions_.rows()), 0);
+    vgeneration = 1;
+  }
+  double m0 = 0, m1 = 0, m2 = 0;
+  Eigen::Matrix3d mxy = Eigen::Matrix3d::Zero();
+  for (const auto& [f, w] : faces) {
+    m0 += w * mu0_[f];
+    m1 += w * mu1_[f];
+    m2 += w * mu2_[f];
+    mxy += w * muxy_[std::size_t(f)];
+    if (!interpolated_ && r >= 1e-6) {
+      // Constant normals: edges (counted from their left face) and vertices of the faces met.
+      for (int e : face_left_edges_[std::size_t(f)]) {
+        const V3 a = positions_.row(edges_(e, 0)), b = positions_.row(edges_(e, 1));
+        const double d0 = (a - x).norm(), d1 = (b - x).norm(), dm = (0.5 * (a + b) - x).norm();
+        const double we = inclusion_ratio(std::min({d0, d1, dm}), std::max({d0, d1, dm}), r);
+        m1 += we * edge_mu1_[e];
+        mxy += we * edge_muxy_[std::size_t(e)];
+      }
+      for (int k = 0; k < 4; ++k) {
+        const int v = faces_(f, k);
+        if (vstamp[std::size_t(v)] == vgeneration) continue;
+        vstamp[std::size_t(v)] = vgeneration;
+        if ((positions_.row(v).transpose() - x).norm() <= r) m2 += vertex_mu2_[v];
+      }
+    }
+  }
+  out.area[i] = m0;
+  // spec §8.3: H = mu1 / (2 mu0), G = mu2 / mu0 (0 if mu0 = 0).
+  out.H[i] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);
+  out.G[i] = m0 == 0.0 ? 0.0 : m2 / m0;
+  const Eigen::Matrix3d T = 0.5 * (mxy + mxy.transpose()) + 1000.0 * m0 * N * N.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(T);
+  const double inv = m0 == 0.0 ? 0.0 : 1.0 / m0;
+  out.k1[i] = -es.eigenvalues()[1] * inv;
+  out.k2[i] = -es.eigenvalues()[0] * inv;
+  out.d1.row(i) = es.eigenvectors().col(1).transpose();
+  out.d2.row(i) = es.eigenvectors().col(0).transpose();
+}
+
+namespace {
+void check_radius(double r, const Eigen::MatrixX3d& positions) {
+  if (!(r >= 0.0) || !std::isfinite(r)) throw InputError("curvature: ball radius must be >= 0, got " + std::to_string(r));
+  const double diag = (positions.colwise().maxCoeff() - positions.colwise().minCoeff()).norm();
+  if (r > 2.0 * diag)
+    throw InputError("curvature: ball radius " + std::to_string(r) + " is larger than the mesh (diagonal " +
+                     std::to_string(diag) + ")");
+}
+CurvatureEstimates make_estimates(Eigen::Index n) {
+  CurvatureEstimates e;
+  e.H.resize(n), e.G.resize(n), e.k1.resize(n), e.k2.resize(n), e.area.resize(n);
+  e.d1.resize(n, 3), e.d2.resize(n, 3);
+  return e;
+}
+}  // namespace
+
+CurvatureEstimates CorrectedCurvature::at_faces(double r) const {
+  check_radius(r, positions_);
+  const Eigen::Index F = faces_.rows();
+  CurvatureEstimates out = make_estimates(F);
+  tbb::parallel_for(Eigen::Index(0), F, [&](Eigen::Index f) {
+    estimate(centroids_.row(f).transpose(), r, int(f), face_normals_.row(f).transpose(), out, f);
+  });
+  return out;
+}
+
+CurvatureEstimates CorrectedCurvature::at_vertices(double r) const {
+  check_radius(r, positions_);
+  const Eigen::Index V = positions_.rows();
+  CurvatureEstimates out = make_estimates(V);
+  tbb::parallel_for(Eigen::Index(0), V, [&](Eigen::Index v) {
+    const int seed = vertex_face_[std::size_t(v)];
+    if (seed < 0) {
+      out.H[v] = out.G[v] = out.k1[v] = out.k2[v] = out.area[v] = 0.0;
+      out.d1.row(v).setZero(), out.d2.row(v).setZero();
+      return;
+    }
+    // spec §8.3 (choice): ball at the vertex, seed = an incident face.
+    estimate(positions_.row(v).transpose(), r, seed, vertex_normals_.row(v).transpose(), out, v);
+  });
+  return out;
+}
+
+CurvatureEstimates CorrectedCurvature::at_points(const Eigen::MatrixX3d& points, double r) const {
+  check_radius(r, positions_);
+  const Eigen::Index P = points.rows();
+  CurvatureEstimates out = make_estimates(P);
+  tbb::parallel_for(Eigen::Index(0), P, [&](Eigen::Index i) {
+    const Eigen::Vector3d x = points.row(i).transpose();
+    const int seed = nearest_face(x);
+    estimate(x, r, seed, face_normals_.row(seed).transpose(), out, i);
+  });
+  return out;
+}
+
+}  // namespace corrlap

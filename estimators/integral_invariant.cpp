@@ -1,0 +1,323 @@
+#include "integral_invariant.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <string>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/normal_fields.hpp>
+
+namespace corrlap {
+
+bool BallMoments::operator==(const BallMoments& o) const {
+  return m0 == o.m0 && std::equal(m1, m1 + 3, o.m1) && std::equal(m2, m2 + 6, o.m2);
+}
+
+Eigen::Matrix3d BallMoments::covariance() const {
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+  if (m0 == 0) return c;
+  // spec §7 step 3: Cov = sum yy^T - (1/|Y|)(sum y)(sum y)^T. Translation invariant, so the exact
+  // moments relative to the centre are used: no cancellation from large absolute coordinates.
+  const double s[3] = {double(m1[0]), double(m1[1]), double(m1[2])};
+  const int idx[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  const double inv = 1.0 / double(m0);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) c(i, j) = double(m2[idx[i][j]]) - s[i] * s[j] * inv;
+  return c;
+}
+
+double ii_digital_radius(double h, const IIParams& params) {
+  // spec §7 step 1: r_d = k * h^(alpha - 1); R = r_d * h.
+  return params.k * std::pow(h, params.alpha - 1.0);
+}
+
+namespace {
+
+/// Kernel predicate of spec §7 step 2: R - ||h delta|| >= 0 (closed ball).
+bool in_kernel(int dx, int dy, int dz, double R, double h) {
+  const double x = h * dx, y = h * dy, z = h * dz;
+  return R - std::sqrt(x * x + y * y + z * z) >= 0.0;
+}
+
+/// One chord of the kernel: offsets (dy, dz), x offsets in [-w, w].
+struct KernelRow {
+  int dy, dz, w;
+};
+
+std::vector<KernelRow> kernel_rows(double digital_radius, double h) {
+  const double R = digital_radius * h;
+  const int n = int(std::ceil(digital_radius)) + 1;
+  std::vector<KernelRow> rows;
+  for (int dz = -n; dz <= n; ++dz)
+    for (int dy = -n; dy <= n; ++dy) {
+      if (!in_kernel(0, dy, dz, R, h)) continue;
+      int w = 0;
+      while (in_kernel(w + 1, dy, dz, R, h)) ++w;
+      rows.push_back({dy, dz, w});
+    }
+  return rows;
+}
+
+void check_radius(const VoxelGrid& grid, double digital_radius) {
+  if (grid.empty_box()) throw InputError("II normals: the voxel grid is empty");
+  if (!(digital_radius >= 1.0))
+    throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
+                     " is smaller than one voxel (increase --radius k or use a finer h)");
+  const int extent = grid.size().maxCoeff();
+  if (digital_radius > double(extent))
+    throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
+                     " is larger than the volume (" + std::to_string(extent) + " voxels)");
+}
+
+/// sum_{u=0}^{m} u^2 extended to negative m so that sum_{u=p}^{q} u^2 = G(q) - G(p-1).
+inline std::int64_t G(std::int64_t m) { return m * (m + 1) * (2 * m + 1) / 6; }
+
+/// Run-length encoding of every (y, z) row: runs of inside voxels as inclusive [begin, end] x ranges.
+struct RowRuns {
+  Eigen::Vector3i lower, size;
+  std::vector<std::int64_t> offset;  // size ny*nz + 1
+  std::vector<std::int32_t> runs;    // begin, end pairs (absolute x)
+
+  std::size_t row_index(int y, int z) const {
+    return std::size_t(z - lower.z()) * std::size_t(size.y()) + std::size_t(y - lower.y());
+  }
+};
+
+/// Runs of set bits of one grid row, appended as absolute (begin, end) pairs; returns the count.
+template <class Emit>
+void scan_row(const std::uint64_t* words, int nx, int x0, Emit&& emit) {
+  const int nw = (nx + 63) / 64;
+  int start = -1;
+  for (int wi = 0; wi < nw; ++wi) {
+    std::uint64_t w = words[wi];
+    if (wi == nw - 1 && (nx & 63)) w &= (std::uint64_t(1) << (nx & 63)) - 1;
+    int pos = 0;
+    while (pos < 64) {
+      if (start < 0) {
+        const std::uint64_t rest = pos == 0 ? w : (w >> pos);
+        if (rest == 0) break;
+        pos += __builtin_ctzll(rest);
+        start = wi * 64 + pos;
+      } else {
+        const std::uint64_t rest = pos == 0 ? ~w : (~w >> pos);
+        if (rest == 0) break;
+        pos += __builtin_ctzll(rest);
+        emit(x0 + start, x0 + wi * 64 + pos - 1);
+        start = -1;
+      }
+    }
+  }
+  if (start >= 0) emit(x0 + start, x0 + nx - 1);
+}
+
+RowRuns encode_runs(const VoxelGrid& grid) {
+  RowRuns rr;
+  rr.lower = grid.lower();
+  rr.size = grid.size();
+  const int nx = rr.size.x(), ny = rr.size.y(), nz = rr.size.z();
+  const std::size_t nrows = std::size_t(ny) * std::size_t(nz);
+  std::vector<std::int64_t> count(nrows + 1, 0);
+  tbb::parallel_for(0, nz, [&](int lz) {
+    const int z = rr.lower.z() + lz;
+    for (int y = rr.lower.y(); y < rr.lower.y() + ny; ++y) {
+      std::int64_t c = 0;
+      scan_row(grid.row(y, z), nx, rr.lower.x(), [&](int, int) { ++c; });
+      count[rr.row_index(y, z)] = c;
+    }
+  });
+  rr.offset.assign(nrows + 1, 0);
+  for (std::size_t i = 0; i < nrows; ++i) rr.offset[i + 1] = rr.offset[i] + 2 * count[i];
+  rr.runs.resize(std::size_t(rr.offset[nrows]));
+  tbb::parallel_for(0, nz, [&](int lz) {
+    const int z = rr.lower.z() + lz;
+    for (int y = rr.lower.y(); y < rr.lower.y() + ny; ++y) {
+      std::int32_t* out = rr.runs.data() + rr.offset[rr.row_index(y, z)];
+      scan_row(grid.row(y, z), nx, rr.lower.x(), [&](int b, int e) {
+        *out++ = b;
+        *out++ = e;
+      });
+    }
+  });
+  return rr;
+}
+
+/// Kernel rows grouped by plane dz (rows of a plane are consecutive, dy ascending).
+struct KernelPlane {
+  int dz;
+  std::size_t begin, end;
+};
+std::vector<KernelPlane> kernel_planes(const std::vector<KernelRow>& rows) {
+  std::vector<KernelPlane> planes;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (planes.empty() || planes.back().dz != rows[i].dz) planes.push_back({rows[i].dz, i, i});
+    planes.back().end = i + 1;
+  }
+  return planes;
+}
+
+BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& kernel,
+                            const std::vector<KernelPlane>& planes, const Eigen::Vector3i& c) {
+  const int ylo = rr.lower.y(), yhi = rr.lower.y() + rr.size.y() - 1;
+  const int zlo = rr.lower.z(), zhi = rr.lower.z() + rr.size.z() - 1;
+  const std::int32_t* runs = rr.runs.data();
+  std::int64_t m0 = 0, sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+  for (const KernelPlane& pl : planes) {
+    const int z = c.z() + pl.dz;
+    if (z < zlo || z > zhi) continue;
+    // Per-plane sums: S0, S1, S2 of the rows and their dy-weighted versions (fewer multiplies).
+    std::int64_t P0 = 0, P1 = 0, P2 = 0, Q0 = 0, Q1 = 0, R0 = 0;
+    for (std::size_t k = pl.begin; k < pl.end; ++k) {
+      const KernelRow& kr = kernel[k];
+      const int y = c.y() + kr.dy;
+      if (y < ylo || y > yhi) continue;
+      const std::size_t ri = rr.row_index(y, z);
+      const std::int32_t* r = runs + rr.offset[ri];
+      const std::int32_t* rend = runs + rr.offset[ri + 1];
+      const int lo = c.x() - kr.w, hi = c.x() + kr.w;
+      while (r != rend && r[1] < lo) r += 2;  // skip runs left of the chord
+      if (r == rend || r[0] > hi) continue;   // chord entirely outside
+      std::int64_t s0, s1, s2;
+      if (r[0] <= lo && r[1] >= hi) {
+        // Chord entirely inside one run (the common case away from the surface): closed form.
+        s0 = 2 * std::int64_t(kr.w) + 1;
+        s1 = 0;
+        s2 = 2 * G(kr.w);
+      } else {
+        s0 = s1 = s2 = 0;
+        for (; r != rend && r[0] <= hi; r += 2) {
+          const std::int64_t p = std::max<int>(r[0], lo) - c.x();
+          const std::int64_t q = std::min<int>(r[1], hi) - c.x();
+          const std::int64_t n = q - p + 1;
+          s0 += n;
+          s1 += (p + q) * n / 2;
+          s2 += G(q) - G(p - 1);
+        }
+      }
+      const std::int64_t dy = kr.dy;
+      P0 += s0;
+      P1 += s1;
+      P2 += s2;
+      Q0 += dy * s0;
+      Q1 += dy * s1;
+      R0 += dy * dy * s0;
+    }
+    const std::int64_t dz = pl.dz;
+    m0 += P0;
+    sx += P1;
+    sy += Q0;
+    sz += dz * P0;
+    xx += P2;
+    xy += Q1;
+    xz += dz * P1;
+    yy += R0;
+    yz += dz * Q0;
+    zz += dz * dz * P0;
+  }
+  BallMoments m;
+  m.m0 = m0;
+  m.m1[0] = sx, m.m1[1] = sy, m.m1[2] = sz;
+  m.m2[0] = xx, m.m2[1] = xy, m.m2[2] = xz, m.m2[3] = yy, m.m2[4] = yz, m.m2[5] = zz;
+  return m;
+}
+
+}  // namespace
+
+std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double digital_radius, double h,
+                                                const std::vector<Eigen::Vector3i>& centres) {
+  const double R = digital_radius * h;
+  const int n = int(std::ceil(digital_radius)) + 1;
+  std::vector<BallMoments> out(centres.size());
+  tbb::parallel_for(std::size_t(0), centres.size(), [&](std::size_t i) {
+    BallMoments m;
+    const Eigen::Vector3i& c = centres[i];
+    for (int dz = -n; dz <= n; ++dz)
+      for (int dy = -n; dy <= n; ++dy)
+        for (int dx = -n; dx <= n; ++dx) {
+          if (!in_kernel(dx, dy, dz, R, h)) continue;
+          if (!grid.get(c.x() + dx, c.y() + dy, c.z() + dz)) continue;
+          const std::int64_t d[3] = {dx, dy, dz};
+          ++m.m0;
+          for (int a = 0; a < 3; ++a) m.m1[a] += d[a];
+          m.m2[0] += d[0] * d[0], m.m2[1] += d[0] * d[1], m.m2[2] += d[0] * d[2];
+          m.m2[3] += d[1] * d[1], m.m2[4] += d[1] * d[2], m.m2[5] += d[2] * d[2];
+        }
+    out[i] = m;
+  });
+  return out;
+}
+
+std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius, double h,
+                                    const std::vector<Eigen::Vector3i>& centres, const ProgressFn& progress) {
+  const RowRuns rr = encode_runs(grid);
+  const std::vector<KernelRow> kernel = kernel_rows(digital_radius, h);
+  const std::vector<KernelPlane> planes = kernel_planes(kernel);
+  std::vector<BallMoments> out(centres.size());
+  std::atomic<std::int64_t> done{0};
+  const std::int64_t total = std::int64_t(centres.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, centres.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i)
+                        out[i] = moments_by_rows(rr, kernel, planes, centres[i]);
+                      if (progress) progress(done += std::int64_t(range.size()), total);
+                    });
+  return out;
+}
+
+Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params,
+                                 IIMethod method, const ProgressFn& progress) {
+  if (!mesh.has_surfels())
+    throw InputError("II normals need the voxels of the surface (a mesh from --shape or --volume, not a mesh file)");
+  const double h = grid.h();
+  const double rd = ii_digital_radius(h, params);
+  check_radius(grid, rd);
+  // Distinct centres: inner and outer voxels of all surfels (spec §7 step 3), shared by neighbours.
+  const Eigen::Vector3i lo = grid.lower();
+  const Eigen::Vector3i sz = grid.size() + Eigen::Vector3i::Constant(2);  // outer voxels may be 1 outside
+  auto key = [&](const Eigen::Vector3i& v) {
+    return (std::int64_t(v.z() - lo.z() + 1) * sz.y() + (v.y() - lo.y() + 1)) * sz.x() + (v.x() - lo.x() + 1);
+  };
+  const std::size_t F = mesh.surfels.size();
+  std::vector<std::int64_t> keys(2 * F);
+  for (std::size_t f = 0; f < F; ++f) {
+    keys[2 * f] = key(mesh.surfels[f].inner_voxel());
+    keys[2 * f + 1] = key(mesh.surfels[f].outer_voxel());
+  }
+  std::vector<std::int64_t> uniq = keys;
+  std::sort(uniq.begin(), uniq.end());
+  uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
+  std::vector<Eigen::Vector3i> centres(uniq.size());
+  for (std::size_t i = 0; i < uniq.size(); ++i) {
+    std::int64_t k = uniq[i];
+    const int x = int(k % sz.x()); k /= sz.x();
+    const int y = int(k % sz.y()); k /= sz.y();
+    centres[i] = Eigen::Vector3i(x, y, int(k)) + lo - Eigen::Vector3i::Ones();
+  }
+  const std::vector<BallMoments> mom = method == IIMethod::Fast ? ii_moments(grid, rd, h, centres, progress)
+                                                                : ii_moments_brute_force(grid, rd, h, centres);
+  Eigen::MatrixX3d normals(Eigen::Index(F), 3);
+  tbb::parallel_for(std::size_t(0), F, [&](std::size_t f) {
+    const auto in = std::lower_bound(uniq.begin(), uniq.end(), keys[2 * f]) - uniq.begin();
+    const auto out = std::lower_bound(uniq.begin(), uniq.end(), keys[2 * f + 1]) - uniq.begin();
+    // spec §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
+    const Eigen::Matrix3d C = 0.5 * (mom[std::size_t(in)].covariance() + mom[std::size_t(out)].covariance());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+    Eigen::Vector3d n = es.eigenvectors().col(0);
+    // spec §7 step 5: orient by the trivial normal (>= 0 keeps it).
+    if (n.dot(mesh.surfels[f].trivial_normal()) < 0.0) n = -n;
+    normals.row(Eigen::Index(f)) = n.transpose();
+  });
+  return normals;
+}
+
+Eigen::MatrixX3d ii_vertex_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params,
+                                   const ProgressFn& progress) {
+  const Eigen::MatrixX3d fn = ii_face_normals(grid, mesh, params, IIMethod::Fast, progress);
+  return vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices());
+}
+
+}  // namespace corrlap

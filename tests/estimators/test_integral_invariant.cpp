@@ -1,0 +1,131 @@
+// Integral-invariant normals (spec §7, numbers of §12.4, reference data of sphere1 h = 0.2).
+#include <doctest/doctest.h>
+
+#include <cmath>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/estimators/integral_invariant.hpp>
+#include <corrlap/io/text_io.hpp>
+
+#include "test_support.hpp"
+
+using namespace corrlap;
+
+namespace {
+struct Digital {
+  VoxelGrid grid;
+  SurfelMesh mesh;
+};
+Digital digital(const std::string& shape, double h, double lo, double hi) {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = lo;
+  p.max_aabb = hi;
+  Digital d;
+  d.grid = digitize(make_implicit_shape(shape), p);
+  d.mesh = extract_surface(d.grid);
+  return d;
+}
+// Angle (radians) between each face normal and the radial direction at the surfel centre.
+std::vector<double> radial_angles(const SurfelMesh& m, const Eigen::MatrixX3d& n) {
+  const Eigen::MatrixX3d c = m.face_centroids();
+  std::vector<double> a(std::size_t(c.rows()));
+  for (Eigen::Index f = 0; f < c.rows(); ++f) {
+    const double d = std::clamp(n.row(f).dot(c.row(f).normalized()), -1.0, 1.0);
+    a[std::size_t(f)] = std::acos(d);
+  }
+  return a;
+}
+double mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s / double(v.size());
+}
+double maxv(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }
+constexpr double deg = 180.0 / M_PI;
+}  // namespace
+
+TEST_CASE("ii fast moments equal brute-force moments exactly, also near the box boundary") {
+  // Torus at h = 0.5 crossing the box (open surface, balls clipped by the box) and goursat.
+  for (const auto& [shape, h, lo, hi] : {std::tuple<std::string, double, double, double>{"torus", 0.5, -8, 4},
+                                         {"goursat", 0.6, -10, 10}}) {
+    const Digital d = digital(shape, h, lo, hi);
+    std::vector<Eigen::Vector3i> centres;
+    for (std::size_t f = 0; f < d.mesh.surfels.size(); f += 7) {
+      centres.push_back(d.mesh.surfels[f].inner_voxel());
+      centres.push_back(d.mesh.surfels[f].outer_voxel());
+    }
+    const double rd = ii_digital_radius(h, {});
+    const auto fast = ii_moments(d.grid, rd, h, centres);
+    const auto slow = ii_moments_brute_force(d.grid, rd, h, centres);
+    REQUIRE(fast.size() == slow.size());
+    int mismatches = 0;
+    for (std::size_t i = 0; i < fast.size(); ++i) mismatches += !(fast[i] == slow[i]);
+    CHECK_MESSAGE(mismatches == 0, shape);
+    CHECK(slow[0].m0 > 0);
+  }
+}
+
+TEST_CASE("ii fast and brute-force normals agree to 1e-9") {
+  const Digital d = digital("goursat", 0.7, -10, 10);
+  const Eigen::MatrixX3d a = ii_face_normals(d.grid, d.mesh, {}, IIMethod::Fast);
+  const Eigen::MatrixX3d b = ii_face_normals(d.grid, d.mesh, {}, IIMethod::BruteForce);
+  CHECK((a - b).cwiseAbs().maxCoeff() <= 1e-9);
+  CHECK((a.rowwise().norm().array() - 1.0).abs().maxCoeff() < 1e-12);
+}
+
+TEST_CASE("ii normals match the reference on sphere1 h=0.2 (alpha = 1/3)") {
+  const Digital d = digital("sphere1", 0.2, -1.5, 1.5);
+  IIParams p;
+  p.alpha = 1.0 / 3.0;
+  CHECK(ii_digital_radius(0.2, p) * 0.2 == doctest::Approx(1.7544106429277198).epsilon(1e-14));
+  const Eigen::MatrixX3d n = ii_face_normals(d.grid, d.mesh, p);
+  const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");
+  REQUIRE(ref.rows() == n.rows());
+  double mean_angle = 0, max_angle = 0;
+  for (Eigen::Index f = 0; f < n.rows(); ++f) {
+    const double a = std::atan2(n.row(f).cross(ref.row(f)).norm(), n.row(f).dot(ref.row(f)));
+    mean_angle += a / double(n.rows());
+    max_angle = std::max(max_angle, a);
+  }
+  MESSAGE("II vs reference: mean angle " << mean_angle << " rad, max " << max_angle);
+  CHECK(mean_angle <= 1e-6);
+  CHECK(max_angle <= 1e-6);
+}
+
+TEST_CASE("ii angle statistics on sphere1 reproduce spec 12.4") {
+  // Default box of the reference (-10..10) gives the same surface; -2..2 is faster (spec §1.2).
+  const Digital d25 = digital("sphere1", 0.25, -2, 2);
+  const auto a25 = radial_angles(d25.mesh, ii_face_normals(d25.grid, d25.mesh));
+  CHECK(mean(a25) * deg == doctest::Approx(5.227).epsilon(5e-4));
+  CHECK(maxv(a25) * deg == doctest::Approx(11.663).epsilon(5e-4));
+  const Digital d10 = digital("sphere1", 0.1, -2, 2);
+  const auto a10 = radial_angles(d10.mesh, ii_face_normals(d10.grid, d10.mesh));
+  CHECK(mean(a10) * deg == doctest::Approx(0.336).epsilon(2e-3));
+  CHECK(maxv(a10) * deg == doctest::Approx(0.637).epsilon(2e-3));
+}
+
+TEST_CASE("ii mean angle error on sphere1 decreases from h=0.1 to h=0.025") {
+  double previous = 1e9;
+  for (double h : {0.1, 0.05, 0.025}) {
+    const Digital d = digital("sphere1", h, -1.5, 1.5);
+    const double m = mean(radial_angles(d.mesh, ii_face_normals(d.grid, d.mesh)));
+    CHECK_MESSAGE(m < previous, "h = " << h);
+    previous = m;
+  }
+  CHECK(previous * deg < 0.2);
+}
+
+TEST_CASE("ii normals reject a radius below one voxel, above the volume, and meshes without voxels") {
+  const Digital d = digital("sphere1", 0.25, -1.5, 1.5);
+  IIParams tiny;
+  tiny.k = 0.1;
+  CHECK_THROWS_WITH_AS(ii_face_normals(d.grid, d.mesh, tiny), doctest::Contains("smaller than one voxel"), InputError);
+  IIParams huge;
+  huge.k = 100;
+  CHECK_THROWS_WITH_AS(ii_face_normals(d.grid, d.mesh, huge), doctest::Contains("larger than the volume"), InputError);
+  SurfelMesh no_voxels = d.mesh;
+  no_voxels.surfels.clear();
+  CHECK_THROWS_AS(ii_face_normals(d.grid, no_voxels), InputError);
+}
