@@ -255,6 +255,20 @@ struct CholmodSolver::Impl {
     OpenMpScope omp(openmp_threads);
     Api<I>::factorize(&s, factor, &common);
     check_status("factorization");
+    // Simplicial LDL^T only fails on a zero pivot: a negative D(k) (indefinite A) must be caught
+    // here. D(k) is the first entry of column k of the factor.
+    if (!factor->is_super && !factor->is_ll) {
+      const I* colp = static_cast<const I*>(factor->p);
+      const I* perm = static_cast<const I*>(factor->Perm);
+      const double* x = static_cast<const double*>(factor->x);
+      for (std::size_t k = 0; k < factor->n; ++k)
+        if (!(x[colp[k]] > 0.0)) {
+          std::ostringstream os;
+          os << "matrix is not positive definite (non-positive pivot at column " << (perm ? long(perm[k]) : long(k))
+             << ", elimination step " << k << ")";
+          fail(SolverStatus::NotPositiveDefinite, os.str());
+        }
+    }
   }
 
   template <class I>
