@@ -19,6 +19,9 @@ Eigen::VectorXd solve_dirichlet(const SpMat& L, const SpMat& M, const Eigen::Vec
   if (Eigen::Index(fixed.size()) != values.size())
     throw InputError("Dirichlet problem: " + std::to_string(fixed.size()) + " fixed vertices but " +
                      std::to_string(values.size()) + " values");
+  // L 1 = 0 (spec §0): without a fixed vertex -L is singular, and a Cholesky of a singular PSD
+  // matrix may pass on rounding errors and return garbage, so refuse up front.
+  if (fixed.empty()) throw InputError("Dirichlet problem: no fixed vertex (L 1 = 0 makes the system singular)");
   // Map every vertex to its index among the free ones (-1: fixed).
   std::vector<int> free_index(std::size_t(n), 0);
   for (std::size_t i = 0; i < fixed.size(); ++i) {

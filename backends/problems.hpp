@@ -13,7 +13,8 @@ namespace corrlap {
 
 /// Solves L u = M f on the free vertices with u[fixed[i]] = values[i]. Throws InputError for
 /// out-of-range or repeated vertices, a size mismatch, or no free vertex; SolverError from the
-/// solver (e.g. not positive definite when a connected component has no fixed vertex).
+/// solver (e.g. not positive definite when a connected component has no fixed vertex). No fixed
+/// vertex at all is an InputError (L 1 = 0 makes the system singular).
 Eigen::VectorXd solve_dirichlet(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                 const Eigen::VectorXd& f, const std::vector<int>& fixed,
                                 const Eigen::VectorXd& values, LinearSolver& solver);
