@@ -1,5 +1,6 @@
 #include "cholmod.hpp"
 
+#include <atomic>
 #include <mutex>
 #include <new>
 #include <sstream>
@@ -10,6 +11,8 @@
 #include <omp.h>
 
 #include "solver_support.hpp"
+
+extern "C" void openblas_set_num_threads(int) __attribute__((weak));
 
 namespace corrlap {
 
@@ -62,6 +65,11 @@ void record_cholmod_error(int status, const char* file, int line, const char* me
 // libgomp shrink the team to the idle cores, and max-active-levels 0 makes it serial. The latter
 // ICV is process-wide in libgomp, so serial sections are reference counted.
 std::mutex serial_mutex;
+
+// METIS (used by the metis, nesdis, auto and best orderings) keeps its random generator in
+// process-wide state (GKlib), so concurrent analyses could race and pick different orderings,
+// breaking run-to-run reproducibility. Analyses with those orderings are serialized.
+std::mutex metis_mutex;
 int serial_users = 0;
 int saved_levels = 1;
 
@@ -90,6 +98,24 @@ class OpenMpScope {
 
  private:
   bool serial_;
+};
+
+// CHOLMOD's supernodal kernels call BLAS. A multi-threaded OpenBLAS called from several threads
+// at once contends on its internal lock and spins: the stress test (12 TBB tasks) ran 10x slower
+// in CPU time. The first time two CHOLMOD calls overlap, OpenBLAS is set to one thread for the
+// rest of the process; the parallelism then comes from the callers' tasks.
+std::atomic<int> active_calls{0};
+std::atomic<bool> concurrency_seen{false};
+
+class ConcurrencyScope {
+ public:
+  ConcurrencyScope() {
+    if (active_calls.fetch_add(1) > 0 && !concurrency_seen.exchange(true) && openblas_set_num_threads)
+      openblas_set_num_threads(1);
+  }
+  ~ConcurrencyScope() { active_calls.fetch_sub(1); }
+  ConcurrencyScope(const ConcurrencyScope&) = delete;
+  ConcurrencyScope& operator=(const ConcurrencyScope&) = delete;
 };
 
 const char* ordering_name(int ordering) {
@@ -243,6 +269,8 @@ struct CholmodSolver::Impl {
     cholmod_sparse s = view<I>(A);
     free_factor();
     apply_options();
+    std::unique_lock<std::mutex> lock(metis_mutex, std::defer_lock);
+    if (ordering != "amd" && ordering != "natural") lock.lock();
     factor = Api<I>::analyze(&s, &common);
     if (!factor) check_status("analysis");
     if (!factor) fail(SolverStatus::NumericalIssue, "analysis returned no factor");
@@ -252,6 +280,7 @@ struct CholmodSolver::Impl {
   template <class I>
   void do_factorize(const SpMat& A) {
     cholmod_sparse s = view<I>(A);
+    ConcurrencyScope concurrent;
     OpenMpScope omp(openmp_threads);
     Api<I>::factorize(&s, factor, &common);
     check_status("factorization");
@@ -281,6 +310,7 @@ struct CholmodSolver::Impl {
     b.x = const_cast<double*>(B.data());
     b.xtype = CHOLMOD_REAL;
     b.dtype = CHOLMOD_DOUBLE;
+    ConcurrencyScope concurrent;
     cholmod_dense* x = Api<I>::solve(factor, &b, &common);
     if (!x) {
       check_status("solve");
