@@ -103,7 +103,9 @@ class OpenMpScope {
 // CHOLMOD's supernodal kernels call BLAS. A multi-threaded OpenBLAS called from several threads
 // at once contends on its internal lock and spins: the stress test (12 TBB tasks) ran 10x slower
 // in CPU time. The first time two CHOLMOD calls overlap, OpenBLAS is set to one thread for the
-// rest of the process; the parallelism then comes from the callers' tasks.
+// rest of the process; the parallelism then comes from the callers' tasks. OpenBLAS results
+// depend on its thread count in the last bits, so callers who need bitwise reproducibility across
+// serial and concurrent phases set blas_threads explicitly (which disables the switch).
 std::atomic<int> active_calls{0};
 std::atomic<bool> concurrency_seen{false};
 
@@ -139,6 +141,7 @@ struct CholmodSolver::Impl {
   std::string ordering = "amd";
   bool long_index = false;
   int openmp_threads = 0;
+  int blas_threads = 0;
   bool check_symmetry = true;
 
   // state
@@ -333,6 +336,9 @@ std::vector<ParameterInfo> CholmodSolver::options() const {
       {"long_index", "false", "use CHOLMOD's 64-bit index API (very large systems)"},
       {"openmp_threads", "0",
        "0: let OpenMP shrink CHOLMOD's team to idle cores (dynamic); 1: serial; >1: CHOLMOD's built-in team"},
+      {"blas_threads", "0",
+       "0: OpenBLAS as configured, switched to 1 thread once CHOLMOD calls overlap; n: set OpenBLAS to n threads "
+       "(process-wide; use 1 for bitwise-reproducible concurrent use)"},
       {"check_symmetry", "true", "reject matrices with |A - A^T| > 1e-10 |A| (only the lower triangle is used)"},
   };
 }
@@ -351,6 +357,13 @@ void CholmodSolver::configure(const Config& options) {
                      ordering + "'");
   const int threads = options.get_int("openmp_threads", s.openmp_threads);
   if (threads < 0) throw InputError("linear solver 'cholmod': config key 'openmp_threads' must be >= 0");
+  const int blas = options.get_int("blas_threads", s.blas_threads);
+  if (blas < 0) throw InputError("linear solver 'cholmod': config key 'blas_threads' must be >= 0");
+  if (blas > 0) {
+    concurrency_seen = true;  // explicit choice: no automatic switch
+    if (openblas_set_num_threads) openblas_set_num_threads(blas);
+  }
+  s.blas_threads = blas;
   s.supernodal = supernodal;
   s.ordering = ordering;
   s.openmp_threads = threads;
