@@ -5,11 +5,25 @@
 
 #include <corrlap/discretizations/registry.hpp>
 
+#include <unistd.h>
+
 #include "test_support.hpp"
 
-using corrlap::test::run_cli;
-
 #ifdef CORRLAP_CLI
+namespace {
+// Like test::run_cli, but with output files unique per process: ctest runs test cases as
+// parallel processes, and run_cli's per-process counter makes them share cli_out_1.txt.
+int run_cli(const std::string& args, std::string* out, std::string* err) {
+  static int counter = 0;
+  const std::string stem = corrlap::test::tmp_path("backends_cli_" + std::to_string(getpid()) + "_" + std::to_string(++counter));
+  const std::string cmd = std::string(CORRLAP_CLI) + " " + args + " >" + stem + ".out 2>" + stem + ".err </dev/null";
+  const int status = std::system(cmd.c_str());
+  *out = corrlap::test::read_text(stem + ".out");
+  *err = corrlap::test::read_text(stem + ".err");
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+}  // namespace
+
 TEST_CASE("corrlap backends lists every backend with its options") {
   std::string out, err;
   REQUIRE(run_cli("backends --json", &out, &err) == 0);
