@@ -1,12 +1,29 @@
 #include "registry.hpp"
 
+#include "cholmod.hpp"
+#include "eigen_direct.hpp"
+#include "iterative.hpp"
+#include "spectra_eigs.hpp"
+
 namespace corrlap {
 
 namespace {
 void register_builtin_linear_solvers(LinearSolverRegistry& r) {
-  (void)r;  // each backend's file pair adds one line here
+  r.add("eigen-ldlt", "Eigen SimplicialLDLT (sparse LDL^T, AMD ordering)",
+        [] { return std::make_unique<EigenDirectSolver>(EigenDirectSolver::Kind::LDLT); });
+  r.add("eigen-llt", "Eigen SimplicialLLT (sparse Cholesky LL^T, AMD ordering)",
+        [] { return std::make_unique<EigenDirectSolver>(EigenDirectSolver::Kind::LLT); });
+  r.add("cholmod", "SuiteSparse CHOLMOD (supernodal/simplicial Cholesky, AMD/METIS/NESDIS, reusable analysis)",
+        [] { return std::make_unique<CholmodSolver>(); });
+  r.add("cg", "preconditioned conjugate gradient (none/jacobi/ichol)",
+        [] { return std::make_unique<ConjugateGradientSolver>(); });
 }
-void register_builtin_eigen_solvers(EigenSolverRegistry& r) { (void)r; }
+void register_builtin_eigen_solvers(EigenSolverRegistry& r) {
+  r.add("shift-invert", "Spectra SymGEigsShiftSolver, shift-invert with any linear solver; dense below dense_threshold",
+        [] { return std::make_unique<ShiftInvertEigenSolver>(); });
+  r.add("dense", "Eigen GeneralizedSelfAdjointEigenSolver on dense matrices (small problems)",
+        [] { return std::make_unique<DenseEigenSolver>(); });
+}
 }  // namespace
 
 LinearSolverRegistry& linear_solver_registry() {

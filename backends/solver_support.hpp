@@ -1,0 +1,55 @@
+#pragma once
+// Checks and helpers shared by the linear solver backends (input validation with SolverError
+// statuses, timing, config forwarding). Internal to backends/: no third-party solver header here.
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include <Eigen/Sparse>
+
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/linear_solver.hpp>
+
+namespace corrlap::detail {
+
+/// Throws SolverError(InvalidInput) when A is not square or empty, SolverError(NumericalIssue)
+/// naming the entry when A holds a NaN/Inf, and SolverError(InvalidInput) when A is not symmetric
+/// (relative tolerance 1e-10 on the Frobenius norm; every backend here is for symmetric systems).
+void check_matrix(const Eigen::SparseMatrix<double>& A, const std::string& solver, bool check_symmetry = true);
+
+/// Throws SolverError(InvalidInput) when B has not `n` rows, SolverError(NumericalIssue) on NaN/Inf.
+void check_rhs(const Eigen::MatrixXd& B, Eigen::Index n, const std::string& solver);
+
+/// Sparsity pattern of a compressed matrix, to check that factorize() gets the analyzed pattern.
+struct Pattern {
+  Eigen::Index rows = -1;
+  std::vector<int> outer, inner;
+  void assign(const Eigen::SparseMatrix<double>& A);
+  bool matches(const Eigen::SparseMatrix<double>& A) const;
+  bool empty() const { return rows < 0; }
+};
+
+/// Throws SolverError(InvalidInput) when A's pattern differs from the analyzed one.
+void check_same_pattern(const Pattern& analyzed, const Eigen::SparseMatrix<double>& A, const std::string& solver);
+
+/// Keys every backend accepts besides its own: "solver" (consumed by make_linear_solver).
+std::vector<std::string> allowed_keys(const std::vector<ParameterInfo>& options);
+
+/// A copy of `config` without the given keys (values keep their type through key=value parsing).
+Config without_keys(const Config& config, const std::vector<std::string>& drop);
+
+/// Relative residual |A X - B|_F / |B|_F (0 when B = 0).
+double relative_residual(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& X, const Eigen::MatrixXd& B);
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace corrlap::detail

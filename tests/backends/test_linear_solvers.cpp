@@ -1,0 +1,272 @@
+// Linear solver backends behind the LinearSolver contract: accuracy, reuse of the symbolic
+// analysis, and failure statuses (issue 4).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+
+#include <corrlap/backends/cholmod.hpp>
+#include <corrlap/backends/eigen_direct.hpp>
+#include <corrlap/backends/registry.hpp>
+
+#include "backends/fem_fixture.hpp"
+
+using namespace corrlap;
+using SpMat = Eigen::SparseMatrix<double>;
+
+namespace {
+
+const test::FlatFem& sphere() {
+  static const test::FlatFem op = test::flat_fem_sphere(0.1);  // ~1.9k vertices
+  return op;
+}
+
+std::unique_ptr<LinearSolver> make(const std::string& items) {
+  std::vector<std::string> kv;
+  std::string cur;
+  for (char c : items + " ") {
+    if (c == ' ') {
+      if (!cur.empty()) kv.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  return make_linear_solver(Config::from_key_values(kv));
+}
+
+// Relative error of the solution of A x = A x* against a random x*. A = -L + M has condition
+// number ~ 1e3 here, so a backward-stable direct solver gives ~1e-13; CG is run to 1e-12.
+double solve_error(LinearSolver& s, const SpMat& A, unsigned seed = 1) {
+  std::srand(seed);
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(A.rows());
+  const Eigen::VectorXd b = A * x;
+  s.compute(A);
+  const Eigen::VectorXd y = s.solve(b);
+  return (y - x).norm() / x.norm();
+}
+
+SolverStatus status_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const SolverError& e) {
+    return e.status();
+  }
+  return SolverStatus::Success;
+}
+
+SpMat diagonal(const std::vector<double>& d) {
+  SpMat A(Eigen::Index(d.size()), Eigen::Index(d.size()));
+  for (std::size_t i = 0; i < d.size(); ++i) A.insert(Eigen::Index(i), Eigen::Index(i)) = d[i];
+  A.makeCompressed();
+  return A;
+}
+
+const std::vector<std::string> kAllConfigs = {
+    "solver=eigen-ldlt",
+    "solver=eigen-llt",
+    "solver=cholmod",
+    "solver=cholmod supernodal=simplicial",
+    "solver=cholmod supernodal=auto ordering=auto",
+    "solver=cholmod ordering=metis",
+    "solver=cholmod ordering=nesdis",
+    "solver=cholmod ordering=best",
+    "solver=cholmod long_index=true",
+    "solver=cholmod supernodal=simplicial long_index=true ordering=metis",
+    "solver=cholmod openmp_threads=1",
+    "solver=cg preconditioner=none tolerance=1e-12",
+    "solver=cg preconditioner=jacobi tolerance=1e-12",
+    "solver=cg preconditioner=ichol tolerance=1e-12",
+};
+
+}  // namespace
+
+TEST_CASE("registry lists every backend") {
+  const auto names = linear_solver_registry().names();
+  for (const char* n : {"cg", "cholmod", "eigen-ldlt", "eigen-llt"})
+    CHECK(std::find(names.begin(), names.end(), n) != names.end());
+}
+
+TEST_CASE("every backend solves an SPD sphere system to tolerance") {
+  const SpMat A = test::shifted(sphere(), 1.0);
+  REQUIRE(A.rows() > 1500);
+  for (const auto& cfg : kAllConfigs) {
+    CAPTURE(cfg);
+    auto s = make(cfg);
+    const double err = solve_error(*s, A);
+    CHECK(err < (cfg.find("cg") != std::string::npos ? 1e-9 : 1e-11));
+    CHECK(s->info().status == SolverStatus::Success);
+    if (s->name() == "cg") {
+      CHECK(s->info().iterations > 0);
+      CHECK(s->info().residual <= 1e-11);
+    }
+  }
+}
+
+TEST_CASE("multiple right-hand sides are solved column by column") {
+  const SpMat A = test::shifted(sphere(), 0.5);
+  std::srand(3);
+  const Eigen::MatrixXd X = Eigen::MatrixXd::Random(A.rows(), 3);
+  const Eigen::MatrixXd B = A * X;
+  for (const char* cfg : {"solver=eigen-ldlt", "solver=cholmod", "solver=cg tolerance=1e-12"}) {
+    CAPTURE(cfg);
+    auto s = make(cfg);
+    s->compute(A);
+    CHECK((s->solve(B) - X).norm() / X.norm() < 1e-9);
+  }
+}
+
+TEST_CASE("cholmod auto picks supernodal or simplicial and reports the ordering used") {
+  CholmodSolver s;
+  s.configure(Config::from_key_values({"supernodal=supernodal", "ordering=metis"}));
+  s.compute(test::shifted(sphere(), 1.0));
+  CHECK(s.is_supernodal());
+  CHECK(s.ordering_used() == "metis");
+  s.configure(Config::from_key_values({"supernodal=simplicial", "ordering=amd"}));
+  s.compute(test::shifted(sphere(), 1.0));
+  CHECK_FALSE(s.is_supernodal());
+  CHECK(s.ordering_used() == "amd");
+}
+
+TEST_CASE("refactorization with new values reuses the symbolic analysis") {
+  const SpMat A1 = test::shifted(sphere(), 1.0), A2 = test::shifted(sphere(), 0.01);
+  std::srand(7);
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(A1.rows());
+  SUBCASE("cholmod") {
+    for (const char* mode : {"supernodal", "simplicial"}) {
+      CAPTURE(mode);
+      CholmodSolver s;
+      s.configure(Config::from_key_values({std::string("supernodal=") + mode}));
+      s.analyze(A1);
+      s.factorize(A1);
+      CHECK((s.solve(A1 * x) - x).norm() / x.norm() < 1e-11);
+      s.factorize(A2);  // new values, same pattern: no new analysis
+      CHECK(s.analysis_count() == 1);
+      CHECK((s.solve(A2 * x) - x).norm() / x.norm() < 1e-9);
+    }
+  }
+  SUBCASE("eigen") {
+    for (auto kind : {EigenDirectSolver::Kind::LDLT, EigenDirectSolver::Kind::LLT}) {
+      EigenDirectSolver s(kind);
+      s.analyze(A1);
+      s.factorize(A1);
+      s.factorize(A2);
+      CHECK(s.analysis_count() == 1);
+      CHECK((s.solve(A2 * x) - x).norm() / x.norm() < 1e-9);
+    }
+  }
+  SUBCASE("a different pattern is rejected, not silently mis-factored") {
+    for (const char* cfg : {"solver=cholmod", "solver=eigen-ldlt", "solver=cg"}) {
+      CAPTURE(cfg);
+      auto s = make(cfg);
+      s->analyze(A1);
+      const SpMat D = diagonal(std::vector<double>(std::size_t(A1.rows()), 1.0));
+      CHECK(status_of([&] { s->factorize(D); }) == SolverStatus::InvalidInput);
+    }
+  }
+}
+
+TEST_CASE("indefinite matrices are reported with the failing column") {
+  // Pivot at column 2 is negative; every other one positive.
+  const SpMat D = diagonal({1.0, 2.0, -3.0, 4.0, 5.0});
+  for (const std::string cfg : {"solver=eigen-ldlt", "solver=eigen-llt", "solver=cholmod",
+                                "solver=cholmod supernodal=simplicial", "solver=cg"}) {
+    CAPTURE(cfg);
+    auto s = make(cfg);
+    try {
+      s->compute(D);
+      FAIL("no error for an indefinite matrix");
+    } catch (const SolverError& e) {
+      CHECK(e.status() == SolverStatus::NotPositiveDefinite);
+      CHECK(std::string(e.what()).find("column 2") != std::string::npos);
+    }
+    CHECK(s->info().status == SolverStatus::NotPositiveDefinite);
+  }
+  // A genuinely indefinite FEM system: -L - 3 M has eigenvalues on both sides of 0.
+  for (const char* cfg : {"solver=eigen-ldlt", "solver=eigen-llt", "solver=cholmod"}) {
+    CAPTURE(cfg);
+    auto s = make(cfg);
+    CHECK(status_of([&] { s->compute(test::shifted(sphere(), -3.0)); }) == SolverStatus::NotPositiveDefinite);
+  }
+}
+
+TEST_CASE("NaN/Inf, dimension mismatch and misuse give statuses") {
+  SpMat bad = test::shifted(sphere(), 1.0);
+  bad.coeffRef(5, 5) = std::nan("");
+  const SpMat A = test::shifted(sphere(), 1.0);
+  SpMat rect(4, 5);
+  rect.insert(0, 0) = 1;
+  SpMat nonsym = diagonal({2, 2, 2});
+  nonsym.insert(0, 1) = 1.0;
+  for (const std::string cfg : {"solver=eigen-ldlt", "solver=eigen-llt", "solver=cholmod", "solver=cg"}) {
+    CAPTURE(cfg);
+    auto s = make(cfg);
+    CHECK(status_of([&] { s->solve(Eigen::VectorXd::Ones(3)); }) == SolverStatus::NotAnalyzed);
+    CHECK(status_of([&] { s->compute(bad); }) == SolverStatus::NumericalIssue);
+    CHECK(status_of([&] { s->compute(rect); }) == SolverStatus::InvalidInput);
+    CHECK(status_of([&] { s->compute(nonsym); }) == SolverStatus::InvalidInput);
+    s->compute(A);
+    CHECK(status_of([&] { s->solve(Eigen::VectorXd::Ones(A.rows() + 1)); }) == SolverStatus::InvalidInput);
+    Eigen::VectorXd b = Eigen::VectorXd::Ones(A.rows());
+    b[3] = INFINITY;
+    CHECK(status_of([&] { s->solve(b); }) == SolverStatus::NumericalIssue);
+  }
+}
+
+TEST_CASE("cg non-convergence is an error unless the caller opts into a warning") {
+  const SpMat A = test::shifted(sphere(), 1e-3);
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(A.rows());
+  auto strict = make("solver=cg preconditioner=none max_iterations=3");
+  strict->compute(A);
+  try {
+    strict->solve(b);
+    FAIL("no error");
+  } catch (const SolverError& e) {
+    CHECK(e.status() == SolverStatus::NoConvergence);
+    CHECK(std::string(e.what()).find("3 iterations") != std::string::npos);
+  }
+  auto lenient = make("solver=cg preconditioner=none max_iterations=3 on_no_convergence=warn");
+  lenient->compute(A);
+  const Eigen::VectorXd x = lenient->solve(b);
+  CHECK(x.size() == A.rows());
+  CHECK(lenient->info().status == SolverStatus::NoConvergence);
+  CHECK(lenient->info().iterations == 3);
+  CHECK(lenient->info().residual > 1e-10);
+}
+
+TEST_CASE("ichol needs fewer iterations than jacobi, which needs no more than none") {
+  const SpMat A = test::shifted(sphere(), 1e-2);
+  std::srand(11);
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(A.rows());
+  int it[3];
+  int i = 0;
+  for (const char* p : {"none", "jacobi", "ichol"}) {
+    auto s = make(std::string("solver=cg tolerance=1e-10 preconditioner=") + p);
+    s->compute(A);
+    s->solve(b);
+    it[i++] = s->info().iterations;
+  }
+  MESSAGE("cg iterations none/jacobi/ichol: " << it[0] << " " << it[1] << " " << it[2]);
+  CHECK(it[1] <= it[0]);
+  CHECK(it[2] < it[1]);
+}
+
+TEST_CASE("unknown keys and names list the valid ones; key solver is accepted") {
+  for (const char* name : {"eigen-ldlt", "eigen-llt", "cholmod", "cg"}) {
+    CAPTURE(name);
+    try {
+      make(std::string("solver=") + name + " orderin=metis");
+      FAIL("no error");
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      CHECK(msg.find("orderin") != std::string::npos);
+      CHECK(msg.find("valid keys") != std::string::npos);
+      CHECK(msg.find("check_symmetry") != std::string::npos);
+    }
+  }
+  CHECK_THROWS_WITH_AS(make("solver=umfpack"), doctest::Contains("cholmod"), InputError);
+  CHECK_THROWS_AS(make("solver=cholmod ordering=colamd"), InputError);
+  CHECK_THROWS_AS(make("solver=cg preconditioner=ilu"), InputError);
+  CHECK_THROWS_AS(make("solver=cg tolerance=2"), InputError);
+  CHECK_NOTHROW(make("solver=cholmod ordering=metis supernodal=auto"));
+}
