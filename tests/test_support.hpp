@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <unistd.h>
 
 namespace corrlap::test {
 
@@ -30,8 +31,10 @@ inline std::string read_text(const std::string& path) {
 /// Runs the CLI with arguments; returns the exit code, stdout in `out`, stderr in `err`.
 inline int run_cli(const std::string& args, std::string* out = nullptr, std::string* err = nullptr) {
   static int counter = 0;
-  const std::string o = tmp_path("cli_out_" + std::to_string(++counter) + ".txt");
-  const std::string e = tmp_path("cli_err_" + std::to_string(counter) + ".txt");
+  // ctest runs test cases as parallel processes: the pid keeps scratch names apart.
+  const std::string tag = std::to_string(::getpid()) + "_" + std::to_string(++counter);
+  const std::string o = tmp_path("cli_out_" + tag + ".txt");
+  const std::string e = tmp_path("cli_err_" + tag + ".txt");
   const std::string cmd = std::string(CORRLAP_CLI) + " " + args + " >" + o + " 2>" + e + " </dev/null";
   const int status = std::system(cmd.c_str());
   if (out) *out = read_text(o);
