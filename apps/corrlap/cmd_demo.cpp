@@ -1,39 +1,128 @@
-// corrlap demo: the main job on a built-in example. It grows with every capability.
+// corrlap demo: the main job on a built-in example (the unit sphere), running the whole data flow
+// voxels -> digital surface -> normals and curvature -> operators -> solver -> results.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
+#include <Eigen/Geometry>
+
+#include <corrlap/backends/problems.hpp>
+#include <corrlap/backends/registry.hpp>
 #include <corrlap/core/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/normal_fields.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/corrected_curvature.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/estimators/normal_estimation.hpp>
 
 #include "command.hpp"
 
 namespace corrlap::cli {
 namespace {
 
-void digitization_table() {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+DigitizationParams sphere_params(double h) {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = -2;
+  p.max_aabb = 2;
+  return p;
+}
+
+void digitization_table(const ImplicitShape& sphere) {
   std::printf("== 1. Digitization of the unit sphere (spec §1): the digital area does not converge to 4*pi\n");
   std::printf("%8s %10s %10s %10s %6s %12s %10s %10s\n", "h", "vertices", "edges", "faces", "euler", "area F*h^2",
               "area/4pi", "time_s");
-  const ImplicitShape sphere = make_implicit_shape("sphere1");
-  for (double h : {0.2, 0.1, 0.05}) {
-    const auto t0 = std::chrono::steady_clock::now();
-    DigitizationParams p;
-    p.h = h;
-    p.min_aabb = -2;
-    p.max_aabb = 2;
-    const SurfelMesh mesh = extract_surface(digitize(sphere, p));
+  for (double h : {0.2, 0.1, 0.05, 0.01}) {
+    const auto t0 = Clock::now();
+    const SurfelMesh mesh = extract_surface(digitize(sphere, sphere_params(h)));
     const MeshInfo info = compute_mesh_info(mesh);
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::printf("%8.3f %10d %10d %10d %6d %12.6f %10.6f %10.4f\n", h, info.vertices, info.edges, info.faces,
-                info.euler, info.area, info.area / (4 * M_PI), t);
+                info.euler, info.area, info.area / (4 * M_PI), since(t0));
   }
   std::printf("\n");
 }
 
+void normals_and_curvature(const ImplicitShape& sphere) {
+  std::printf("== 2. Normals (spec §7) and corrected curvature (spec §8) on the unit sphere\n");
+  std::printf("%8s %16s %16s %12s %12s %10s\n", "h", "II mean angle", "II max angle", "mean H", "max|H-1|", "time_s");
+  for (double h : {0.1, 0.05}) {
+    const auto t0 = Clock::now();
+    const VoxelGrid grid = digitize(sphere, sphere_params(h));
+    const SurfelMesh mesh = extract_surface(grid);
+    const Eigen::MatrixX3d ii = estimate_face_normals(NormalEstimator::II, mesh, &grid, &sphere);
+    const Eigen::MatrixX3d exact = true_face_normals(sphere, mesh);
+    double mean = 0, worst = 0;
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      const double a = std::atan2(ii.row(f).cross(exact.row(f)).norm(), ii.row(f).dot(exact.row(f)));
+      mean += a;
+      worst = std::max(worst, a);
+    }
+    mean /= mesh.num_faces();
+    const Eigen::MatrixX3d vn = true_vertex_normals(sphere, mesh);
+    const CurvatureEstimates c = CorrectedCurvature::interpolated(mesh, vn).at_vertices(0.1);
+    std::printf("%8.3f %14.4f deg %14.4f deg %12.6f %12.6f %10.3f\n", h, mean * 180 / M_PI, worst * 180 / M_PI,
+                c.H.mean(), (c.H.array() - 1.0).abs().maxCoeff(), since(t0));
+  }
+  std::printf("\n");
+}
+
+void operators_table(const ImplicitShape& sphere) {
+  std::printf("== 3. Operators (true normals) -> backward Poisson f = x^2 (spec §10.4, CHOLMOD) and eigenvalues\n");
+  std::printf("   area = 1^T M 1 (4*pi = %.5f); eigenvalues -lambda should be 0, 2 (x3), 6 (x5)\n", 4 * M_PI);
+  std::printf("%18s %7s %10s %12s %12s %10s %10s %10s\n", "method", "h", "area", "Poisson L2", "order", "mu_1",
+              "mu_4", "time_s");
+  auto solver_config = Config::from_key_values({"solver=cholmod"});
+  for (const char* method : {"polydec", "projected-polydec", "fem", "interpolated", "corrected-vrm"}) {
+    double previous = 0;
+    for (double h : {0.1, 0.05}) {
+      const auto t0 = Clock::now();
+      const SurfelMesh mesh = extract_surface(digitize(sphere, sphere_params(h)));
+      NormalFields normals;
+      normals.face = true_face_normals(sphere, mesh);
+      normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
+      const Operators ops = make_discretization(method)->assemble(mesh, normals, Config());
+      // f = x^2 at the radial projection, Laplacian 2 - 6x^2 (spec §10.2)
+      Eigen::VectorXd f(mesh.num_vertices()), b(mesh.num_vertices());
+      for (int v = 0; v < mesh.num_vertices(); ++v) {
+        const double x = mesh.positions(v, 0) / mesh.positions.row(v).norm();
+        f[v] = x * x;
+        b[v] = 2 - 6 * x * x;
+      }
+      auto solver = make_linear_solver(solver_config);
+      const Eigen::VectorXd g = solve_neumann_poisson(ops.L, ops.M, b, *solver, f[0]);
+      const PoissonErrors e = poisson_errors(ops.M, g, f);
+      auto eig = eigen_solver_registry().create("shift-invert");
+      eig->configure(solver_config);
+      const EigenResult r = eig->solve(ops.L, ops.M, 5);
+      const double area = Eigen::VectorXd::Ones(mesh.num_vertices()).dot(ops.M * Eigen::VectorXd::Ones(mesh.num_vertices()));
+      char order[32] = "";
+      if (previous > 0) std::snprintf(order, sizeof order, "%.2f", std::log(previous / e.l2) / std::log(2.0));
+      std::printf("%18s %7.3f %10.5f %12.3e %12s %10.5f %10.5f %10.3f\n", method, h, area, e.l2, order, r.values[1],
+                  r.values[4], since(t0));
+      previous = e.l2;
+    }
+  }
+  std::printf("\nUncorrected PolyDEC neither gets the area nor the spectrum right; the corrected methods do,\n"
+              "and their Poisson error decreases about like h^1.7 (spec §12.5).\n");
+}
+
+void run_demo() {
+  const auto t0 = Clock::now();
+  const ImplicitShape sphere = make_implicit_shape("sphere1");
+  digitization_table(sphere);
+  normals_and_curvature(sphere);
+  operators_table(sphere);
+  std::printf("\ndemo finished in %.1f s\n", since(t0));
+}
+
 RegisterCommand reg(0, "demo", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("demo", "run the main job on a built-in example (sphere1)");
-  cmd->callback([] { digitization_table(); });
+  auto* cmd = app.add_subcommand("demo", "run the whole pipeline on a built-in example (unit sphere)");
+  cmd->callback([] { run_demo(); });
 });
 
 }  // namespace
