@@ -1,10 +1,16 @@
 // Linear solver backends on sphere1 operators (issue 4): analyze / factorize / solve per backend,
 // refactorization (analysis reused) vs full factorization, CG iterations, and the 49 smallest
 // eigenpairs by shift-invert. System: M - dt L with dt = 0.035 h (spec §10.3, SPD).
-// Operators: the corrected FEM with true normals when "fem" is registered, else the flat bilinear
-// FEM of spec §4.5 (same sparsity pattern). Goals: CHOLMOD >= 3x faster than eigen-ldlt in
-// factorization at the largest size; refactorization >= 1.5x faster than analyze + factorize.
+// Operators: corrected FEM (9-point stencil) and interpolated corrected calculus (21-point stencil),
+// true normals. Goals: CHOLMOD >= 3x faster than eigen-ldlt in factorization at the largest size;
+// refactorization >= 1.5x faster than analyze + factorize; our CHOLMOD wrapper within 10% of
+// calling CHOLMOD directly ("cholmod-direct": the same settings through the C API).
+//   bench_solvers                      all sizes up to h = 0.005
+//   CORRLAP_BENCH_FINEST=1 bench_solvers --benchmark_filter='h=0.0025'   the 3M-unknown case
 #include <benchmark/benchmark.h>
+#include <cholmod.h>
+
+#include <cstdlib>
 
 #include <map>
 #include <memory>
@@ -13,6 +19,7 @@
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/backends/spectra_eigs.hpp>
 #include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
@@ -30,9 +37,11 @@ struct Problem {
   std::string method;
 };
 
-const Problem& problem(double h) {
-  static std::map<double, std::unique_ptr<Problem>> cache;
-  auto& p = cache[h];
+const Problem& problem(const std::string& method, double h) {
+  static std::map<std::pair<std::string, double>, std::unique_ptr<Problem>> cache;
+  static std::mutex mutex;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& p = cache[{method, h}];
   if (p) return *p;
   p = std::make_unique<Problem>();
   DigitizationParams d;
@@ -41,31 +50,13 @@ const Problem& problem(double h) {
   d.max_aabb = 2;
   const ImplicitShape shape = make_implicit_shape("sphere1");
   const SurfelMesh mesh = extract_surface(digitize(shape, d));
-  if (discretization_registry().contains("fem")) {
-    NormalFields normals;
-    normals.face = true_face_normals(shape, mesh);
-    normals.vertex = true_vertex_normals(shape, mesh);
-    const Operators ops = make_discretization("fem")->assemble(mesh, normals, Config{});
-    p->L = ops.L;
-    p->M = ops.M;
-    p->method = "fem";
-  } else {
-    const double K[4][4] = {{4, -1, -2, -1}, {-1, 4, -1, -2}, {-2, -1, 4, -1}, {-1, -2, -1, 4}};
-    const double Mm[4][4] = {{4, 2, 1, 2}, {2, 4, 2, 1}, {1, 2, 4, 2}, {2, 1, 2, 4}};
-    std::vector<Eigen::Triplet<double>> tl, tm;
-    for (int f = 0; f < mesh.num_faces(); ++f)
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) {
-          tl.emplace_back(mesh.faces(f, i), mesh.faces(f, j), -K[i][j] / 6.0);
-          tm.emplace_back(mesh.faces(f, i), mesh.faces(f, j), h * h * Mm[i][j] / 36.0);
-        }
-    const int n = mesh.num_vertices();
-    p->L.resize(n, n);
-    p->M.resize(n, n);
-    p->L.setFromTriplets(tl.begin(), tl.end());
-    p->M.setFromTriplets(tm.begin(), tm.end());
-    p->method = "flat-fem";
-  }
+  NormalFields normals;
+  normals.face = true_face_normals(shape, mesh);
+  normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
+  const Operators ops = make_discretization(method)->assemble(mesh, normals, Config{});
+  p->L = ops.L;
+  p->M = ops.M;
+  p->method = method;
   p->A = p->M - 0.035 * h * p->L;
   p->A.makeCompressed();
   p->h = h;
@@ -98,16 +89,16 @@ void counters(benchmark::State& state, const Problem& p) {
     if (!state.counters.count(c)) state.counters[c] = 0;
 }
 
-void analyze(benchmark::State& state, std::size_t b, double h) {
-  const Problem& p = problem(h);
+void analyze(benchmark::State& state, std::size_t b, const std::string& method, double h) {
+  const Problem& p = problem(method, h);
   auto s = make(b);
   for (auto _ : state) s->analyze(p.A);
   counters(state, p);
 }
 
 // Full factorization: symbolic analysis + numeric factorization.
-void compute(benchmark::State& state, std::size_t b, double h) {
-  const Problem& p = problem(h);
+void compute(benchmark::State& state, std::size_t b, const std::string& method, double h) {
+  const Problem& p = problem(method, h);
   bench::reset_peak_rss();
   for (auto _ : state) {
     auto s = make(b);
@@ -117,8 +108,8 @@ void compute(benchmark::State& state, std::size_t b, double h) {
 }
 
 // Refactorization with new values on the analyzed pattern (e.g. a new dt).
-void refactorize(benchmark::State& state, std::size_t b, double h) {
-  const Problem& p = problem(h);
+void refactorize(benchmark::State& state, std::size_t b, const std::string& method, double h) {
+  const Problem& p = problem(method, h);
   auto s = make(b);
   s->analyze(p.A);
   SpMat A2 = p.M - 0.07 * h * p.L;
@@ -128,8 +119,8 @@ void refactorize(benchmark::State& state, std::size_t b, double h) {
   counters(state, p);
 }
 
-void solve(benchmark::State& state, std::size_t b, double h) {
-  const Problem& p = problem(h);
+void solve(benchmark::State& state, std::size_t b, const std::string& method, double h) {
+  const Problem& p = problem(method, h);
   auto s = make(b);
   s->compute(p.A);
   // A smooth non-trivial right-hand side (A 1 = M 1 would make 1 the exact solution).
@@ -139,8 +130,8 @@ void solve(benchmark::State& state, std::size_t b, double h) {
   counters(state, p);
 }
 
-void eigs49(benchmark::State& state, const std::string& solver, double h) {
-  const Problem& p = problem(h);
+void eigs49(benchmark::State& state, const std::string& solver, const std::string& method, double h) {
+  const Problem& p = problem(method, h);
   ShiftInvertEigenSolver e;
   e.configure(Config::from_key_values({"solver=" + solver}));
   EigenResult r;
@@ -151,31 +142,75 @@ void eigs49(benchmark::State& state, const std::string& solver, double h) {
   counters(state, p);
 }
 
+// The same full factorization as "cholmod-amd" (supernodal, AMD, postordered, lower triangle)
+// through CHOLMOD's C API directly: the baseline for the wrapper's overhead.
+void cholmod_direct(benchmark::State& state, const std::string& method, double h) {
+  const Problem& p = problem(method, h);
+  SpMat lower = p.A.triangularView<Eigen::Lower>();
+  lower.makeCompressed();
+  cholmod_common c;
+  cholmod_start(&c);
+  c.supernodal = CHOLMOD_SUPERNODAL;
+  c.nmethods = 1;
+  c.method[0].ordering = CHOLMOD_AMD;
+  c.postorder = 1;
+  cholmod_sparse a{};
+  a.nrow = a.ncol = std::size_t(lower.rows());
+  a.nzmax = std::size_t(lower.nonZeros());
+  a.p = lower.outerIndexPtr();
+  a.i = lower.innerIndexPtr();
+  a.x = lower.valuePtr();
+  a.stype = -1;
+  a.itype = CHOLMOD_INT;
+  a.xtype = CHOLMOD_REAL;
+  a.dtype = CHOLMOD_DOUBLE;
+  a.sorted = 1;
+  a.packed = 1;
+  for (auto _ : state) {
+    cholmod_factor* L = cholmod_analyze(&a, &c);
+    cholmod_factorize(&a, L, &c);
+    if (c.status != CHOLMOD_OK) state.SkipWithError("cholmod_factorize failed");
+    cholmod_free_factor(&L, &c);
+  }
+  cholmod_finish(&c);
+  counters(state, p);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::vector<double> hs = {0.02, 0.01, 0.005};
-  for (double h : hs)
-    for (std::size_t b = 0; b < kBackends.size(); ++b) {
-      const bool slow_at_005 = kBackends[b].first == "eigen-llt" || kBackends[b].first == "cholmod-simplicial" ||
-                               kBackends[b].first == "cholmod-serial-omp" || kBackends[b].first == "cg-jacobi" ||
-                               kBackends[b].first == "cholmod-metis-nocheck";
-      if (h < 0.009 && slow_at_005) continue;  // keep the run short: one Eigen and the main CHOLMOD variants
-      const std::string tag = kBackends[b].first + "/h=" + std::to_string(h).substr(0, 6);
-      const bool iterative = kBackends[b].first.rfind("cg", 0) == 0;
-      if (!iterative) {
-        benchmark::RegisterBenchmark(("analyze/" + tag).c_str(), analyze, b, h)->Unit(benchmark::kMillisecond)->UseRealTime();
-        benchmark::RegisterBenchmark(("compute/" + tag).c_str(), compute, b, h)->Unit(benchmark::kMillisecond)->UseRealTime();
-        benchmark::RegisterBenchmark(("refactorize/" + tag).c_str(), refactorize, b, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+  const bool finest = std::getenv("CORRLAP_BENCH_FINEST") != nullptr;
+  std::vector<double> hs = {0.02, 0.01, 0.005};
+  if (finest) hs = {0.0025};
+  for (const std::string method : {"fem", "interpolated"})
+    for (double h : hs) {
+      const std::string htag = "h=" + std::to_string(h).substr(0, 6);
+      for (std::size_t b = 0; b < kBackends.size(); ++b) {
+        const std::string& name = kBackends[b].first;
+        const bool slow = name == "eigen-llt" || name == "cholmod-simplicial" || name == "cholmod-serial-omp" ||
+                          name == "cg-jacobi";
+        if (h < 0.009 && slow) continue;  // keep the run short: one Eigen and the main CHOLMOD variants
+        const std::string tag = method + "/" + name + "/" + htag;
+        const bool iterative = name.rfind("cg", 0) == 0;
+        if (!iterative) {
+          benchmark::RegisterBenchmark(("analyze/" + tag).c_str(), analyze, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+          benchmark::RegisterBenchmark(("compute/" + tag).c_str(), compute, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+          benchmark::RegisterBenchmark(("refactorize/" + tag).c_str(), refactorize, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+        }
+        benchmark::RegisterBenchmark(("solve/" + tag).c_str(), solve, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
       }
-      benchmark::RegisterBenchmark(("solve/" + tag).c_str(), solve, b, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+      benchmark::RegisterBenchmark(("compute/" + method + "/cholmod-direct/" + htag).c_str(), cholmod_direct, method, h)
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime();
     }
-  for (double h : {0.02, 0.01})
-    benchmark::RegisterBenchmark(("eigs49/cholmod/h=" + std::to_string(h).substr(0, 6)).c_str(), eigs49,
-                                 std::string("cholmod"), h)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(1);
+  if (!finest)
+    for (const std::string method : {"fem", "interpolated"})
+      for (double h : {0.02, 0.01})
+        benchmark::RegisterBenchmark(("eigs49/" + method + "/cholmod/h=" + std::to_string(h).substr(0, 6)).c_str(), eigs49,
+                                     std::string("cholmod"), method, h)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->Iterations(1);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
