@@ -21,30 +21,33 @@ struct DigitizeArgs {
 
 void run(const DigitizeArgs& a) {
   SurfelMesh mesh = a.source.surface();
-  if (!a.out.empty()) write_mesh(a.out, mesh);
-  const bool want_normals = !a.face_normals_out.empty() || !a.vertex_normals_out.empty();
+  const bool ply = a.out.size() > 4 && a.out.substr(a.out.size() - 4) == ".ply";
+  const bool want_normals = !a.face_normals_out.empty() || !a.vertex_normals_out.empty() || ply;
+  MeshAttributes attributes;
   if (want_normals) {
     std::string kind = a.normals;
     auto shape = a.source.implicit_shape();
     if (kind == "auto") kind = shape ? "true" : "trivial";
     if (kind == "true" && !shape)
       throw InputError("--normals true needs an implicit shape (--shape or --polynomial)");
-    Eigen::MatrixX3d fn = kind == "true" ? true_face_normals(*shape, mesh) : mesh.face_normals_from_positions();
+    const Eigen::MatrixX3d fn = kind == "true" ? true_face_normals(*shape, mesh) : mesh.face_normals_from_positions();
+    // spec §1.5: vertex normals = normalized sum of incident face normals (the reference's choice)
+    const Eigen::MatrixX3d vn = vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices());
     if (!a.face_normals_out.empty()) write_normals(a.face_normals_out, fn);
-    if (!a.vertex_normals_out.empty()) {
-      // spec §1.5: vertex normals = normalized sum of incident face normals (the reference's choice)
-      write_normals(a.vertex_normals_out, vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices()));
-    }
+    if (!a.vertex_normals_out.empty()) write_normals(a.vertex_normals_out, vn);
+    attributes.face_normals = fn;  // PLY output carries them too
+    attributes.vertex_normals = vn;
   }
+  if (!a.out.empty()) write_mesh(a.out, mesh, attributes);
   std::cerr << "digitized " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, "
             << mesh.num_faces() << " faces" << (a.out.empty() ? "" : " -> " + a.out) << "\n";
 }
 
 RegisterCommand reg(10, "digitize", [](CLI::App& app) {
   auto args = std::make_shared<DigitizeArgs>();
-  auto* cmd = app.add_subcommand("digitize", "digitize an implicit shape or a volume into a surfel mesh");
+  auto* cmd = app.add_subcommand("digitize", "digitize an implicit shape, a volume or a closed triangle mesh into a surfel mesh");
   args->source.add_options(*cmd, /*with_mesh=*/false);
-  cmd->add_option("--out", args->out, "output mesh (.obj or .ply)");
+  cmd->add_option("--out", args->out, "output mesh (.obj, or .ply with face and vertex normals)");
   cmd->add_option("--face-normals", args->face_normals_out, "write one normal per face (text, nx ny nz)");
   cmd->add_option("--vertex-normals", args->vertex_normals_out,
                   "write one normal per vertex: normalized sum of incident face normals");
