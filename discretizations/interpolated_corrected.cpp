@@ -315,7 +315,7 @@ class InterpolatedCorrected final : public Discretization {
     // Per face: [0,16) M0_f; [16,32) global: K1 = D^T (S^T S / ubar^z) D, local: L_f;
     // [32,48) P_f D (global only); extras: [48,60) U_f, [60,72) V_f, [72,88) M1_f, [88] a_f.
     const std::size_t stride = extras ? 89 : 48;
-    std::vector<double> data(std::size_t(F) * stride);
+    detail::ReusedScratch data(std::size_t(F) * stride);  // reused: no page faults (every read entry is written)
     const Eigen::Matrix4d& D = quad_difference();
     std::atomic<int> non_square{-1};
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
@@ -351,17 +351,19 @@ class InterpolatedCorrected final : public Discretization {
     if (non_square.load() >= 0)
       throw InputError("interpolated: face " + std::to_string(non_square.load()) +
                        " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
-    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
+    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
+    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
     std::optional<EdgeTopology> topo;
     if (extras) topo = build_edges(mesh);
     if (global) {
       detail::gather_quad_rows<1>(
-          mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+          mesh, pat.get(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
           {&ops.M});
       ops.L = global_projection_laplacian(mesh, vc, data.data(), stride, lambda);
     } else {
       detail::gather_quad_rows<2>(
-          mesh, vc,
+          mesh, pat.get(), vc,
           [&](int f, int i, double* rows) {
             const double* d = data.data() + std::size_t(f) * stride;
             std::copy_n(d + 4 * i, 4, rows);

@@ -151,6 +151,9 @@ class ReusedScratch {
   ReusedScratch(const ReusedScratch&) = delete;
   ReusedScratch& operator=(const ReusedScratch&) = delete;
   double* data() { return buf_.get(); }
+  const double* data() const { return buf_.get(); }
+  double& operator[](std::size_t i) { return buf_[i]; }
+  const double& operator[](std::size_t i) const { return buf_[i]; }
 
  private:
   std::unique_ptr<double[]> buf_;
@@ -223,6 +226,14 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
       }
     }
   });
+}
+
+/// Vertex gather through the cached pattern when there is one, else the direct gather (same bits).
+template <int Count, class RowKernel>
+void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  if (pat) gather_quad_rows<Count>(*pat, kernel, out);
+  else gather_quad_rows<Count>(mesh, vc, kernel, out);
 }
 
 /// Diagonal matrix with entry v = sum over the corners (f, i) at v, ascending f, of value(f, i).
