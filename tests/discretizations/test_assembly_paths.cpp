@@ -77,13 +77,20 @@ TEST_CASE("the vertex pattern cache is rebuilt when the connectivity changes") {
   const auto pc = detail::quad_vertex_pattern(c);
   CHECK(pc.get() != pb.get());
   CHECK(pc->faces[0] == f0[1]);
-  // FEM through the cache after switching meshes equals FEM with a cold cache.
-  const auto fem = make_discretization("fem");
-  const Operators warm = fem->assemble(a.mesh, a.normals, Config{});
-  detail::clear_quad_vertex_pattern_cache();
-  const Operators cold = fem->assemble(a.mesh, a.normals, Config{});
-  CHECK(same_bits(warm.L, cold.L));
-  CHECK(same_bits(warm.M, cold.M));
+  // Methods through the caches after switching meshes equal a cold cache (interpolated also
+  // caches its projection pattern, keyed on the vertex pattern).
+  for (const char* name : {"fem", "interpolated", "polydec"}) {
+    INFO(name);
+    const auto d = make_discretization(name);
+    (void)d->assemble(b.mesh, b.normals, Config{});
+    const Operators warm_b = d->assemble(b.mesh, b.normals, Config{});
+    const Operators warm = d->assemble(a.mesh, a.normals, Config{});
+    detail::clear_quad_vertex_pattern_cache();
+    const Operators cold = d->assemble(a.mesh, a.normals, Config{});
+    CHECK(same_bits(warm.L, cold.L));
+    CHECK(same_bits(warm.M, cold.M));
+    CHECK(warm_b.L.rows() == b.mesh.num_vertices());
+  }
 }
 
 TEST_CASE("AssemblyPlan gather is bitwise the sequential ordered sum, with and without edge signs") {
