@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <sstream>
 
 #if defined(__linux__)
@@ -105,7 +106,8 @@ AssemblyPlan::AssemblyPlan(const int* ids, std::size_t num_elements, int k, int 
 void advise_huge_pages(const void* p, std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
-  if (bytes < 2 * huge) return;
+  static const bool disabled = std::getenv("CORRLAP_NO_HUGEPAGES") != nullptr;
+  if (disabled || bytes < 2 * huge) return;
   const std::uintptr_t b = (reinterpret_cast<std::uintptr_t>(p) + huge - 1) & ~(huge - 1);
   const std::uintptr_t e = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(huge - 1);
   if (e > b) (void)madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);  // a hint: failure is harmless

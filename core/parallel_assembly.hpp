@@ -40,6 +40,7 @@ class AssemblyPlan {
 /// pages (Linux madvise MADV_HUGEPAGE; no-op elsewhere or for small ranges). Call on freshly
 /// allocated, not yet touched output buffers: on this class of machine, first-touch page faults of
 /// 4 KiB pages cost ~0.7 ms per MiB, more than writing the matrix itself. Values are unaffected.
+/// Environment variable CORRLAP_NO_HUGEPAGES (any value) turns the hint off.
 void advise_huge_pages(const void* p, std::size_t bytes);
 
 /// Fills local matrices for elements [begin, end) into `locals` (already offset to element begin).
