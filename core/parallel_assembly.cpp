@@ -36,17 +36,20 @@ AssemblyPlan::AssemblyPlan(const int* ids, std::size_t num_elements, int k, int 
     }
   for (int c = 0; c < n; ++c) col_count[std::size_t(c) + 1] += col_count[std::size_t(c)];
   // entries sorted by (column, element, j, i) via counting sort on columns; element order kept.
+  // Stored directly in contributions_ (one buffer instead of two: the sort below is per column,
+  // in place, each column's range being read into a thread-local buffer before it is rewritten).
   std::vector<std::int64_t> fill(col_count.begin(), col_count.end() - 1);
-  std::vector<std::int64_t> local(std::size_t(col_count[std::size_t(n)]));
+  contributions_.resize(std::size_t(col_count[std::size_t(n)]));
+  std::int64_t* local = contributions_.data();
   for (std::size_t e = 0; e < num_elements; ++e)
     for (int j = 0; j < k; ++j) {
       const int c = ids[e * k + j];
       for (int i = 0; i < k; ++i) local[std::size_t(fill[std::size_t(c)]++)] = std::int64_t(e * kk + std::size_t(i) * k + j);
     }
+  std::vector<std::int64_t>().swap(fill);
   // Per column, in parallel: sort the contributions by (row, local index) in place (the column's
   // range of contributions_ is its range of `local`), count distinct rows; then a prefix sum and
   // a parallel fill of rows and entry starts. Same layout as a sequential pass, for any thread count.
-  contributions_.resize(local.size());
   std::vector<int> outer(std::size_t(n) + 1, 0);
   tbb::enumerable_thread_specific<std::vector<std::pair<int, std::int64_t>>> bufs;
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
@@ -95,7 +98,7 @@ AssemblyPlan::AssemblyPlan(const int* ids, std::size_t num_elements, int k, int 
       }
     }
   });
-  start_[nnz] = std::int64_t(local.size());
+  start_[nnz] = std::int64_t(contributions_.size());
   pattern_.resize(n, n);
   pattern_.resizeNonZeros(Eigen::Index(inner.size()));
   std::copy(outer.begin(), outer.end(), pattern_.outerIndexPtr());
