@@ -1,10 +1,17 @@
 #include "parallel_assembly.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 #include <sstream>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "error.hpp"
 
@@ -29,51 +36,88 @@ AssemblyPlan::AssemblyPlan(const int* ids, std::size_t num_elements, int k, int 
     }
   for (int c = 0; c < n; ++c) col_count[std::size_t(c) + 1] += col_count[std::size_t(c)];
   // entries sorted by (column, element, j, i) via counting sort on columns; element order kept.
+  // Stored directly in contributions_ (one buffer instead of two: the sort below is per column,
+  // in place, each column's range being read into a thread-local buffer before it is rewritten).
   std::vector<std::int64_t> fill(col_count.begin(), col_count.end() - 1);
-  std::vector<std::int64_t> local(std::size_t(col_count[std::size_t(n)]));
+  contributions_.resize(std::size_t(col_count[std::size_t(n)]));
+  std::int64_t* local = contributions_.data();
   for (std::size_t e = 0; e < num_elements; ++e)
     for (int j = 0; j < k; ++j) {
       const int c = ids[e * k + j];
       for (int i = 0; i < k; ++i) local[std::size_t(fill[std::size_t(c)]++)] = std::int64_t(e * kk + std::size_t(i) * k + j);
     }
-  // Per column: sort contributions by (row, local index) to get distinct rows in order.
+  std::vector<std::int64_t>().swap(fill);
+  // Per column, in parallel: sort the contributions by (row, local index) in place (the column's
+  // range of contributions_ is its range of `local`), count distinct rows; then a prefix sum and
+  // a parallel fill of rows and entry starts. Same layout as a sequential pass, for any thread count.
   std::vector<int> outer(std::size_t(n) + 1, 0);
-  std::vector<int> inner;
-  inner.reserve(local.size() / 2);
-  start_.reserve(local.size() / 2 + 1);
-  contributions_.resize(local.size());
-  std::int64_t out = 0;
-  std::vector<std::pair<int, std::int64_t>> buf;
-  for (int c = 0; c < n; ++c) {
-    buf.clear();
-    for (std::int64_t a = col_count[std::size_t(c)]; a < col_count[std::size_t(c) + 1]; ++a) {
-      const std::int64_t idx = local[std::size_t(a)];
-      const std::size_t e = std::size_t(idx) / kk;
-      const int i = int((std::size_t(idx) % kk) / std::size_t(k));
-      buf.emplace_back(ids[e * k + i], idx);
-    }
-    std::sort(buf.begin(), buf.end());
-    for (std::size_t b = 0; b < buf.size(); ++b) {
-      if (b == 0 || buf[b].first != buf[b - 1].first) {
-        inner.push_back(buf[b].first);
-        start_.push_back(out);
+  tbb::enumerable_thread_specific<std::vector<std::pair<int, std::int64_t>>> bufs;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
+    auto& buf = bufs.local();
+    for (int c = r.begin(); c != r.end(); ++c) {
+      const std::int64_t a0 = col_count[std::size_t(c)], a1 = col_count[std::size_t(c) + 1];
+      buf.clear();
+      for (std::int64_t a = a0; a < a1; ++a) {
+        const std::int64_t idx = local[std::size_t(a)];
+        const std::size_t e = std::size_t(idx) / kk;
+        const int i = int((std::size_t(idx) % kk) / std::size_t(k));
+        buf.emplace_back(ids[e * k + i], idx);
       }
-      std::int64_t sgn = 1;
-      if (signs) {
-        const std::size_t idx = std::size_t(buf[b].second), e = idx / kk;
-        const int i = int((idx % kk) / std::size_t(k)), j = int(idx % std::size_t(k));
-        sgn = std::int64_t(signs[e * k + i]) * std::int64_t(signs[e * k + j]);
+      std::sort(buf.begin(), buf.end());
+      int distinct = 0;
+      for (std::size_t t = 0; t < buf.size(); ++t) {
+        if (t == 0 || buf[t].first != buf[t - 1].first) ++distinct;
+        std::int64_t sgn = 1;
+        if (signs) {
+          const std::size_t idx = std::size_t(buf[t].second), e = idx / kk;
+          const int i = int((idx % kk) / std::size_t(k)), j = int(idx % std::size_t(k));
+          sgn = std::int64_t(signs[e * k + i]) * std::int64_t(signs[e * k + j]);
+        }
+        contributions_[std::size_t(a0) + t] = (buf[t].second + 1) * sgn;
       }
-      contributions_[std::size_t(out++)] = (buf[b].second + 1) * sgn;
+      outer[std::size_t(c) + 1] = distinct;
     }
-    outer[std::size_t(c) + 1] = int(inner.size());
-  }
-  start_.push_back(out);
+  });
+  for (int c = 0; c < n; ++c) outer[std::size_t(c) + 1] += outer[std::size_t(c)];
+  const std::size_t nnz = std::size_t(outer[std::size_t(n)]);
+  std::vector<int> inner(nnz);
+  start_.resize(nnz + 1);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& r) {
+    for (int c = r.begin(); c != r.end(); ++c) {
+      std::size_t s = std::size_t(outer[std::size_t(c)]);
+      int prev = -1;
+      for (std::int64_t a = col_count[std::size_t(c)]; a < col_count[std::size_t(c) + 1]; ++a) {
+        const std::int64_t cc = contributions_[std::size_t(a)];
+        const std::size_t idx = std::size_t((cc > 0 ? cc : -cc) - 1), e = idx / kk;
+        const int row = ids[e * k + int((idx % kk) / std::size_t(k))];
+        if (a == col_count[std::size_t(c)] || row != prev) {
+          inner[s] = row;
+          start_[s++] = a;
+          prev = row;
+        }
+      }
+    }
+  });
+  start_[nnz] = std::int64_t(contributions_.size());
   pattern_.resize(n, n);
   pattern_.resizeNonZeros(Eigen::Index(inner.size()));
   std::copy(outer.begin(), outer.end(), pattern_.outerIndexPtr());
   std::copy(inner.begin(), inner.end(), pattern_.innerIndexPtr());
   std::fill(pattern_.valuePtr(), pattern_.valuePtr() + inner.size(), 0.0);
+}
+
+void advise_huge_pages(const void* p, std::size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
+  static const bool disabled = std::getenv("CORRLAP_NO_HUGEPAGES") != nullptr;
+  if (disabled || bytes < 2 * huge) return;
+  const std::uintptr_t b = (reinterpret_cast<std::uintptr_t>(p) + huge - 1) & ~(huge - 1);
+  const std::uintptr_t e = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(huge - 1);
+  if (e > b) (void)madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);  // a hint: failure is harmless
+#else
+  (void)p;
+  (void)bytes;
+#endif
 }
 
 Eigen::SparseMatrix<double> AssemblyPlan::gather(const double* locals) const {

@@ -1,5 +1,7 @@
 #include "corrected_fem.hpp"
 
+#include <cmath>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -22,6 +24,31 @@ FemLocalFrame corrected_fem_local_frame(const QuadCorners& x, const Eigen::Vecto
 }
 
 namespace {
+// corrected_fem_local_frame in scalar form, operation for operation (same roundings, so bitwise
+// the same result), reading the column-major positions and
+// normals directly (verified: full-precision L.mtx/M.mtx unchanged vs the Eigen form): no 4x3 corner copy, and the compiler can overlap the faces' sqrt/div chains.
+inline void fem_geo(const double* P, std::size_t V, const int* q, const double* U, std::size_t F, std::size_t f,
+                    double* g) {
+  const double x0 = P[q[0]], y0 = P[V + q[0]], z0 = P[2 * V + q[0]];
+  const double ax = P[q[1]] - x0, ay = P[V + q[1]] - y0, az = P[2 * V + q[1]] - z0;
+  const double bx = P[q[3]] - x0, by = P[V + q[3]] - y0, bz = P[2 * V + q[3]] - z0;
+  const double cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
+  const double area = std::sqrt(cx * cx + cy * cy + cz * cz);
+  const double ux = U[f], uy = U[F + f], uz = U[2 * F + f];
+  auto dot_normalized = [&](double x, double y, double z) {
+    const double n2 = x * x + y * y + z * z;
+    if (n2 > 0.0) {
+      const double n = std::sqrt(n2);
+      x = x / n, y = y / n, z = z / n;
+    }
+    return ux * x + uy * y + uz * z;
+  };
+  g[0] = dot_normalized(ax, ay, az);
+  g[1] = dot_normalized(bx, by, bz);
+  g[2] = ux * (cx / area) + uy * (cy / area) + uz * (cz / area);
+  g[3] = area;
+}
+
 // Stiffness written straight into a row-major 4x4 buffer, scaled by `scale` (-1 for L_f).
 inline void fem_stiffness_into(double x, double y, double z, double scale, double* K) {
   // spec §4.3, DGtal form (valid even when u is slightly off unit length).
@@ -38,19 +65,30 @@ inline void fem_stiffness_into(double x, double y, double z, double scale, doubl
   for (int k = 0; k < 16; ++k) K[k] = scale * v[k];
 }
 
-// Row i of L_f = -K_f from g = (x, y, z, area) (spec §4.3 pattern).
-inline void fem_stiffness_row(const double* g, int i, double* row) {
-  const double x = g[0], y = g[1], iz = 1.0 / g[2];
+// Per face, once: the six distinct values of K_f (spec §4.3 pattern; the same expressions the
+// reference-checked per-row kernel used, so the matrices are bitwise unchanged) and the mass scales area z / 36 and area z / 4
+// (spec §4.4), from g = (x, y, z, area) in place; the divisions are then done once per face
+// instead of once per incident vertex.
+inline void fem_face_values(double* g) {
+  const double x = g[0], y = g[1], z = g[2], area = g[3], iz = 1.0 / z;
   const double sx = 1.0 - x * x, sy = 1.0 - y * y, eta = x * y * 0.5 * iz;
   const double self = eta + (sx + sy) / 3.0 * iz;
   const double o1 = (-2.0 * sy + sx) / 6.0 * iz;
   const double o2 = (-2.0 * sx + sy) / 6.0 * iz;
   const double o = -eta - (sx + sy) / 6.0 * iz;
+  g[0] = self, g[1] = o1, g[2] = o2, g[3] = o, g[4] = self - 2.0 * eta, g[5] = o + 2.0 * eta;
+  g[6] = area * z / 36.0;
+  g[7] = area * z / 4.0;
+}
+
+// Row i of L_f = -K_f from the values of fem_face_values.
+inline void fem_face_row(const double* g, int i, double* row) {
+  const double self = g[0], o1 = g[1], o2 = g[2], o = g[3], s2 = g[4], oe = g[5];
   switch (i) {
     case 0: row[0] = -self, row[1] = -o1, row[2] = -o, row[3] = -o2; break;
-    case 1: row[0] = -o1, row[1] = -(self - 2.0 * eta), row[2] = -o2, row[3] = -(o + 2.0 * eta); break;
+    case 1: row[0] = -o1, row[1] = -s2, row[2] = -o2, row[3] = -oe; break;
     case 2: row[0] = -o, row[1] = -o2, row[2] = -self, row[3] = -o1; break;
-    default: row[0] = -o2, row[1] = -(o + 2.0 * eta), row[2] = -o1, row[3] = -(self - 2.0 * eta); break;
+    default: row[0] = -o2, row[1] = -oe, row[2] = -o1, row[3] = -s2; break;
   }
 }
 
@@ -109,44 +147,43 @@ class CorrectedFem final : public Discretization {
     Operators ops;
     const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops.warnings);
     const int F = mesh.num_faces();
-    // Per-face (x, y, z, area): the only data the local matrices depend on (spec §4.3, §4.4).
-    std::vector<double> geo(std::size_t(F) * 4);
+    // Per face (x, y, z, area) -> the distinct values of its local matrices (spec §4.3, §4.4).
+    constexpr std::size_t G = 8;
+    detail::ReusedScratch geo(std::size_t(F) * G);
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 2048), [&](const tbb::blocked_range<int>& r) {
+      const std::size_t V = std::size_t(mesh.num_vertices());
       for (int f = r.begin(); f != r.end(); ++f) {
-        const FemLocalFrame fr = corrected_fem_local_frame(quad_corners(mesh, f), u.row(f).transpose());
-        double* g = geo.data() + std::size_t(f) * 4;
-        g[0] = fr.u_local.x();
-        g[1] = fr.u_local.y();
-        g[2] = fr.u_local.z();
-        g[3] = fr.area;
+        double* g = geo.data() + std::size_t(f) * G;
+        fem_geo(mesh.positions.data(), V, mesh.faces.data() + 4 * std::size_t(f), u.data(), std::size_t(F), std::size_t(f), g);
+        fem_face_values(g);
       }
     });
     // Fused kernel + vertex-row gather: the local matrices depend only on (x, y, z, area), so each
     // row is computed where it is summed and every matrix entry is written once (memory-bound).
-    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    // Pattern cached per connectivity (quad_row_gather.hpp); direct gather if it cannot be cached.
+    const auto pat = detail::quad_vertex_pattern(mesh);
+    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
+    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
     const bool lumped = mass == "lumped";
     auto lumped_mass = [&] {
-      return detail::gather_corner_diagonal(mesh, vc, [&](int f, int) {
-        const double* g = geo.data() + std::size_t(f) * 4;
-        return g[3] * g[2] / 4.0;
-      });
+      return detail::gather_corner_diagonal(mesh, vc, [&](int f, int) { return geo.data()[std::size_t(f) * G + 7]; });
+    };
+    auto stiffness = [&](int f, int i, double* rows) { fem_face_row(geo.data() + std::size_t(f) * G, i, rows); };
+    auto stiffness_mass = [&](int f, int i, double* rows) {
+      const double* g = geo.data() + std::size_t(f) * G;
+      fem_face_row(g, i, rows);
+      // spec §4.4 consistent mass row i: (area z / 36) [4 2 1 2] rotated.
+      const double sc = g[6];
+      static const double w[4] = {4, 2, 1, 2};
+      for (int j = 0; j < 4; ++j) rows[4 + j] = sc * w[(j - i + 4) & 3];
     };
     if (lumped) {
-      detail::gather_quad_rows<1>(mesh, vc, [&](int f, int i, double* rows) { fem_stiffness_row(geo.data() + std::size_t(f) * 4, i, rows); },
-                                  {&ops.L});
+      if (pat) detail::gather_quad_rows<1>(*pat, stiffness, {&ops.L});
+      else detail::gather_quad_rows<1>(mesh, vc, stiffness, {&ops.L});
       ops.M = lumped_mass();
     } else {
-      detail::gather_quad_rows<2>(
-          mesh, vc,
-          [&](int f, int i, double* rows) {
-            const double* g = geo.data() + std::size_t(f) * 4;
-            fem_stiffness_row(g, i, rows);
-            // spec §4.4 consistent mass row i: (area z / 36) [4 2 1 2] rotated.
-            const double sc = g[3] * g[2] / 36.0;
-            static const double w[4] = {4, 2, 1, 2};
-            for (int j = 0; j < 4; ++j) rows[4 + j] = sc * w[(j - i + 4) & 3];
-          },
-          {&ops.L, &ops.M});
+      if (pat) detail::gather_quad_rows<2>(*pat, stiffness_mass, {&ops.L, &ops.M});
+      else detail::gather_quad_rows<2>(mesh, vc, stiffness_mass, {&ops.L, &ops.M});
     }
     if (extras) {
       ops.M_lumped = lumped ? ops.M : lumped_mass();

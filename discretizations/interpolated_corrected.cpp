@@ -4,6 +4,9 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <memory>
+#include <mutex>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -183,15 +186,113 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCor
 // sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
 // (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
 // P_f D at +32 (row-major 4x4).
+// Connectivity-only part of the global-projection Laplacian: edge elements and the CSR pattern
+// (sorted rows of each column). Cached next to the vertex pattern it was built from (same
+// connectivity <=> same QuadVertexPattern object, which the entry keeps alive).
+struct ProjectionPattern {
+  std::shared_ptr<const detail::QuadVertexPattern> key;
+  EdgeElements el;
+  std::vector<int> outer, inner;
+};
+
+// Per thread: vertex stamps (ColumnScratch) and edge stamps; the edges of the faces around v are
+// listed in ascending order so the summation order is fixed.
+struct ProjectionScratch {
+  detail::ColumnScratch col;
+  std::vector<int> edge_stamp, edges;
+  ProjectionScratch(int V, int E, std::size_t cap_n, std::size_t cap_e)
+      : col(V, cap_n), edge_stamp(std::size_t(E), -1), edges(cap_e) {}
+};
+
+// Sorted edges of the faces around v into sc.edges; returns their count.
+inline int projection_edges(const EdgeElements& el, const detail::VertexCorners& vc, ProjectionScratch& sc, int v, int mark) {
+  const int* fe = el.corner_edge.data();
+  int ne = 0;
+  for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+    const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
+    for (int i = 0; i < 4; ++i)
+      if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
+  }
+  std::sort(sc.edges.begin(), sc.edges.begin() + ne);
+  return ne;
+}
+
+// Distinct vertices of the elements of the ne edges (unsorted, into sc.col.list); returns the count.
+inline int projection_vertices(const EdgeElements& el, ProjectionScratch& sc, int ne, int mark) {
+  int n = 0;
+  int* stamp = sc.col.stamp.data();
+  int* list = sc.col.list.data();
+  for (int t = 0; t < ne; ++t) {
+    const int* ids = el.ids.data() + std::size_t(sc.edges[std::size_t(t)]) * std::size_t(el.k);
+    for (int s = 0; s < el.k; ++s)
+      if (stamp[ids[s]] != mark) stamp[ids[s]] = mark, list[n++] = ids[s];
+  }
+  return n;
+}
+
+std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
+  auto p = std::make_shared<ProjectionPattern>();
+  p->el = build_edge_elements(mesh, vc);
+  const EdgeElements& el = p->el;
+  const int V = mesh.num_vertices();
+  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(el.k) + 1;
+  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, el.num_edges, cap_n, cap_e); });
+  p->outer.assign(std::size_t(V) + 1, 0);
+  // Stamps (edge and vertex arrays): v in pass 1, V + v in pass 2, so nothing is ever reset.
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
+    ProjectionScratch& sc = scratch.local();
+    for (int v = range.begin(); v != range.end(); ++v)
+      p->outer[std::size_t(v) + 1] = projection_vertices(el, sc, projection_edges(el, vc, sc, v, v), v);
+  });
+  for (int v = 0; v < V; ++v) p->outer[std::size_t(v) + 1] += p->outer[std::size_t(v)];
+  p->inner.resize(std::size_t(p->outer[std::size_t(V)]));
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
+    ProjectionScratch& sc = scratch.local();
+    for (int v = range.begin(); v != range.end(); ++v) {
+      const int n = projection_vertices(el, sc, projection_edges(el, vc, sc, v, V + v), V + v);
+      std::sort(sc.col.list.begin(), sc.col.list.begin() + n);
+      std::copy_n(sc.col.list.begin(), n, p->inner.begin() + p->outer[std::size_t(v)]);
+    }
+  });
+  return p;
+}
+
+std::mutex projection_cache_mutex;
+std::shared_ptr<const ProjectionPattern> projection_cache;
+
+std::shared_ptr<const ProjectionPattern> projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc,
+                                                            const std::shared_ptr<const detail::QuadVertexPattern>& key) {
+  if (key) {
+    std::lock_guard<std::mutex> lock(projection_cache_mutex);
+    if (projection_cache && projection_cache->key == key) return projection_cache;
+  }
+  auto built = build_projection_pattern(mesh, vc);
+  if (key) {
+    std::const_pointer_cast<ProjectionPattern>(built)->key = key;
+    std::lock_guard<std::mutex> lock(projection_cache_mutex);
+    projection_cache = built;
+  }
+  return built;
+}
+
+// spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
+// r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
+// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex rows: column v
+// sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
+// (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
+// P_f D at +32 (row-major 4x4). The pattern is cached per connectivity (key = vertex pattern).
 Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, const detail::VertexCorners& vc,
+                                                        const std::shared_ptr<const detail::QuadVertexPattern>& key,
                                                         const double* data, std::size_t stride, double lambda) {
-  const EdgeElements el = build_edge_elements(mesh, vc);
+  const auto pp = projection_pattern(mesh, vc, key);
+  const EdgeElements& el = pp->el;
   const int k = el.k, E = el.num_edges, V = mesh.num_vertices();
   const int* faces = mesh.faces.data();
-  std::vector<double> r(std::size_t(E) * std::size_t(k), 0.0);
+  detail::ReusedScratch r(std::size_t(E) * std::size_t(k));
   tbb::parallel_for(tbb::blocked_range<int>(0, E, 8192), [&](const tbb::blocked_range<int>& range) {
     for (int e = range.begin(); e != range.end(); ++e) {
       double* re = r.data() + std::size_t(e) * std::size_t(k);
+      std::fill_n(re, k, 0.0);
       const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
       const double inv = 1.0 / double(a1 - a0);
       for (int a = a0; a < a1; ++a) {
@@ -204,59 +305,27 @@ Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, 
       }
     }
   });
-  const int* fe = el.corner_edge.data();
   const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
-  // Per thread: vertex stamps/positions (ColumnScratch) and edge stamps; the edges of the faces
-  // around v are listed in ascending order so the summation order is fixed.
-  struct Scratch {
-    detail::ColumnScratch col;
-    std::vector<int> edge_stamp, edges;
-    Scratch(int V, int E, std::size_t cap_n, std::size_t cap_e) : col(V, cap_n), edge_stamp(std::size_t(E), -1), edges(cap_e) {}
-  };
-  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(V, E, cap_n, cap_e); });
-  // Collects the edges of the faces around v (sorted) and the distinct vertices of their elements
-  // (unsorted, in list); returns the vertex count.
-  auto neighbourhood = [&](Scratch& sc, int v, int mark, int& ne) {
-    ne = 0;
-    for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-      const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
-      for (int i = 0; i < 4; ++i)
-        if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
-    }
-    std::sort(sc.edges.begin(), sc.edges.begin() + ne);
-    int n = 0;
-    int* stamp = sc.col.stamp.data();
-    int* list = sc.col.list.data();
-    for (int t = 0; t < ne; ++t) {
-      const int* ids = el.ids.data() + std::size_t(sc.edges[std::size_t(t)]) * std::size_t(k);
-      for (int s = 0; s < k; ++s)
-        if (stamp[ids[s]] != mark) stamp[ids[s]] = mark, list[n++] = ids[s];
-    }
-    return n;
-  };
-  std::vector<int> outer(std::size_t(V) + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
-    Scratch& sc = scratch.local();
-    int ne = 0;
-    for (int v = range.begin(); v != range.end(); ++v) outer[std::size_t(v) + 1] = neighbourhood(sc, v, v, ne);
-  });
-  for (int v = 0; v < V; ++v) outer[std::size_t(v) + 1] += outer[std::size_t(v)];
+  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, E, cap_n, cap_e); });
+  const int* outer = pp->outer.data();
+  const Eigen::Index nnz = outer[V];
   Eigen::SparseMatrix<double> L(V, V);
-  L.resizeNonZeros(outer[std::size_t(V)]);
-  std::copy(outer.begin(), outer.end(), L.outerIndexPtr());
+  L.resizeNonZeros(nnz);
+  advise_huge_pages(L.valuePtr(), std::size_t(nnz) * sizeof(double));
+  advise_huge_pages(L.innerIndexPtr(), std::size_t(nnz) * sizeof(int));
+  std::copy(pp->outer.begin(), pp->outer.end(), L.outerIndexPtr());
   int* inner = L.innerIndexPtr();
   double* val = L.valuePtr();
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& range) {
-    Scratch& sc = scratch.local();
+    ProjectionScratch& sc = scratch.local();
     int* pos = sc.col.pos.data();
-    int* list = sc.col.list.data();
-    int ne = 0;
     for (int v = range.begin(); v != range.end(); ++v) {
-      const int n = neighbourhood(sc, v, V + v, ne);
-      std::sort(list, list + n);
-      for (int t = 0; t < n; ++t) pos[list[t]] = t;
-      const std::size_t o = std::size_t(outer[std::size_t(v)]);
-      std::copy_n(list, n, inner + o);
+      const int ne = projection_edges(el, vc, sc, v, v);
+      const std::size_t o = std::size_t(outer[v]);
+      const int n = outer[v + 1] - outer[v];
+      const int* rows = pp->inner.data() + o;
+      for (int t = 0; t < n; ++t) pos[rows[t]] = t;
+      std::copy_n(rows, n, inner + o);
       double* col = val + o;
       std::fill_n(col, n, 0.0);
       for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
@@ -315,7 +384,7 @@ class InterpolatedCorrected final : public Discretization {
     // Per face: [0,16) M0_f; [16,32) global: K1 = D^T (S^T S / ubar^z) D, local: L_f;
     // [32,48) P_f D (global only); extras: [48,60) U_f, [60,72) V_f, [72,88) M1_f, [88] a_f.
     const std::size_t stride = extras ? 89 : 48;
-    std::vector<double> data(std::size_t(F) * stride);
+    detail::ReusedScratch data(std::size_t(F) * stride);  // reused: no page faults (every read entry is written)
     const Eigen::Matrix4d& D = quad_difference();
     std::atomic<int> non_square{-1};
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
@@ -351,17 +420,19 @@ class InterpolatedCorrected final : public Discretization {
     if (non_square.load() >= 0)
       throw InputError("interpolated: face " + std::to_string(non_square.load()) +
                        " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
-    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
+    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
+    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
     std::optional<EdgeTopology> topo;
     if (extras) topo = build_edges(mesh);
     if (global) {
       detail::gather_quad_rows<1>(
-          mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+          mesh, pat.get(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
           {&ops.M});
-      ops.L = global_projection_laplacian(mesh, vc, data.data(), stride, lambda);
+      ops.L = global_projection_laplacian(mesh, vc, pat, data.data(), stride, lambda);
     } else {
       detail::gather_quad_rows<2>(
-          mesh, vc,
+          mesh, pat.get(), vc,
           [&](int f, int i, double* rows) {
             const double* d = data.data() + std::size_t(f) * stride;
             std::copy_n(d + 4 * i, 4, rows);

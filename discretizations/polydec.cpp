@@ -82,7 +82,7 @@ class PolyDec final : public Discretization {
     const int F = mesh.num_faces();
     // Per face: L_f (16), |a_f| (1); with extras also U_f (12, column-major), V_f (12), M1_f (16).
     const std::size_t stride = extras ? 57 : 17;
-    std::vector<double> data(std::size_t(F) * stride);
+    detail::ReusedScratch data(std::size_t(F) * stride);  // reused: no page faults (every read entry is written)
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
       for (int f = r.begin(); f != r.end(); ++f) {
         QuadCorners X = quad_corners(mesh, f);
@@ -98,9 +98,11 @@ class PolyDec final : public Discretization {
         }
       }
     });
-    const detail::VertexCorners vc = detail::vertex_corners(mesh);
+    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
+    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
+    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
     detail::gather_quad_rows<1>(
-        mesh, vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+        mesh, pat.get(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
         {&ops.L});
     // spec §2.3: lumped mass M_vv = sum_f |a_f| / 4 (DGtal M0()).
     ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int) { return data[std::size_t(f) * stride + 16] / 4.0; });

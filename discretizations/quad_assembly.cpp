@@ -1,8 +1,12 @@
 #include "quad_assembly.hpp"
 
+#include <cstring>
+#include <mutex>
 #include <vector>
 
 #include <corrlap/core/error.hpp>
+
+#include "quad_row_gather.hpp"
 
 namespace corrlap {
 
@@ -91,6 +95,122 @@ Eigen::SparseMatrix<double> row_sum_lumped(const Eigen::SparseMatrix<double>& A)
   D.makeCompressed();
   return D;
 }
+
+namespace detail {
+
+namespace {
+std::shared_ptr<const QuadVertexPattern> build_quad_vertex_pattern(const SurfelMesh& mesh) {
+  auto p = std::make_shared<QuadVertexPattern>();
+  const int V = mesh.num_vertices(), F = mesh.num_faces();
+  const int* faces = mesh.faces.data();
+  p->num_vertices = V;
+  p->faces.assign(faces, faces + std::size_t(F) * 4);
+  p->vc = vertex_corners(mesh);
+  const VertexCorners& vc = p->vc;
+  const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
+  if (cap > 65535) return nullptr;
+  tbb::enumerable_thread_specific<ColumnScratch> scratch([&] { return ColumnScratch(V, cap); });
+  p->outer.assign(std::size_t(V) + 1, 0);
+  int* outer = p->outer.data();
+  // Pass 1: distinct rows per column (stamp marks: v in pass 1, V + v in pass 2).
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
+    int* stamp = scratch.local().stamp.data();
+    for (int v = r.begin(); v != r.end(); ++v) {
+      int n = 0;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j)
+          if (stamp[f[j]] != v) stamp[f[j]] = v, ++n;
+      }
+      outer[v + 1] = n;
+    }
+  });
+  for (int v = 0; v < V; ++v) outer[v + 1] += outer[v];
+  p->inner.resize(std::size_t(outer[V]));
+  p->slot.resize(std::size_t(F) * 16);  // 4 incidences per face, 4 slots each
+  // Pass 2: sorted rows and the slot of every (incidence, corner).
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
+    ColumnScratch& sc = scratch.local();
+    int* stamp = sc.stamp.data();
+    int* pos = sc.pos.data();
+    int* list = sc.list.data();
+    for (int v = r.begin(); v != r.end(); ++v) {
+      const int mark = V + v;
+      int n = 0;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j)
+          if (stamp[f[j]] != mark) stamp[f[j]] = mark, list[n++] = f[j];
+      }
+      std::sort(list, list + n);
+      std::copy_n(list, n, p->inner.data() + outer[v]);
+      for (int t = 0; t < n; ++t) pos[list[t]] = t;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j) p->slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint16_t(pos[f[j]]);
+      }
+    }
+  });
+  return p;
+}
+
+std::mutex scratch_mutex;
+std::vector<std::pair<std::unique_ptr<double[]>, std::size_t>> scratch_pool;
+
+std::mutex cache_mutex;
+std::shared_ptr<const QuadVertexPattern> cached_pattern;
+}  // namespace
+
+std::shared_ptr<const QuadVertexPattern> quad_vertex_pattern(const SurfelMesh& mesh) {
+  const std::size_t n = std::size_t(mesh.num_faces()) * 4;
+  std::shared_ptr<const QuadVertexPattern> c;
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    c = cached_pattern;
+  }
+  // Exact comparison of the connectivity (a few ms at most, far cheaper than rebuilding).
+  if (c && c->num_vertices == mesh.num_vertices() && c->faces.size() == n &&
+      (n == 0 || std::memcmp(c->faces.data(), mesh.faces.data(), n * sizeof(int)) == 0))
+    return c;
+  c = build_quad_vertex_pattern(mesh);
+  if (c) {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    cached_pattern = c;
+  }
+  return c;
+}
+
+ReusedScratch::ReusedScratch(std::size_t n) {
+  {
+    std::lock_guard<std::mutex> lock(scratch_mutex);
+    if (!scratch_pool.empty()) {
+      buf_ = std::move(scratch_pool.back().first);
+      capacity_ = scratch_pool.back().second;
+      scratch_pool.pop_back();
+    }
+  }
+  if (capacity_ < n) {
+    buf_.reset(new double[n]);
+    capacity_ = n;
+    advise_huge_pages(buf_.get(), n * sizeof(double));
+  }
+}
+
+ReusedScratch::~ReusedScratch() {
+  std::lock_guard<std::mutex> lock(scratch_mutex);
+  if (scratch_pool.size() < 2) scratch_pool.emplace_back(std::move(buf_), capacity_);
+}
+
+void clear_quad_vertex_pattern_cache() {
+  {
+    std::lock_guard<std::mutex> lock(scratch_mutex);
+    scratch_pool.clear();
+  }
+  std::lock_guard<std::mutex> lock(cache_mutex);
+  cached_pattern.reset();
+}
+
+}  // namespace detail
 
 void check_quad_mesh(const SurfelMesh& mesh, const std::string& method) {
   if (mesh.num_faces() == 0 || mesh.num_vertices() == 0) throw InputError(method + ": the mesh has no face");

@@ -11,8 +11,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <memory>
 #include <vector>
 
+#include <corrlap/core/parallel_assembly.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::detail {
@@ -136,6 +139,101 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
       }
     }
   });
+}
+
+/// Per-face scratch (double values) reused across assemblies: a fresh multi-MiB buffer costs more
+/// in first-touch page faults than the kernel that fills it. Takes a pooled buffer if one is free
+/// (at most two are kept, so concurrent assemblies simply allocate). Contents are uninitialized.
+class ReusedScratch {
+ public:
+  explicit ReusedScratch(std::size_t n);
+  ~ReusedScratch();
+  ReusedScratch(const ReusedScratch&) = delete;
+  ReusedScratch& operator=(const ReusedScratch&) = delete;
+  double* data() { return buf_.get(); }
+  const double* data() const { return buf_.get(); }
+  double& operator[](std::size_t i) { return buf_[i]; }
+  const double& operator[](std::size_t i) const { return buf_[i]; }
+
+ private:
+  std::unique_ptr<double[]> buf_;
+  std::size_t capacity_ = 0;
+};
+
+/// Cached vertex pattern of a quad mesh: incidence (vertex -> corners, ascending), the CSR
+/// column structure (sorted distinct rows of each column) and, for every incidence a (in vc
+/// order), the positions slot[4a + j] of corner j of its face inside the column. Computed once
+/// per mesh connectivity: assembling again on the same faces (other normals, other parameters)
+/// only writes values, each entry once. Column sizes are bounded by 65535 (uint16 slots).
+struct QuadVertexPattern {
+  int num_vertices = 0;
+  std::vector<int> faces;  // copy of the connectivity: the cache key
+  VertexCorners vc;
+  std::vector<int> outer;   // #V + 1
+  std::vector<int> inner;   // nnz, sorted within each column
+  std::vector<std::uint16_t> slot;  // 4 per incidence
+};
+
+/// The pattern of `mesh` (built in parallel on first use, then cached for the most recent
+/// connectivity; the cache compares the whole face array, never a hash). Returns nullptr when a
+/// column would exceed the slot range (callers then use the direct gather above).
+std::shared_ptr<const QuadVertexPattern> quad_vertex_pattern(const SurfelMesh& mesh);
+/// Drops the cached pattern (frees its memory).
+void clear_quad_vertex_pattern_cache();
+
+/// Same result, bit for bit, as gather_quad_rows(mesh, vc, ...) (same entries, same summation
+/// order: incident faces ascending), but with the pattern precomputed: per column it copies the
+/// row indices and accumulates the rows at their cached slots.
+template <int Count, class RowKernel>
+void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  const int V = p.num_vertices;
+  const Eigen::Index nnz = p.outer[std::size_t(V)];
+  for (auto* A : out) {
+    A->resize(V, V);
+    A->resizeNonZeros(nnz);
+    advise_huge_pages(A->valuePtr(), std::size_t(nnz) * sizeof(double));
+    advise_huge_pages(A->innerIndexPtr(), std::size_t(nnz) * sizeof(int));
+    std::copy(p.outer.begin(), p.outer.end(), A->outerIndexPtr());
+  }
+  std::array<int*, Count> inner;
+  std::array<double*, Count> val;
+  for (int m = 0; m < Count; ++m) {
+    inner[std::size_t(m)] = out[std::size_t(m)]->innerIndexPtr();
+    val[std::size_t(m)] = out[std::size_t(m)]->valuePtr();
+  }
+  const int* vstart = p.vc.start.data();
+  const int* vcorner = p.vc.corner.data();
+  const std::uint16_t* slot = p.slot.data();
+  const int* outer = p.outer.data();
+  const int* pin = p.inner.data();
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& r) {
+    double rows[4 * Count];
+    // Rows and values of the whole block first (sequential streams), then accumulation.
+    const std::size_t b = std::size_t(outer[r.begin()]), e = std::size_t(outer[r.end()]);
+    for (int m = 0; m < Count; ++m) {
+      std::copy(pin + b, pin + e, inner[std::size_t(m)] + b);
+      std::fill(val[std::size_t(m)] + b, val[std::size_t(m)] + e, 0.0);
+    }
+    for (int v = r.begin(); v != r.end(); ++v) {
+      const std::size_t o = std::size_t(outer[v]);
+      for (int a = vstart[v]; a < vstart[v + 1]; ++a) {
+        const int c = vcorner[a];
+        kernel(c >> 2, c & 3, rows);
+        const std::uint16_t* s = slot + 4 * std::size_t(a);
+        for (int j = 0; j < 4; ++j)
+          for (int m = 0; m < Count; ++m) val[std::size_t(m)][o + s[j]] += rows[4 * m + j];
+      }
+    }
+  });
+}
+
+/// Vertex gather through the cached pattern when there is one, else the direct gather (same bits).
+template <int Count, class RowKernel>
+void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  if (pat) gather_quad_rows<Count>(*pat, kernel, out);
+  else gather_quad_rows<Count>(mesh, vc, kernel, out);
 }
 
 /// Diagonal matrix with entry v = sum over the corners (f, i) at v, ascending f, of value(f, i).
