@@ -3,6 +3,9 @@
 #include <cmath>
 #include <sstream>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include "error.hpp"
 
 namespace corrlap {
@@ -37,6 +40,21 @@ void validate_normals(Eigen::MatrixX3d& normals, Eigen::Index expected_rows, con
     std::ostringstream os;
     os << what << ": expected " << expected_rows << " normals, got " << normals.rows();
     throw InputError(os.str());
+  }
+  // Fast path (parallel): every row finite and unit. Otherwise the serial scan below names the
+  // first offending row (or normalizes).
+  if (!normalize) {
+    const bool all_good = tbb::parallel_reduce(
+        tbb::blocked_range<Eigen::Index>(0, normals.rows(), 8192), true,
+        [&](const tbb::blocked_range<Eigen::Index>& r, bool ok) {
+          for (Eigen::Index i = r.begin(); ok && i != r.end(); ++i) {
+            const double len = normals.row(i).norm();
+            ok = std::isfinite(len) && std::abs(len - 1.0) <= tolerance;
+          }
+          return ok;
+        },
+        [](bool a, bool b) { return a && b; });
+    if (all_good) return;
   }
   for (Eigen::Index i = 0; i < normals.rows(); ++i) {
     const Eigen::Vector3d n = normals.row(i).transpose();

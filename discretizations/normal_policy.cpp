@@ -3,6 +3,10 @@
 #include <cmath>
 #include <sstream>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <corrlap/core/error.hpp>
 
 namespace corrlap {
@@ -34,7 +38,9 @@ std::string OrientationReport::summary(const std::string& method) const {
 Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh) {
   if (!mesh.has_surfels()) return mesh.face_normals_from_positions();
   Eigen::MatrixX3d n(mesh.num_faces(), 3);
-  for (int f = 0; f < mesh.num_faces(); ++f) n.row(f) = mesh.surfels[std::size_t(f)].trivial_normal().transpose();
+  tbb::parallel_for(0, mesh.num_faces(), [&](int f) {
+    n.row(f) = mesh.surfels[std::size_t(f)].trivial_normal().transpose();
+  });
   return n;
 }
 
@@ -54,28 +60,48 @@ Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& nor
   if (!(clamp_min > 0.0 && clamp_min < 1.0)) throw InputError(method + ": clamp_min must be in (0, 1)");
 
   const Eigen::MatrixX3d n = trivial_face_normals(mesh);
-  OrientationReport r;
-  auto note = [&](Eigen::Index f, Eigen::Index corner, double d) {
-    ++r.inconsistent;
-    if (d < r.worst_dot || r.worst_face < 0) {
-      r.worst_dot = d;
-      r.worst_face = f;
-      r.worst_corner = corner;
-    }
-  };
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    if (face) {
-      ++r.checked;
-      const double d = u.row(f).dot(n.row(f));
-      if (!(d > 0.0)) note(f, -1, d);
-    } else {
-      for (int c = 0; c < 4; ++c) {
-        ++r.checked;
-        const double d = u.row(mesh.faces(f, c)).dot(n.row(f));
-        if (!(d > 0.0)) note(f, c, d);
+  // Parallel check; the reduction keeps the first minimum in face order, like a serial scan.
+  struct Scan {
+    int inconsistent = 0;
+    double worst_dot = 1.0;
+    Eigen::Index worst_face = -1, worst_corner = -1;
+    void note(Eigen::Index f, Eigen::Index corner, double d) {
+      ++inconsistent;
+      if (worst_face < 0 || d < worst_dot) {
+        worst_dot = d;
+        worst_face = f;
+        worst_corner = corner;
       }
     }
-  }
+  };
+  const Scan scan = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<int>(0, mesh.num_faces(), 4096), Scan{},
+      [&](const tbb::blocked_range<int>& range, Scan acc) {
+        for (int f = range.begin(); f != range.end(); ++f) {
+          if (face) {
+            const double d = u.row(f).dot(n.row(f));
+            if (!(d > 0.0)) acc.note(f, -1, d);
+          } else {
+            for (int c = 0; c < 4; ++c) {
+              const double d = u.row(mesh.faces(f, c)).dot(n.row(f));
+              if (!(d > 0.0)) acc.note(f, c, d);
+            }
+          }
+        }
+        return acc;
+      },
+      [](Scan left, const Scan& right) {
+        const int count = left.inconsistent + right.inconsistent;
+        if (right.worst_face >= 0 && (left.worst_face < 0 || right.worst_dot < left.worst_dot)) left = right;
+        left.inconsistent = count;
+        return left;
+      });
+  OrientationReport r;
+  r.checked = face ? mesh.num_faces() : 4 * mesh.num_faces();
+  r.inconsistent = scan.inconsistent;
+  r.worst_dot = scan.worst_dot;
+  r.worst_face = scan.worst_face;
+  r.worst_corner = scan.worst_corner;
   if (!face && r.inconsistent == 0) r.worst_corner = -1;
   if (out_report) *out_report = r;
   if (r.inconsistent == 0) return u;
