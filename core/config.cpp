@@ -122,6 +122,13 @@ void Config::check_keys(const std::vector<std::string>& allowed, std::string_vie
   throw InputError(os.str());
 }
 
+void Config::check_parameters(const std::vector<ParameterInfo>& documented, std::string_view context) const {
+  std::vector<std::string> names;
+  names.reserve(documented.size());
+  for (const auto& p : documented) names.push_back(p.name);
+  check_keys(names, context);
+}
+
 std::string Config::to_json() const {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& [k, v] : values_) std::visit([&](const auto& x) { j[k] = x; }, v);

@@ -43,6 +43,9 @@ class Config {
   /// Throws InputError naming every unknown key and listing the valid ones.
   void check_keys(const std::vector<std::string>& allowed, std::string_view context) const;
 
+  /// check_keys against the names of documented parameters (a method's or a backend's).
+  void check_parameters(const std::vector<ParameterInfo>& documented, std::string_view context) const;
+
   /// JSON text of the configuration (for logs and --json outputs).
   std::string to_json() const;
 

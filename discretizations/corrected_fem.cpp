@@ -136,9 +136,7 @@ class CorrectedFem final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    std::vector<std::string> keys;
-    for (const auto& p : parameters()) keys.push_back(p.name);
-    params.check_keys(keys, "fem parameters");
+    params.check_parameters(parameters(), "fem parameters");
     const std::string mass = params.get_string("mass", "full");
     if (mass != "full" && mass != "lumped") throw InputError("fem: mass '" + mass + "': expected full or lumped");
     const bool extras = params.get_bool("extras", false);

@@ -86,7 +86,7 @@ class Cotan final : public Discretization {
     return {{"mass", "voronoi", "lumped mass: voronoi (mixed Voronoi, Meyer et al.) | barycentric (A/3)"}};
   }
   Operators assemble(const SurfelMesh& mesh, const NormalFields&, const Config& params) const override {
-    params.check_keys({"mass"}, name());
+    params.check_parameters(parameters(), name());
     mesh.validate("cotan");
     const std::string m = params.get_string("mass", "voronoi");
     if (m != "voronoi" && m != "barycentric") throw InputError("cotan: mass '" + m + "': expected voronoi or barycentric");

@@ -277,9 +277,7 @@ class HeatKernel final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    std::vector<std::string> keys;
-    for (const auto& p : parameters()) keys.push_back(p.name);
-    params.check_keys(keys, name());
+    params.check_parameters(parameters(), name());
     mesh.validate("heat-kernel");
     const std::string variant = params.get_string("variant", "dual");
     const std::string mass = params.get_string("mass", "measure");

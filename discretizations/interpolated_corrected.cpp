@@ -364,9 +364,7 @@ class InterpolatedCorrected final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    std::vector<std::string> keys;
-    for (const auto& p : parameters()) keys.push_back(p.name);
-    params.check_keys(keys, "interpolated parameters");
+    params.check_parameters(parameters(), "interpolated parameters");
     const double lambda = params.get_double("lambda", 0.1);
     const double kappa = params.get_double("kappa", 2.0);
     if (!(std::isfinite(lambda) && lambda >= 0.0)) throw InputError("interpolated: lambda must be finite and >= 0");

@@ -68,9 +68,7 @@ class PolyDec final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     const std::string who = name();
-    std::vector<std::string> keys;
-    for (const auto& p : parameters()) keys.push_back(p.name);
-    params.check_keys(keys, who + " parameters");
+    params.check_parameters(parameters(), who + " parameters");
     const double lambda = params.get_double("lambda", 1.0);
     if (!(std::isfinite(lambda) && lambda >= 0.0)) throw InputError(who + ": lambda must be finite and >= 0");
     const bool extras = params.get_bool("extras", false);

@@ -348,9 +348,7 @@ class Vrm final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    std::vector<std::string> keys;
-    for (const auto& p : parameters()) keys.push_back(p.name);
-    params.check_keys(keys, name());
+    params.check_parameters(parameters(), name());
     mesh.validate(name().c_str());
     Operators ops;
     const int F = mesh.num_faces(), V = mesh.num_vertices();
