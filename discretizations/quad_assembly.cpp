@@ -112,39 +112,16 @@ std::shared_ptr<const QuadVertexPattern> build_quad_vertex_pattern(const SurfelM
   tbb::enumerable_thread_specific<ColumnScratch> scratch([&] { return ColumnScratch(V, cap); });
   p->outer.assign(std::size_t(V) + 1, 0);
   int* outer = p->outer.data();
-  // Pass 1: distinct rows per column (stamp marks: v in pass 1, V + v in pass 2).
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
-    int* stamp = scratch.local().stamp.data();
-    for (int v = r.begin(); v != r.end(); ++v) {
-      int n = 0;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j)
-          if (stamp[f[j]] != v) stamp[f[j]] = v, ++n;
-      }
-      outer[v + 1] = n;
-    }
-  });
-  for (int v = 0; v < V; ++v) outer[v + 1] += outer[v];
+  count_column_rows(faces, vc, V, scratch, outer);  // pass 1: distinct rows per column
   p->inner.resize(std::size_t(outer[V]));
   p->slot.resize(std::size_t(F) * 16);  // 4 incidences per face, 4 slots each
   // Pass 2: sorted rows and the slot of every (incidence, corner).
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
     ColumnScratch& sc = scratch.local();
-    int* stamp = sc.stamp.data();
-    int* pos = sc.pos.data();
-    int* list = sc.list.data();
+    const int* pos = sc.pos.data();
     for (int v = r.begin(); v != r.end(); ++v) {
-      const int mark = V + v;
-      int n = 0;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j)
-          if (stamp[f[j]] != mark) stamp[f[j]] = mark, list[n++] = f[j];
-      }
-      std::sort(list, list + n);
-      std::copy_n(list, n, p->inner.data() + outer[v]);
-      for (int t = 0; t < n; ++t) pos[list[t]] = t;
+      const int n = column_rows(faces, vc, V, v, sc);
+      std::copy_n(sc.list.data(), n, p->inner.data() + outer[v]);
       for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
         const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
         for (int j = 0; j < 4; ++j) p->slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint16_t(pos[f[j]]);

@@ -72,6 +72,44 @@ struct ColumnScratch {
       : stamp(std::size_t(num_vertices), -1), pos(std::size_t(num_vertices), 0), list(list_capacity) {}
 };
 
+/// Column pattern pass 1: outer[v + 1] = number of distinct rows of column v (the vertices of the
+/// faces around v), then the prefix sum, so outer is the CSC outer index array (V + 1 entries).
+/// Uses stamp marks v; column_rows uses V + v, so the two passes never reset the stamps.
+inline void count_column_rows(const int* faces, const VertexCorners& vc, int V,
+                              tbb::enumerable_thread_specific<ColumnScratch>& scratch, int* outer) {
+  outer[0] = 0;
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
+    int* stamp = scratch.local().stamp.data();
+    for (int v = r.begin(); v != r.end(); ++v) {
+      int n = 0;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j)
+          if (stamp[f[j]] != v) stamp[f[j]] = v, ++n;
+      }
+      outer[v + 1] = n;
+    }
+  });
+  for (int v = 0; v < V; ++v) outer[v + 1] += outer[v];
+}
+
+/// Column pattern pass 2: the sorted distinct rows of column v written to `list`; returns their
+/// number and sets pos[row] to each row's position in the column.
+inline int column_rows(const int* faces, const VertexCorners& vc, int V, int v, ColumnScratch& sc) {
+  const int mark = V + v;  // distinct from count_column_rows' stamps
+  int* stamp = sc.stamp.data();
+  int* list = sc.list.data();
+  int n = 0;
+  for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+    const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+    for (int j = 0; j < 4; ++j)
+      if (stamp[f[j]] != mark) stamp[f[j]] = mark, list[n++] = f[j];
+  }
+  std::sort(list, list + n);
+  for (int t = 0; t < n; ++t) sc.pos[std::size_t(list[t])] = t;
+  return n;
+}
+
 /// Assembles Count symmetric matrices. kernel(f, i, rows) writes row i of the local matrix m of
 /// face f into rows[4 m .. 4 m + 3]. Local matrices must be symmetric (column v is row v).
 template <int Count, class RowKernel>
@@ -82,19 +120,7 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
   const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
   tbb::enumerable_thread_specific<ColumnScratch> scratch([&] { return ColumnScratch(V, cap); });
   std::vector<int> outer(std::size_t(V) + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
-    int* stamp = scratch.local().stamp.data();
-    for (int v = r.begin(); v != r.end(); ++v) {
-      int n = 0;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j)
-          if (stamp[f[j]] != v) stamp[f[j]] = v, ++n;
-      }
-      outer[std::size_t(v) + 1] = n;
-    }
-  });
-  for (int v = 0; v < V; ++v) outer[std::size_t(v) + 1] += outer[std::size_t(v)];
+  count_column_rows(faces, vc, V, scratch, outer.data());
   const Eigen::Index nnz = outer[std::size_t(V)];
   for (auto* A : out) {
     A->resize(V, V);
@@ -103,9 +129,8 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
   }
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
     ColumnScratch& sc = scratch.local();
-    int* stamp = sc.stamp.data();
-    int* pos = sc.pos.data();
-    int* list = sc.list.data();
+    const int* pos = sc.pos.data();
+    const int* list = sc.list.data();
     std::array<int*, Count> inner;
     std::array<double*, Count> val;
     for (int m = 0; m < Count; ++m) {
@@ -114,16 +139,8 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
     }
     double rows[4 * Count];
     for (int v = r.begin(); v != r.end(); ++v) {
-      const int mark = V + v;  // distinct from the first pass's stamps
-      int n = 0;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j)
-          if (stamp[f[j]] != mark) stamp[f[j]] = mark, list[n++] = f[j];
-      }
-      std::sort(list, list + n);
+      const int n = column_rows(faces, vc, V, v, sc);
       const std::size_t o = std::size_t(outer[std::size_t(v)]);
-      for (int t = 0; t < n; ++t) pos[list[t]] = t;
       for (int m = 0; m < Count; ++m) {
         std::copy_n(list, n, inner[std::size_t(m)] + o);
         std::fill_n(val[std::size_t(m)] + o, n, 0.0);
