@@ -11,42 +11,17 @@
 
 #include "discretizations/test_vrm_support.hpp"
 
+#include "test_support.hpp"
+
 using namespace corrlap;
 
 namespace {
 
-// Icosahedron subdivided `level` times, vertices projected on the unit sphere.
+// Icosahedron subdivided `level` times, vertices on the unit sphere (shared test helper).
 void icosphere(int level, Eigen::MatrixX3d& V, TriangleIndices& T) {
-  const double p = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Eigen::Vector3d> v = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                                    {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-  for (auto& x : v) x.normalize();
-  std::vector<Eigen::Vector3i> t = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                                    {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      v.push_back((v[std::size_t(a)] + v[std::size_t(b)]).normalized());
-      return mid[key] = int(v.size()) - 1;
-    };
-    std::vector<Eigen::Vector3i> nt;
-    for (const auto& f : t) {
-      const int a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
-      nt.push_back({f[0], a, c});
-      nt.push_back({f[1], b, a});
-      nt.push_back({f[2], c, b});
-      nt.push_back({a, b, c});
-    }
-    t = nt;
-  }
-  V.resize(Eigen::Index(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) V.row(Eigen::Index(i)) = v[i].transpose();
-  T.resize(Eigen::Index(t.size()), 3);
-  for (std::size_t i = 0; i < t.size(); ++i) T.row(Eigen::Index(i)) = t[i].transpose();
+  const PolygonMesh m = test::icosphere(level);
+  V = m.positions;
+  T = triangulate(m);
 }
 
 Eigen::VectorXd smallest_eigenvalues(const Operators& ops, int k) {

@@ -37,41 +37,6 @@ PolygonMesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   return m;
 }
 
-// Icosahedron subdivided `levels` times, projected on the sphere (centre c, radius r).
-PolygonMesh icosphere(int levels, double r, const Eigen::Vector3d& c) {
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (auto& p : v) p.normalize();
-  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                                       {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                                       {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      v.push_back((v[std::size_t(a)] + v[std::size_t(b)]).normalized());
-      return mid[key] = int(v.size()) - 1;
-    };
-    std::vector<std::array<int, 3>> g;
-    for (const auto& tri : f) {
-      const int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), cc = midpoint(tri[2], tri[0]);
-      g.push_back({tri[0], a, cc});
-      g.push_back({tri[1], b, a});
-      g.push_back({tri[2], cc, b});
-      g.push_back({a, b, cc});
-    }
-    f = g;
-  }
-  PolygonMesh m;
-  m.positions.resize(Eigen::Index(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.positions.row(Eigen::Index(i)) = (c + r * v[i]).transpose();
-  for (const auto& tri : f) m.faces.push_back({tri[0], tri[1], tri[2]});
-  return m;
-}
-
 // Volume and area of a closed triangle mesh (divergence theorem).
 double mesh_volume(const PolygonMesh& m) {
   double vol = 0;
@@ -162,7 +127,7 @@ TEST_CASE("voxelized box has exactly the grid centres of the half-open box (edge
 
 TEST_CASE("inside test equals the generalized winding number (solid angles) on a rotated sphere") {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
-  const PolygonMesh m = transformed(icosphere(3, 1.0, Eigen::Vector3d::Zero()), R, Eigen::Vector3d(0.31, -0.12, 0.05));
+  const PolygonMesh m = transformed(test::icosphere(3, 1.0, Eigen::Vector3d::Zero()), R, Eigen::Vector3d(0.31, -0.12, 0.05));
   MeshVoxelizationParams p;
   p.resolution = 14;
   MeshVoxelizationReport r;
@@ -184,7 +149,7 @@ TEST_CASE("inside test equals the generalized winding number (solid angles) on a
 }
 
 TEST_CASE("voxel volume of a sphere converges to the polyhedron volume") {
-  const PolygonMesh m = icosphere(4, 1.0, Eigen::Vector3d(0.013, 0.027, -0.041));
+  const PolygonMesh m = test::icosphere(4, 1.0, Eigen::Vector3d(0.013, 0.027, -0.041));
   const double V = mesh_volume(m), A = mesh_area(m);
   for (double h : {0.1, 0.05}) {
     CAPTURE(h);
@@ -199,7 +164,7 @@ TEST_CASE("voxel volume of a sphere converges to the polyhedron volume") {
 }
 
 TEST_CASE("triangle soups, flipped orientation and polygon faces give the same voxels") {
-  const PolygonMesh m = icosphere(2, 1.0, Eigen::Vector3d(0.1, 0.2, 0.3));
+  const PolygonMesh m = test::icosphere(2, 1.0, Eigen::Vector3d(0.1, 0.2, 0.3));
   MeshVoxelizationParams p;
   p.resolution = 20;
   const VoxelGrid ref = voxelize_mesh(m, p);
@@ -288,7 +253,7 @@ TEST_CASE("overlapping parts and non-manifold edges are reported, voxels are the
 }
 
 TEST_CASE("voxelization does not depend on the thread count") {
-  const PolygonMesh m = icosphere(3, 1.0, Eigen::Vector3d(0.05, 0.0, -0.02));
+  const PolygonMesh m = test::icosphere(3, 1.0, Eigen::Vector3d(0.05, 0.0, -0.02));
   MeshVoxelizationParams p;
   p.resolution = 40;
   VoxelGrid one;
