@@ -8,6 +8,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/heat_kernel.hpp>
+#include <corrlap/discretizations/normal_policy.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 
@@ -123,22 +124,32 @@ TEST_CASE("heat kernel input errors") {
 }
 
 namespace {
-double heat_poisson_error(double h, double cutoff) {
+// Backward Poisson error (spec 10.4, f = x^2) of the registered heat kernel on sphere1 with true
+// normals and the given cut-off, k and alpha (t = k h^alpha).
+double heat_poisson_error(double h, double cutoff, double k = 0.1, double alpha = 2.0 / 3.0) {
   const SurfelMesh mesh = test::sphere1_surface(h);
   NormalFields nf;
   nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
   Config c;
   c.set("cutoff", cutoff);
+  c.set("k", k);
+  c.set("alpha", alpha);
   const Operators ops = make_discretization("heat-kernel")->assemble(mesh, nf, c);
   return test::backward_poisson_error(ops.L, ops.M, test::radial(mesh.face_centroids()), true);
 }
+
+double order(double coarse, double fine) { return std::log(coarse / fine) / std::log(2.0); }
 }  // namespace
 
-// Why no order 1.5 here: the heat-kernel operator has two consistency errors that the grid does
-// not remove. (1) The cut-off keeps only the fraction phi(K) = 1 - exp(-K^2/2)(1 + K^2/2) of the
-// kernel's second moment, so with a fixed K it converges to phi(K) Delta, not Delta
-// (phi(3) = 0.9389: a 6.5% error floor). (2) The smoothing bias is O(t) = O(h^{2/3}) for
-// t = 0.1 h^{2/3}. The tests check both predictions instead of an order it cannot have.
+// Why no order 1.5 with the surfel centres of spec 6 (measured, see docs/discretizations_extra.md):
+// the backward error behaves like C1 h^2 / t + C2 t (+ the cut-off floor below).
+//  - C2 t: the smoothing bias of any heat-kernel Laplacian;
+//  - C1 h^2 / t: surfel centres lie up to ~h off the surface, which perturbs every squared
+//    distance by O(h^2) relative to the kernel width t. Projecting the centres onto the sphere
+//    removes it (last test: order 1.7 with t = h^1.75).
+// With t = k h^alpha the best order is therefore 1 (alpha = 1); the spec's alpha = 2/3 gives 2/3.
+// The cut-off keeps only the fraction phi(K) = 1 - exp(-K^2/2)(1 + K^2/2) of the kernel's second
+// moment, so with a fixed K the operator tends to phi(K) Delta (phi(3) = 0.9389: a 6.5% floor).
 TEST_CASE("heat kernel backward Poisson (spec 10.4), default K = 3: errors decrease toward the cut-off floor") {
   const double hs[3] = {0.1, 0.05, 0.025};
   double err[3];
@@ -156,8 +167,42 @@ TEST_CASE("heat kernel backward Poisson (spec 10.4), default K = 3: errors decre
 
 TEST_CASE("heat kernel backward Poisson with a wide cut-off (K = 6) converges like t = O(h^{2/3})") {
   const double e1 = heat_poisson_error(0.1, 6.0), e2 = heat_poisson_error(0.05, 6.0);
-  const double order = std::log(e1 / e2) / std::log(2.0);
-  MESSAGE("heat-kernel (K = 6) backward L2 errors " << e1 << " " << e2 << ", order " << order);
-  CHECK(order > 0.55);
-  CHECK(order < 1.0);
+  MESSAGE("heat-kernel (K = 6) backward L2 errors " << e1 << " " << e2 << ", order " << order(e1, e2));
+  CHECK(order(e1, e2) > 0.55);
+  CHECK(order(e1, e2) < 1.0);
+}
+
+TEST_CASE("heat kernel backward Poisson, t = 0.1 h, K = 5: first order, the best t = k h^alpha allows") {
+  const double e1 = heat_poisson_error(0.1, 5.0, 0.1, 1.0), e2 = heat_poisson_error(0.05, 5.0, 0.1, 1.0),
+               e3 = heat_poisson_error(0.025, 5.0, 0.1, 1.0);
+  MESSAGE("heat-kernel (t = 0.1 h, K = 5) backward L2 errors " << e1 << " " << e2 << " " << e3 << ", orders "
+                                                                << order(e1, e2) << " " << order(e2, e3));
+  // measured 0.99 and 0.91: the h^2/t term is not yet fully asymptotic at h = 0.1
+  CHECK(order(e1, e2) > 0.8);
+  CHECK(order(e2, e3) > 0.8);
+  CHECK(0.5 * order(e1, e3) < 1.3);  // over h/4, and not better than first order
+}
+
+TEST_CASE("heat kernel matrix on points ON the sphere, t = h^1.75: order >= 1.5 (the kernel itself is consistent)") {
+  // Same measures (h^2 |u.n|) as the surfel operator, but the surfel centres are projected
+  // radially onto the unit sphere: without the O(h) position noise the error is O(t).
+  const auto error = [](double h) {
+    const SurfelMesh mesh = test::sphere1_surface(h);
+    const Eigen::MatrixX3d u = true_face_normals(make_implicit_shape("sphere1"), mesh);
+    const Eigen::MatrixX3d q = test::radial(mesh.face_centroids());
+    const Eigen::MatrixX3d n = trivial_face_normals(mesh);
+    Eigen::VectorXd mu(mesh.num_faces());
+    Eigen::SparseMatrix<double> M(mu.size(), mu.size());
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      mu[f] = h * h * std::abs(u.row(f).dot(n.row(f)));
+      M.insert(f, f) = mu[f];
+    }
+    const Eigen::SparseMatrix<double> L = heat_kernel_matrix(q, mu, std::pow(h, 1.75), 5.0);
+    return test::backward_poisson_error(L, M, q, true);
+  };
+  const double e1 = error(0.1), e2 = error(0.05), e3 = error(0.025);
+  MESSAGE("heat kernel on projected points: backward L2 errors " << e1 << " " << e2 << " " << e3 << ", orders "
+                                                                  << order(e1, e2) << " " << order(e2, e3));
+  CHECK(order(e1, e2) >= 1.5);  // measured 1.69
+  CHECK(order(e2, e3) >= 1.5);  // measured 1.76
 }
