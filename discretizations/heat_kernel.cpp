@@ -163,9 +163,18 @@ void check_inputs(const Eigen::MatrixX3d& points, double t, double cutoff) {
   if (!(cutoff > 0.0) || !std::isfinite(cutoff)) throw InputError("heat kernel: cutoff must be a positive number");
 }
 
+// Entries of point i's neighbourhood s.a[0, s.n) that column i stores: all of them, or (Upper)
+// only rows below i.
+std::size_t stored_neighbours(const Scratch& s, Eigen::Index i, HeatKernelStorage storage) {
+  if (storage == HeatKernelStorage::Full) return s.n;
+  std::size_t k = 0;
+  for (std::size_t e = 0; e < s.n; ++e) k += std::size_t(s.a[e].index < i);
+  return k;
+}
+
 }  // namespace
 
-std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff) {
+std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff, HeatKernelStorage storage) {
   check_inputs(points, t, cutoff);
   const double R = cutoff * std::sqrt(2.0 * t);
   const CellGrid grid(points, R / kCellsPerRadius);
@@ -175,7 +184,7 @@ std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, doub
     Scratch& s = scratch.local();
     for (Eigen::Index i = r.begin(); i != r.end(); ++i) {
       neighbours(points, grid, i, R * R, s, false);
-      count[std::size_t(i)] = std::int64_t(s.n) + 1;
+      count[std::size_t(i)] = std::int64_t(stored_neighbours(s, i, storage)) + 1;
     }
   });
   std::int64_t total = 0;
@@ -184,8 +193,10 @@ std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, doub
 }
 
 Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
-                                               double cutoff, HeatKernelForm form) {
+                                               double cutoff, HeatKernelForm form, HeatKernelStorage storage) {
   check_inputs(points, t, cutoff);
+  if (storage == HeatKernelStorage::Upper && form != HeatKernelForm::Symmetric)
+    throw InputError("heat kernel: upper-triangle storage needs the symmetric form");
   const Eigen::Index n = points.rows();
   if (mu.size() != n) throw InputError("heat kernel: " + std::to_string(mu.size()) + " measures for " + std::to_string(n) + " points");
   for (Eigen::Index i = 0; i < n; ++i)
@@ -207,7 +218,7 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
     Scratch& s = scratch.local();
     for (Eigen::Index i = r.begin(); i != r.end(); ++i) {
       neighbours(points, grid, i, R2, s, false);
-      outer[std::size_t(i) + 1] = std::int64_t(s.n) + 1;
+      outer[std::size_t(i) + 1] = std::int64_t(stored_neighbours(s, i, storage)) + 1;
     }
   });
   for (Eigen::Index i = 0; i < n; ++i) outer[std::size_t(i) + 1] += outer[std::size_t(i)];
@@ -241,11 +252,13 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
       std::int64_t diag_pos = -1;
       double row_sum = 0.0;  // sum_i c mu_i g(d_ij), in ascending i (deterministic)
       const double muj = mu[j];
+      const bool upper = storage == HeatKernelStorage::Upper;
       for (std::size_t k = 0; k < s.n; ++k) {
         const Neighbour& nb = s.a[k];
         if (diag_pos < 0 && nb.index > j) diag_pos = out++;
         const double g = c * std::exp(-nb.d2 * inv4t);
         row_sum += mu[nb.index] * g;
+        if (upper && nb.index > j) continue;  // the diagonal closes the column; keep summing
         inner[out] = nb.index;
         values[out] = form == HeatKernelForm::Symmetric ? mu[nb.index] * muj * g : muj * g;
         ++out;

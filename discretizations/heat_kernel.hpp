@@ -30,14 +30,25 @@ enum class HeatKernelForm {
   Pointwise,  ///< A itself: row s is the pointwise Laplacian at s (rows sum to 0)
 };
 
+/// Which entries of the matrix are stored.
+enum class HeatKernelStorage {
+  Full,   ///< every entry (what the registry returns; usable everywhere)
+  Upper,  ///< Symmetric form only: entries with row <= column, half the memory. Use it through
+          ///< Eigen's selfadjointView<Eigen::Upper>() (products, ConjugateGradient<..., Eigen::Upper>)
+          ///< or CHOLMOD with stype = 1; every other consumer expects Full.
+};
+
 /// Sparse heat-kernel matrix on the points (rows of `points`) with measures `mu` > 0 (spec §6).
-/// Only pairs closer than cutoff * sqrt(2t) are coupled. Throws InputError on bad sizes or
-/// non-positive t/cutoff, NumericalError when the matrix would exceed 2^31 - 1 nonzeros or memory.
+/// Only pairs closer than cutoff * sqrt(2t) are coupled. Throws InputError on bad sizes,
+/// non-positive t/cutoff or Upper storage of the (non-symmetric) pointwise form, NumericalError
+/// when the matrix would exceed 2^31 - 1 nonzeros or memory.
 Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
-                                               double cutoff = 3.0, HeatKernelForm form = HeatKernelForm::Symmetric);
+                                               double cutoff = 3.0, HeatKernelForm form = HeatKernelForm::Symmetric,
+                                               HeatKernelStorage storage = HeatKernelStorage::Full);
 
 /// Number of nonzeros heat_kernel_matrix would produce (same neighbour search, no values).
-std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff = 3.0);
+std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff = 3.0,
+                                  HeatKernelStorage storage = HeatKernelStorage::Full);
 
 /// The registered discretization. Parameters: t (default k h^alpha), k, alpha, cutoff,
 /// variant = dual (surfel values, domain Faces; default, as the reference) | primal (vertex

@@ -206,3 +206,36 @@ TEST_CASE("heat kernel matrix on points ON the sphere, t = h^1.75: order >= 1.5 
   CHECK(order(e1, e2) >= 1.5);  // measured 1.69
   CHECK(order(e2, e3) >= 1.5);  // measured 1.76
 }
+
+TEST_CASE("heat kernel upper-triangle storage: half the entries, same matrix through selfadjointView") {
+  const SurfelMesh mesh = test::sphere1_surface(0.1);
+  const Eigen::MatrixX3d x = mesh.face_centroids();
+  const Eigen::MatrixX3d u = true_face_normals(make_implicit_shape("sphere1"), mesh);
+  const Eigen::MatrixX3d n = trivial_face_normals(mesh);
+  Eigen::VectorXd mu(mesh.num_faces());
+  for (int f = 0; f < mesh.num_faces(); ++f) mu[f] = 0.01 * std::abs(u.row(f).dot(n.row(f)));
+  const double t = heat_kernel_time(0.1);
+  for (int threads : {1, 2}) {
+    set_thread_count(threads);
+    const Eigen::SparseMatrix<double> full = heat_kernel_matrix(x, mu, t);
+    const Eigen::SparseMatrix<double> upper =
+        heat_kernel_matrix(x, mu, t, 3.0, HeatKernelForm::Symmetric, HeatKernelStorage::Upper);
+    const Eigen::SparseMatrix<double> expected = full.triangularView<Eigen::Upper>();
+    CHECK(upper.nonZeros() == expected.nonZeros());
+    CHECK(upper.nonZeros() == heat_kernel_nonzeros(x, t, 3.0, HeatKernelStorage::Upper));
+    CHECK(upper.nonZeros() < full.nonZeros() / 2 + full.rows());
+    // bitwise equal, entry by entry (the diagonal is still minus the full row sum)
+    CHECK(Eigen::Map<const Eigen::VectorXi>(upper.innerIndexPtr(), upper.nonZeros()) ==
+          Eigen::Map<const Eigen::VectorXi>(expected.innerIndexPtr(), expected.nonZeros()));
+    CHECK((Eigen::Map<const Eigen::VectorXd>(upper.valuePtr(), upper.nonZeros()) -
+           Eigen::Map<const Eigen::VectorXd>(expected.valuePtr(), expected.nonZeros()))
+              .cwiseAbs()
+              .maxCoeff() == 0.0);
+    const Eigen::VectorXd v = Eigen::VectorXd::LinSpaced(x.rows(), -1, 1);
+    const Eigen::VectorXd a = full * v, b = upper.selfadjointView<Eigen::Upper>() * v;
+    CHECK((a - b).cwiseAbs().maxCoeff() <= 1e-12 * a.cwiseAbs().maxCoeff());
+  }
+  set_thread_count(0);
+  CHECK_THROWS_WITH_AS(heat_kernel_matrix(x, mu, t, 3.0, HeatKernelForm::Pointwise, HeatKernelStorage::Upper),
+                       doctest::Contains("symmetric"), InputError);
+}
