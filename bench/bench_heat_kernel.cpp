@@ -7,7 +7,9 @@
 // Mesh and normals are built once per h, outside the timed loop.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <fstream>
+#include <vector>
 #include <map>
 #include <memory>
 #include <string>
@@ -145,11 +147,15 @@ void BM_corrected_vrm(benchmark::State& state) {
   set_thread_count(0);
 }
 
+// This VM's timings vary by up to 2x from run to run (memory handed back by the kernel, other
+// tenants): the small cases repeat 3 times and also report the minimum ("_min" rows).
+double min_of(const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); }
+
 }  // namespace
 
-BENCHMARK(BM_heat_kernel)->Args({20, 1})->Args({20, 2})->Args({50, 1})->Args({50, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_heat_kernel)->Args({20, 1})->Args({20, 2})->Args({50, 1})->Args({50, 2})->Repetitions(3)->ComputeStatistics("min", min_of)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_heat_kernel)->Args({100, 1})->Args({100, 2})->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_heat_kernel_upper)->Args({50, 1})->Args({50, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_heat_kernel_upper)->Args({50, 1})->Args({50, 2})->Repetitions(3)->ComputeStatistics("min", min_of)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_heat_kernel_upper)->Args({100, 1})->Args({100, 2})->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_corrected_vrm)->Args({100, 1})->Args({100, 2})->Args({200, 1})->Args({200, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
 
