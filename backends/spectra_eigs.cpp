@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <new>
+#include <random>
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
@@ -32,7 +33,10 @@ void check_problem(const SpMat& L, const SpMat& M, int k, const std::string& who
   detail::check_matrix(M, who + " (M)", true);
 }
 
-/// Spectra operator y = (K - sigma M)^{-1} x with K = -L, applied by a LinearSolver.
+/// Spectra operator y = P (K - sigma M)^{-1} x with K = -L, applied by a LinearSolver. P = I is
+/// the plain shift-invert; with a deflation basis X (M-orthonormal eigenvectors already found),
+/// P = I - X X^T M removes them, so that a later run sees only the rest of the spectrum (P commutes
+/// with the operator, which stays self-adjoint for the M inner product).
 class ShiftInvertOp {
  public:
   using Scalar = double;
@@ -40,19 +44,38 @@ class ShiftInvertOp {
   Eigen::Index rows() const { return L_.rows(); }
   Eigen::Index cols() const { return L_.rows(); }
   void set_shift(double sigma) {
+    if (factorized_ && sigma == sigma_) return;  // deflation runs reuse the factorization
     SpMat A = -L_ - sigma * M_;  // K - sigma M, SPD for sigma < 0
     A.makeCompressed();
     solver_.compute(A);
+    factorized_ = true;
+    sigma_ = sigma;
   }
   void perform_op(const double* x_in, double* y_out) const {
     const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
-    Eigen::Map<Eigen::VectorXd>(y_out, rows()) = solver_.solve(x);
+    Eigen::Map<Eigen::VectorXd> y(y_out, rows());
+    y = solver_.solve(x);
+    if (X_ != nullptr && X_->cols() > 0) y -= *X_ * (MX_.transpose() * y);
+  }
+  /// Deflate the columns of X (M-orthonormal); nullptr: none.
+  void deflate(const Eigen::MatrixXd* X) {
+    X_ = X;
+    if (X != nullptr) MX_ = M_ * *X;
+  }
+  /// P v for a start vector.
+  Eigen::VectorXd project(const Eigen::VectorXd& v) const {
+    if (X_ == nullptr || X_->cols() == 0) return v;
+    return v - *X_ * (MX_.transpose() * v);
   }
 
  private:
   const SpMat& L_;
   const SpMat& M_;
   LinearSolver& solver_;
+  bool factorized_ = false;
+  double sigma_ = 0.0;
+  const Eigen::MatrixXd* X_ = nullptr;
+  Eigen::MatrixXd MX_;
 };
 
 /// Spectra's B operator: y = M x (full symmetric storage).
@@ -109,6 +132,7 @@ EigenResult DenseEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
 struct ShiftInvertEigenSolver::Impl {
   double shift = -1e-3;
   int ncv = 0;
+  int guard = -1;  // -1: automatic
   int max_iterations = 1000;
   double tolerance = 1e-10;
   int dense_threshold = 400;
@@ -123,7 +147,9 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
   return {
       {"solver", "cholmod", "linear solver for (K - shift M)^{-1}; its options may be given too"},
       {"shift", "-0.001", "shift in units of mu = -lambda; must be < 0 (K - shift M must be positive definite)"},
-      {"ncv", "0", "Lanczos basis size (0: max(2k + 1, k + 20), at most n)"},
+      {"ncv", "0", "Lanczos basis size (0: max(2m + 1, m + 20) for m = k + guard, at most n)"},
+      {"guard", "auto", "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
+                        "gets all its copies (auto: max(6, k/4))"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
       {"dense_threshold", "400", "use the dense solver when n <= this"},
@@ -147,6 +173,9 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   const double shift = options.get_double("shift", s.shift);
   if (!(shift < 0.0)) throw InputError("eigen solver 'shift-invert': config key 'shift' must be < 0 (mu = -lambda >= 0)");
   const int ncv = options.get_int("ncv", s.ncv);
+  const std::string guard_text = options.get_string("guard", "auto");
+  const int guard = guard_text == "auto" ? -1 : options.get_int("guard", 0);
+  if (guard_text != "auto" && guard < 0) throw InputError("eigen solver 'shift-invert': guard must be >= 0 or auto");
   const int maxit = options.get_int("max_iterations", s.max_iterations);
   const double tol = options.get_double("tolerance", s.tolerance);
   const int dense = options.get_int("dense_threshold", s.dense_threshold);
@@ -154,6 +183,7 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
     throw InputError("eigen solver 'shift-invert': ncv >= 0, max_iterations >= 1, tolerance > 0, dense_threshold >= 0");
   s.shift = shift;
   s.ncv = ncv;
+  s.guard = guard;
   s.max_iterations = maxit;
   s.tolerance = tol;
   s.dense_threshold = dense;
@@ -170,23 +200,76 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   auto linear = make_linear_solver(s.linear_config, "cholmod");
   ShiftInvertOp op(L, M, *linear);
   MassOp bop(M);
-  const int ncv = int(std::min<Eigen::Index>(n, s.ncv > 0 ? std::max(s.ncv, k + 2) : std::max(2 * k + 1, k + 20)));
-  Spectra::SymGEigsShiftSolver<ShiftInvertOp, MassOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, k, ncv, s.shift);
-  eigs.init();
-  const Eigen::Index nconv =
-      eigs.compute(Spectra::SortRule::LargestMagn, s.max_iterations, s.tolerance, Spectra::SortRule::SmallestAlge);
-  s.last_report = linear->info();
-  if (eigs.info() != Spectra::CompInfo::Successful || nconv < k) {
-    std::ostringstream os;
-    os << "shift-invert eigen solver: only " << nconv << " of " << k << " eigenpairs converged after "
-       << eigs.num_iterations() << " restarts (ncv " << ncv << ", tolerance " << s.tolerance
-       << "); increase ncv or max_iterations";
-    throw SolverError(SolverStatus::NoConvergence, os.str());
+  int restarts = 0;
+  // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
+  const auto run = [&](int nev, const Eigen::VectorXd* start, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
+    const int ncv = int(std::min<Eigen::Index>(n, s.ncv > 0 ? std::max(s.ncv, nev + 2) : std::max(2 * nev + 1, nev + 20)));
+    Spectra::SymGEigsShiftSolver<ShiftInvertOp, MassOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, nev, ncv, s.shift);
+    if (start)
+      eigs.init(start->data());
+    else
+      eigs.init();
+    const Eigen::Index nconv =
+        eigs.compute(Spectra::SortRule::LargestMagn, s.max_iterations, s.tolerance, Spectra::SortRule::SmallestAlge);
+    restarts += int(eigs.num_iterations());
+    s.last_report = linear->info();
+    if (eigs.info() != Spectra::CompInfo::Successful || nconv < nev) {
+      std::ostringstream os;
+      os << "shift-invert eigen solver: only " << nconv << " of " << nev << " eigenpairs (" << k
+         << " asked) converged after " << eigs.num_iterations() << " restarts (ncv " << ncv << ", tolerance "
+         << s.tolerance << "); increase ncv or max_iterations";
+      throw SolverError(SolverStatus::NoConvergence, os.str());
+    }
+    values = eigs.eigenvalues();  // mu = -lambda, ascending (SmallestAlge sorting)
+    vectors = eigs.eigenvectors();
+  };
+
+  // Lanczos from one start vector sees the extra copies of a multiple eigenvalue only through
+  // rounding, so it can converge with a copy missing and the next eigenvalue in its place (seen on
+  // a digitized sphere: 7.897 x3 at positions 10-12 came out as 7.897 x2, 9.607; on a periodic grid
+  // whole copies of 4- and 8-fold eigenvalues). Two defences: (1) `guard` extra eigenpairs, dropped
+  // at the end; (2) verification: deflate everything found and look for eigenvalues below the k-th
+  // in the rest of the spectrum; add them and repeat until there are none.
+  const int guard_wanted = s.guard >= 0 ? s.guard : std::max(6, k / 4);
+  const int nev = k + int(std::min<Eigen::Index>(guard_wanted, n - 2 - k));
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  run(nev, nullptr, values, vectors);
+  std::mt19937 rng(12345);  // fixed: the result is reproducible
+  std::normal_distribution<double> normal;
+  for (int round = 0; round < 64; ++round) {
+    const int m = int(std::min<Eigen::Index>(std::max(guard_wanted, 3), n - vectors.cols() - 2));
+    if (m < 1) break;  // (almost) the whole space is found: nothing left to verify
+    op.deflate(&vectors);
+    Eigen::VectorXd start(n);
+    for (Eigen::Index i = 0; i < n; ++i) start[i] = normal(rng);
+    start = op.project(start);
+    Eigen::VectorXd more_values;
+    Eigen::MatrixXd more_vectors;
+    run(m, &start, more_values, more_vectors);
+    op.deflate(nullptr);
+    const double kth = values[k - 1];
+    if (more_values[0] >= kth - 1e-9 * std::max(1.0, std::abs(kth))) break;  // complete
+    // Merge and sort by value (stable: ties keep the earlier pair first).
+    const Eigen::Index p = values.size(), q = more_values.size();
+    Eigen::VectorXd all_values(p + q);
+    all_values << values, more_values;
+    Eigen::MatrixXd all_vectors(n, p + q);
+    all_vectors << vectors, more_vectors;
+    std::vector<Eigen::Index> order(std::size_t(p + q));
+    for (Eigen::Index i = 0; i < p + q; ++i) order[std::size_t(i)] = i;
+    std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return all_values[a] < all_values[b]; });
+    values.resize(p + q);
+    vectors.resize(n, p + q);
+    for (Eigen::Index i = 0; i < p + q; ++i) {
+      values[i] = all_values[order[std::size_t(i)]];
+      vectors.col(i) = all_vectors.col(order[std::size_t(i)]);
+    }
   }
   EigenResult r;
-  r.values = eigs.eigenvalues();  // mu = -lambda, ascending (SmallestAlge sorting)
-  r.vectors = eigs.eigenvectors();
-  r.iterations = int(eigs.num_iterations());
+  r.values = values.head(k);
+  r.vectors = vectors.leftCols(k);
+  r.iterations = restarts;
   return r;
 }
 
