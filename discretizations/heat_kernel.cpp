@@ -194,8 +194,17 @@ std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, doub
 }
 
 Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
-                                               double cutoff, HeatKernelForm form, HeatKernelStorage storage) {
+                                               double cutoff, HeatKernelForm form, HeatKernelStorage storage,
+                                               const Eigen::MatrixX3d* tangent_normals) {
   check_inputs(points, t, cutoff);
+  if (tangent_normals != nullptr) {
+    if (tangent_normals->rows() != points.rows())
+      throw InputError("heat kernel: " + std::to_string(tangent_normals->rows()) + " tangent normals for " +
+                       std::to_string(points.rows()) + " points");
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+      if (!tangent_normals->row(i).allFinite() || std::abs(tangent_normals->row(i).norm() - 1.0) > 1e-6)
+        throw InputError("heat kernel: tangent normal of point " + std::to_string(i) + " is not a unit vector");
+  }
   if (storage == HeatKernelStorage::Upper && form != HeatKernelForm::Symmetric)
     throw InputError("heat kernel: upper-triangle storage needs the symmetric form");
   const Eigen::Index n = points.rows();
@@ -261,7 +270,19 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
       for (std::size_t k = 0; k < s.n; ++k) {
         const Neighbour& nb = s.a[k];
         if (diag_pos < 0 && nb.index > j) diag_pos = out++;
-        const double g = c * std::exp(-nb.d2 * inv4t);
+        double d2 = nb.d2;
+        if (tangent_normals != nullptr) {
+          // Tangent-plane distance: drop the component of e along the mean normal. Symmetric in
+          // (i, j) bit for bit (u_i + u_j commutes, e flips sign), so L stays symmetric.
+          const Eigen::Vector3d e = points.row(nb.index) - points.row(j);
+          const Eigen::Vector3d m = (tangent_normals->row(nb.index) + tangent_normals->row(j)).transpose();
+          const double mm = m.squaredNorm();
+          if (mm > 0.0) {
+            const double en = e.dot(m);
+            d2 = std::max(0.0, d2 - en * en / mm);
+          }
+        }
+        const double g = c * std::exp(-d2 * inv4t);
         row_sum += mu[nb.index] * g;
         if (upper && nb.index > j) continue;  // the diagonal closes the column; keep summing
         inner[out] = nb.index;
@@ -288,6 +309,9 @@ class HeatKernel final : public Discretization {
         {"k", "0.1", "t = k h^alpha"},
         {"alpha", "0.6666666666666666", "t = k h^alpha"},
         {"cutoff", "3", "couple points closer than cutoff * sqrt(2t) (spec §6, K)"},
+        {"distance", "euclidean",
+         "euclidean (spec §6) | tangent: distances in the plane of the mean normal (corrlap extension; "
+         "removes the O(h^2/t) error of off-surface surfel centres; dual variant only)"},
         {"variant", "dual", "dual: surfel values (domain Faces) | primal: vertex values"},
         {"mass", "measure", "measure: L = diag(mu) A symmetric, M = diag(mu) | identity: L = A pointwise, M = I"}};
     for (auto& q : normal_policy_parameters()) p.push_back(q);
@@ -310,6 +334,11 @@ class HeatKernel final : public Discretization {
       if (!(t > 0) || !std::isfinite(t)) throw InputError("heat-kernel: k h^alpha must be positive");
     }
     const double cutoff = params.get_double("cutoff", 3.0);
+    const std::string distance = params.get_string("distance", "euclidean");
+    if (distance != "euclidean" && distance != "tangent")
+      throw InputError("heat-kernel: distance '" + distance + "': expected euclidean or tangent");
+    if (distance == "tangent" && variant != "dual")
+      throw InputError("heat-kernel: distance=tangent needs variant=dual (one normal per surfel)");
 
     Operators ops;
     const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops.warnings);
@@ -347,7 +376,8 @@ class HeatKernel final : public Discretization {
     // swap, not assign: Eigen 3.4's SparseMatrix has no move assignment, and a copy would double
     // the peak memory of the largest operator (9 GB at h = 0.01).
     Eigen::SparseMatrix<double> L =
-        heat_kernel_matrix(points, m, t, cutoff, symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise);
+        heat_kernel_matrix(points, m, t, cutoff, symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise,
+                           HeatKernelStorage::Full, distance == "tangent" ? &u : nullptr);
     ops.L.swap(L);
     Eigen::SparseMatrix<double> D(m.size(), m.size());
     D.reserve(Eigen::VectorXi::Ones(m.size()));

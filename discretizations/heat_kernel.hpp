@@ -42,15 +42,24 @@ enum class HeatKernelStorage {
 /// Only pairs closer than cutoff * sqrt(2t) are coupled. Throws InputError on bad sizes,
 /// non-positive t/cutoff or Upper storage of the (non-symmetric) pointwise form, NumericalError
 /// when the matrix would exceed 2^31 - 1 nonzeros or memory.
+///
+/// `tangent_normals` (optional, one unit normal per point) switches to the tangent-plane distance
+/// (corrlap's extension, not in spec §6): the kernel uses |e|^2 - (e . n_rs)^2 with e = x_r - x_s and
+/// n_rs the normalized mean of the two normals. Surfel centres lie up to ~h off the surface, and
+/// this O(h^2 / t) error caps the backward order of the Euclidean kernel at 1; the tangent distance
+/// removes it (order ~1.8 with t = h^1.75, docs/discretizations_extra.md). The cut-off still uses the
+/// Euclidean distance.
 Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
                                                double cutoff = 3.0, HeatKernelForm form = HeatKernelForm::Symmetric,
-                                               HeatKernelStorage storage = HeatKernelStorage::Full);
+                                               HeatKernelStorage storage = HeatKernelStorage::Full,
+                                               const Eigen::MatrixX3d* tangent_normals = nullptr);
 
 /// Number of nonzeros heat_kernel_matrix would produce (same neighbour search, no values).
 std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff = 3.0,
                                   HeatKernelStorage storage = HeatKernelStorage::Full);
 
 /// The registered discretization. Parameters: t (default k h^alpha), k, alpha, cutoff,
+/// distance = euclidean (spec §6, default) | tangent (see heat_kernel_matrix; dual variant only),
 /// variant = dual (surfel values, domain Faces; default, as the reference) | primal (vertex
 /// values, mu(v) = sum_{s ni v} mu(s)/4), mass = measure | identity, and the normal policy keys.
 /// Needs one normal per face: mu(s) = (face area) |u_s . n_s| (h^2 |u_s . n_s| on surfels).

@@ -126,7 +126,8 @@ TEST_CASE("heat kernel input errors") {
 namespace {
 // Backward Poisson error (spec 10.4, f = x^2) of the registered heat kernel on sphere1 with true
 // normals and the given cut-off, k and alpha (t = k h^alpha).
-double heat_poisson_error(double h, double cutoff, double k = 0.1, double alpha = 2.0 / 3.0) {
+double heat_poisson_error(double h, double cutoff, double k = 0.1, double alpha = 2.0 / 3.0,
+                          const std::string& distance = "euclidean") {
   const SurfelMesh mesh = test::sphere1_surface(h);
   NormalFields nf;
   nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
@@ -134,6 +135,7 @@ double heat_poisson_error(double h, double cutoff, double k = 0.1, double alpha 
   c.set("cutoff", cutoff);
   c.set("k", k);
   c.set("alpha", alpha);
+  c.set("distance", distance);
   const Operators ops = make_discretization("heat-kernel")->assemble(mesh, nf, c);
   return test::backward_poisson_error(ops.L, ops.M, test::radial(mesh.face_centroids()), true);
 }
@@ -238,4 +240,55 @@ TEST_CASE("heat kernel upper-triangle storage: half the entries, same matrix thr
   set_thread_count(0);
   CHECK_THROWS_WITH_AS(heat_kernel_matrix(x, mu, t, 3.0, HeatKernelForm::Pointwise, HeatKernelStorage::Upper),
                        doctest::Contains("symmetric"), InputError);
+}
+
+TEST_CASE("heat kernel with the tangent-plane distance (corrlap extension): backward order >= 1.5 on surfels") {
+  // Removing the normal component of the centre-to-centre vector removes the O(h^2/t) error of
+  // off-surface surfel centres; what remains is O(t) = O(h^1.75).
+  const double e1 = heat_poisson_error(0.1, 5.0, 1.0, 1.75, "tangent"),
+               e2 = heat_poisson_error(0.05, 5.0, 1.0, 1.75, "tangent"),
+               e3 = heat_poisson_error(0.025, 5.0, 1.0, 1.75, "tangent");
+  MESSAGE("heat-kernel (tangent distance, t = h^1.75, K = 5) backward L2 errors "
+          << e1 << " " << e2 << " " << e3 << ", orders " << order(e1, e2) << " " << order(e2, e3));
+  CHECK(order(e1, e2) >= 1.5);  // measured 1.87
+  CHECK(order(e2, e3) >= 1.5);  // measured 1.82
+  // The Euclidean kernel with the same t and K stays below first order on the finest step.
+  const double f2 = heat_poisson_error(0.05, 5.0, 1.0, 1.75), f3 = heat_poisson_error(0.025, 5.0, 1.0, 1.75);
+  CHECK(order(f2, f3) < 1.0);  // measured 0.71
+  CHECK(e3 < 0.5 * f3);
+}
+
+TEST_CASE("heat kernel tangent distance: symmetric graph Laplacian, bitwise thread-independent, input errors") {
+  const SurfelMesh mesh = test::sphere1_surface(0.2);
+  NormalFields nf;
+  nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
+  const auto d = make_discretization("heat-kernel");
+  const Config c = Config::from_key_values({"distance=tangent"});
+  set_thread_count(1);
+  const Operators one = d->assemble(mesh, nf, c);
+  set_thread_count(2);
+  const Operators two = d->assemble(mesh, nf, c);
+  set_thread_count(0);
+  CHECK(Eigen::Map<const Eigen::VectorXd>(one.L.valuePtr(), one.L.nonZeros()) ==
+        Eigen::Map<const Eigen::VectorXd>(two.L.valuePtr(), two.L.nonZeros()));
+  const Eigen::SparseMatrix<double> Lt = one.L.transpose();
+  CHECK((one.L - Lt).norm() == 0.0);
+  CHECK((one.L * Eigen::VectorXd::Ones(one.L.rows())).cwiseAbs().maxCoeff() < 1e-12 * one.L.diagonal().cwiseAbs().maxCoeff());
+  for (int k = 0; k < one.L.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(one.L, k); it; ++it)
+      if (it.row() != it.col()) CHECK(it.value() > 0.0);
+  // differs from the Euclidean kernel (larger weights: shorter distances)
+  const Operators euclid = d->assemble(mesh, nf, Config());
+  CHECK(one.L.nonZeros() == euclid.L.nonZeros());
+  CHECK(-one.L.diagonal().sum() > -euclid.L.diagonal().sum());
+  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"distance=geodesic"})), doctest::Contains("geodesic"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"distance=tangent", "variant=primal"})),
+                       doctest::Contains("dual"), InputError);
+  const Eigen::MatrixX3d x = mesh.face_centroids();
+  Eigen::MatrixX3d bad = nf.face;
+  bad.row(7) *= 2.0;
+  CHECK_THROWS_WITH_AS(heat_kernel_matrix(x, Eigen::VectorXd::Ones(x.rows()), 0.01, 3.0, HeatKernelForm::Symmetric,
+                                          HeatKernelStorage::Full, &bad),
+                       doctest::Contains("point 7"), InputError);
 }
