@@ -25,7 +25,10 @@ void OperatorOptions::add_options(CLI::App& cmd) {
   cmd.add_option("--kappa", kappa, "interpolated: flat correction factor (2 = DGtal, 1 = paper)");
   cmd.add_option("--assembly", assembly, "interpolated: global (DGtal L0, default) | local")
       ->check(CLI::IsMember({"global", "local"}));
-  cmd.add_option("--mass", mass, "fem: full (default) | lumped")->check(CLI::IsMember({"full", "lumped"}));
+  cmd.add_option("--mass", mass, "fem: full (default) | lumped; heat-kernel: measure (default) | identity")
+      ->check(CLI::IsMember({"full", "lumped", "measure", "identity"}));
+  cmd.add_option("--t", heat_t, "heat-kernel: diffusion time (default 0.1 h^(2/3), spec §6)");
+  cmd.add_option("--cutoff", cutoff, "heat-kernel: couple points closer than cutoff * sqrt(2t) (default 3)");
   cmd.add_option("--orientation", orientation, "normals with u.n <= 0: error | warn (default) | clamp")
       ->check(CLI::IsMember({"error", "warn", "clamp"}));
   cmd.add_option("--param", params, "method parameter key=value (repeatable)");
@@ -68,6 +71,8 @@ OperatorOptions::Input OperatorOptions::prepare(bool extras) const {
   in.params.merge(Config::from_key_values(params));
   if (lambda) in.params.set("lambda", *lambda);
   if (kappa) in.params.set("kappa", *kappa);
+  if (heat_t) in.params.set("t", *heat_t);
+  if (cutoff) in.params.set("cutoff", *cutoff);
   if (!assembly.empty()) in.params.set("assembly", assembly);
   if (!mass.empty()) in.params.set("mass", mass);
   if (!orientation.empty()) in.params.set("orientation", orientation);

@@ -18,7 +18,7 @@ struct OperatorOptions {
   std::string method;
   std::string face_normals_file, vertex_normals_file;
   std::string normals = "auto";  ///< auto | true | trivial
-  std::optional<double> lambda, kappa;
+  std::optional<double> lambda, kappa, heat_t, cutoff;
   std::string assembly, mass, orientation, config_file;
   std::vector<std::string> params;  ///< key=value
   int threads = 0;

@@ -53,6 +53,19 @@ TEST_CASE("corrlap operators passes --mass, --assembly, --lambda and --param to 
   CHECK(Lb.nonZeros() == read_matrix_market(a + "/L.mtx").nonZeros());  // local variant: FEM's 9-point pattern
 }
 
+TEST_CASE("corrlap operators passes --t, --cutoff and --mass to the heat kernel") {
+  const std::string a = tmp_path("ops_heat_flags"), b = tmp_path("ops_heat_param"), c = tmp_path("ops_heat_default");
+  REQUIRE(run_cli_tagged("t4", "operators --method heat-kernel --shape sphere1 --h 0.2 --t 0.02 --cutoff 2 --mass identity --out " + a) == 0);
+  REQUIRE(run_cli_tagged("t4", "operators --method heat-kernel --shape sphere1 --h 0.2 --param t=0.02 --param cutoff=2 --param mass=identity --out " + b) == 0);
+  REQUIRE(run_cli_tagged("t4", "operators --method heat-kernel --shape sphere1 --h 0.2 --out " + c) == 0);
+  const Eigen::SparseMatrix<double> La = read_matrix_market(a + "/L.mtx"), Lb = read_matrix_market(b + "/L.mtx");
+  CHECK(compare_matrices(La, Lb).relative == 0.0);
+  CHECK(La.nonZeros() < read_matrix_market(c + "/L.mtx").nonZeros());  // smaller t and cut-off: fewer pairs
+  const Eigen::SparseMatrix<double> Ma = read_matrix_market(a + "/M.mtx");
+  CHECK(Ma.nonZeros() == Ma.rows());
+  CHECK(Eigen::VectorXd(Ma.diagonal()).isOnes());  // mass=identity
+}
+
 TEST_CASE("corrlap operators reports bad input with exit code 1 and a message") {
   std::string err;
   CHECK(run_cli_tagged("t3", "operators --method fem --mesh " + sphere_ref("mesh.obj") + " --out " + tmp_path("x"), nullptr, &err) == 1);
