@@ -59,13 +59,16 @@ double mem_available_gib() {
   return 0;
 }
 
-void BM_heat_kernel(benchmark::State& state) {
+// Full: the registered discretization (L and M, full storage). Upper: the symmetric L alone in
+// upper-triangle storage (heat_kernel_matrix with HeatKernelStorage::Upper), about half the memory,
+// for selfadjointView / CG / CHOLMOD users. Skipped when the machine lacks the memory.
+void heat_kernel_bench(benchmark::State& state, HeatKernelStorage storage) {
   const int inv_h = int(state.range(0));
   set_thread_count(int(state.range(1)));
   const Input& in = sphere_input(inv_h);
-  const double h = 1.0 / inv_h;
-  const std::int64_t nnz_est =
-      heat_kernel_nonzeros(in.mesh.face_centroids(), heat_kernel_time(h), 3.0);
+  const double h = 1.0 / inv_h, t = heat_kernel_time(h);
+  const Eigen::MatrixX3d x = in.mesh.face_centroids();
+  const std::int64_t nnz_est = heat_kernel_nonzeros(x, t, 3.0, storage);
   const double gib = double(nnz_est) * 12.0 / (1024.0 * 1024.0 * 1024.0);
   if (gib * 1.25 > mem_available_gib()) {
     state.SkipWithError(("needs ~" + std::to_string(gib) + " GiB, not available").c_str());
@@ -73,12 +76,21 @@ void BM_heat_kernel(benchmark::State& state) {
     return;
   }
   const auto d = make_discretization("heat-kernel");
+  const Eigen::MatrixX3d n = trivial_face_normals(in.mesh);
+  Eigen::VectorXd mu(in.mesh.num_faces());
+  for (int f = 0; f < in.mesh.num_faces(); ++f) mu[f] = h * h * std::abs(in.normals.face.row(f).dot(n.row(f)));
   bench::reset_peak_rss();
   std::int64_t nnz = 0;
   for (auto _ : state) {
-    Operators ops = d->assemble(in.mesh, in.normals, Config());
-    nnz = ops.L.nonZeros();
-    benchmark::DoNotOptimize(ops.L.valuePtr());
+    if (storage == HeatKernelStorage::Full) {
+      Operators ops = d->assemble(in.mesh, in.normals, Config());
+      nnz = ops.L.nonZeros();
+      benchmark::DoNotOptimize(ops.L.valuePtr());
+    } else {
+      const Eigen::SparseMatrix<double> L = heat_kernel_matrix(x, mu, t, 3.0, HeatKernelForm::Symmetric, storage);
+      nnz = L.nonZeros();
+      benchmark::DoNotOptimize(L.valuePtr());
+    }
   }
   state.counters["h"] = h;
   state.counters["threads"] = double(state.range(1));
@@ -91,42 +103,8 @@ void BM_heat_kernel(benchmark::State& state) {
   set_thread_count(0);
 }
 
-// The symmetric L in upper-triangle storage (library call heat_kernel_matrix, HeatKernelStorage::
-// Upper): about half the memory of the full operator, for selfadjointView / CG / CHOLMOD users.
-void BM_heat_kernel_upper(benchmark::State& state) {
-  const int inv_h = int(state.range(0));
-  set_thread_count(int(state.range(1)));
-  const Input& in = sphere_input(inv_h);
-  const double h = 1.0 / inv_h, t = heat_kernel_time(h);
-  const Eigen::MatrixX3d x = in.mesh.face_centroids();
-  const std::int64_t nnz_est = heat_kernel_nonzeros(x, t, 3.0, HeatKernelStorage::Upper);
-  const double gib = double(nnz_est) * 12.0 / (1024.0 * 1024.0 * 1024.0);
-  if (gib * 1.25 > mem_available_gib()) {
-    state.SkipWithError(("needs ~" + std::to_string(gib) + " GiB, not available").c_str());
-    set_thread_count(0);
-    return;
-  }
-  const Eigen::MatrixX3d n = trivial_face_normals(in.mesh);
-  Eigen::VectorXd mu(in.mesh.num_faces());
-  for (int f = 0; f < in.mesh.num_faces(); ++f) mu[f] = h * h * std::abs(in.normals.face.row(f).dot(n.row(f)));
-  bench::reset_peak_rss();
-  std::int64_t nnz = 0;
-  for (auto _ : state) {
-    const Eigen::SparseMatrix<double> L =
-        heat_kernel_matrix(x, mu, t, 3.0, HeatKernelForm::Symmetric, HeatKernelStorage::Upper);
-    nnz = L.nonZeros();
-    benchmark::DoNotOptimize(L.valuePtr());
-  }
-  state.counters["h"] = h;
-  state.counters["threads"] = double(state.range(1));
-  state.counters["surfels"] = in.mesh.num_faces();
-  state.counters["nnz"] = double(nnz);
-  state.counters["L_GiB"] = gib;
-  state.counters["surfels_per_s"] =
-      benchmark::Counter(double(in.mesh.num_faces()), benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["peak_rss_MiB"] = bench::peak_rss_mib();
-  set_thread_count(0);
-}
+void BM_heat_kernel(benchmark::State& state) { heat_kernel_bench(state, HeatKernelStorage::Full); }
+void BM_heat_kernel_upper(benchmark::State& state) { heat_kernel_bench(state, HeatKernelStorage::Upper); }
 
 void BM_corrected_vrm(benchmark::State& state) {
   const int inv_h = int(state.range(0));
