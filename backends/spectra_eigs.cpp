@@ -133,6 +133,7 @@ struct ShiftInvertEigenSolver::Impl {
   double shift = -1e-3;
   int ncv = 0;
   int guard = -1;  // -1: automatic
+  bool verify = true;
   int max_iterations = 1000;
   double tolerance = 1e-10;
   int dense_threshold = 400;
@@ -150,6 +151,7 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
       {"ncv", "0", "Lanczos basis size (0: max(2m + 1, m + 20) for m = k + guard, at most n)"},
       {"guard", "auto", "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
                         "gets all its copies (auto: max(6, k/4))"},
+      {"verify", "true", "deflate the pairs found and search the rest of the spectrum for missed copies"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
       {"dense_threshold", "400", "use the dense solver when n <= this"},
@@ -184,6 +186,7 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   s.shift = shift;
   s.ncv = ncv;
   s.guard = guard;
+  s.verify = options.get_bool("verify", s.verify);
   s.max_iterations = maxit;
   s.tolerance = tol;
   s.dense_threshold = dense;
@@ -237,7 +240,7 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   run(nev, nullptr, values, vectors);
   std::mt19937 rng(12345);  // fixed: the result is reproducible
   std::normal_distribution<double> normal;
-  for (int round = 0; round < 64; ++round) {
+  for (int round = 0; s.verify && round < 64; ++round) {
     const int m = int(std::min<Eigen::Index>(std::max(guard_wanted, 3), n - vectors.cols() - 2));
     if (m < 1) break;  // (almost) the whole space is found: nothing left to verify
     op.deflate(&vectors);
