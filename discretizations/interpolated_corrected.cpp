@@ -366,7 +366,7 @@ void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
 // L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex columns: column v
 // sums the face terms of its faces (incidences ascending) and then lambda r_e[v] r_e over the
 // edges of its faces (ascending), so the result is the same for any thread count.
-// `faceterms` holds per face M0 (16) and K1 (16), row-major; `r` the edge rows (k per edge).
+// `faceterms` holds the per-face records of interpolated_face_terms; `r` the edge rows (k per edge).
 // When `mpat` is given, M (spec §3.2, M = sum_f M0_f) is filled in the same column pass, with the
 // same summation order as detail::gather_quad_rows.
 template <class Pos>
@@ -400,17 +400,27 @@ void fill_columns(const ProjectionPattern& pp, const detail::VertexCorners& vc, 
       std::copy(mpat->inner.data() + mb, mpat->inner.data() + me, M->innerIndexPtr() + mb);
       std::fill(mval + mb, mval + me, 0.0);
     }
+    constexpr int ahead = 2;  // columns: the edge rows and face records are scattered in memory
     for (int v = range.begin(); v != range.end(); ++v) {
+      if (v + ahead < V) {
+        for (int q = ce_start[v + ahead]; q < ce_start[v + ahead + 1]; ++q)
+          __builtin_prefetch(r + std::size_t(ce_edge[q]) * std::size_t(k));
+        for (int a = vstart[v + ahead]; a < vstart[v + ahead + 1]; ++a)
+          __builtin_prefetch(faceterms + std::size_t(vcorner[a] >> 2) * detail::kTermsStride);
+      }
       double* col = val + outer[v];
       double* mcol = M ? mval + mouter[v] : nullptr;
       for (int a = vstart[v]; a < vstart[v + 1]; ++a) {
         const int c = vcorner[a];
-        const double* t = faceterms + std::size_t(c >> 2) * 32 + 4 * (c & 3);
+        const double* t = faceterms + std::size_t(c >> 2) * detail::kTermsStride;
+        const int i = c & 3;
         const Pos* fp = face_pos + 4 * std::size_t(a);
-        for (int j = 0; j < 4; ++j) col[fp[j]] -= t[16 + j];
+        for (int j = 0; j < 4; ++j) col[fp[j]] -= t[detail::kTermsK1 + detail::kSym[i][j]];
         if (mcol) {
+          double row[4];
+          detail::interpolated_mass_row(t, i, row);
           const std::uint16_t* ms = mslot + 4 * std::size_t(a);
-          for (int j = 0; j < 4; ++j) mcol[ms[j]] += t[j];
+          for (int j = 0; j < 4; ++j) mcol[ms[j]] += row[j];
         }
       }
       for (int q = ce_start[v]; q < ce_start[v + 1]; ++q) {
@@ -479,9 +489,9 @@ class InterpolatedCorrected final : public Discretization {
     const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
     const auto pp = global ? projection_pattern(mesh, vc, pat) : nullptr;
     // One reused buffer (no first-touch page faults in steady state; every read entry is
-    // written first): per face [M0 | K1 (global) or L_f (local)] (32), then P_f D per face (16,
-    // global), then the edge rows r_e (k per edge, global).
-    const std::size_t pd_off = std::size_t(F) * 32, r_off = pd_off + (global ? std::size_t(F) * 16 : 0);
+    // written first): the face records of interpolated_face_terms (local assembly: L_f packed in
+    // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
+    const std::size_t pd_off = std::size_t(F) * detail::kTermsStride, r_off = pd_off + std::size_t(F) * 16;
     detail::ReusedScratch data(r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
     double* terms = data.data();
     double* pdata = data.data() + pd_off;
@@ -492,7 +502,6 @@ class InterpolatedCorrected final : public Discretization {
     const int* faces = mesh.faces.data();
     std::atomic<int> non_square{-1};
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
-      double pd_local[16];
       for (int f = r.begin(); f != r.end(); ++f) {
         double xs[4][3], us[4][3];
         const double* xp[4];
@@ -508,21 +517,22 @@ class InterpolatedCorrected final : public Discretization {
           xp[k] = xs[k];
           up[k] = us[k];
         }
-        double* t = terms + std::size_t(f) * 32;
-        double* pd = global ? pdata + std::size_t(f) * 16 : pd_local;
+        double* t = terms + std::size_t(f) * detail::kTermsStride;
         // The closed forms of spec §3.2-§3.4 hold on surfels (squares); reject other quads.
-        if (!detail::interpolated_face_terms(xp, up, kappa, t, t + 16, pd)) {
+        double* pd = pdata + std::size_t(f) * 16;
+        if (!detail::interpolated_face_terms(xp, up, kappa, t, pd)) {
           int cur = non_square.load();
           while ((cur < 0 || f < cur) && !non_square.compare_exchange_weak(cur, f)) {}
           continue;
         }
         if (!global) {
-          // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5).
+          // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
           for (int i = 0; i < 4; ++i)
             for (int j = i; j < 4; ++j) {
               double s = 0.0;
               for (int m = 0; m < 4; ++m) s += pd[4 * m + i] * pd[4 * m + j];
-              t[16 + 4 * i + j] = t[16 + 4 * j + i] = -(t[16 + 4 * i + j] + lambda * s);
+              double& k = t[detail::kTermsK1 + detail::kSym[i][j]];
+              k = -(k + lambda * s);
             }
         }
       }
@@ -538,7 +548,8 @@ class InterpolatedCorrected final : public Discretization {
       if (pat) allocate_like(ops.M, mesh.num_vertices(), pat->outer.data());
       else
         detail::gather_quad_rows<1>(
-            mesh, nullptr, vc, [&](int f, int i, double* row) { std::copy_n(terms + std::size_t(f) * 32 + 4 * i, 4, row); },
+            mesh, nullptr, vc,
+            [&](int f, int i, double* row) { detail::interpolated_mass_row(terms + std::size_t(f) * detail::kTermsStride, i, row); },
             {&ops.M});
       Eigen::SparseMatrix<double>* M = pat ? &ops.M : nullptr;
       if (pp->wide)
@@ -549,9 +560,9 @@ class InterpolatedCorrected final : public Discretization {
       detail::gather_quad_rows<2>(
           mesh, pat.get(), vc,
           [&](int f, int i, double* rows) {
-            const double* d = terms + std::size_t(f) * 32;
-            std::copy_n(d + 4 * i, 4, rows);
-            std::copy_n(d + 16 + 4 * i, 4, rows + 4);
+            const double* t = terms + std::size_t(f) * detail::kTermsStride;
+            detail::interpolated_mass_row(t, i, rows);
+            for (int j = 0; j < 4; ++j) rows[4 + j] = t[detail::kTermsK1 + detail::kSym[i][j]];
           },
           {&ops.M, &ops.L});
     }
