@@ -29,7 +29,8 @@ KernelCase random_case(std::mt19937& rng, bool axis_aligned) {
     // a signed permutation: any of the 6 surfel orientations
     const int a = int(rng() % 3);
     const Eigen::Vector3d e0 = Eigen::Vector3d::Unit(a) * (rng() % 2 ? 1.0 : -1.0);
-    const Eigen::Vector3d e1 = Eigen::Vector3d::Unit((a + 1) % 3) * (rng() % 2 ? 1.0 : -1.0);
+    const int b = (a + 1 + int(rng() % 2)) % 3;  // cyclic or anti-cyclic pair of axes
+    const Eigen::Vector3d e1 = Eigen::Vector3d::Unit(b) * (rng() % 2 ? 1.0 : -1.0);
     R.col(0) = e0;
     R.col(1) = e1;
     R.col(2) = e0.cross(e1);
