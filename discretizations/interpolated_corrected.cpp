@@ -10,10 +10,13 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <optional>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 #include <corrlap/core/error.hpp>
 
+#include "interpolated_kernel.hpp"
 #include "normal_policy.hpp"
 #include "quad_row_gather.hpp"
 
@@ -95,6 +98,7 @@ using RowMat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
 struct EdgeElements {
   int k = 0;                        // padded element size
   std::vector<int> ids;             // #E x k vertex ids (padding repeats the first id)
+  std::vector<std::uint8_t> size;   // distinct vertices of each element
   std::vector<int> start;           // incidences of edge e: [start[e], start[e+1])
   std::vector<int> inc_face;        // face of the incidence
   std::vector<std::int8_t> inc_local;  // local edge index i in that face
@@ -154,6 +158,7 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCor
   el.inc_local.resize(total);
   el.inc_slot.assign(total * 4, 0);
   el.ids.assign(std::size_t(E) * std::size_t(k), 0);
+  el.size.assign(std::size_t(E), 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int e = r.begin(); e != r.end(); ++e) {
       const int rep = rep_of_edge[std::size_t(e)];
@@ -174,25 +179,37 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCor
           el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
         }
       }
+      el.size[std::size_t(e)] = std::uint8_t(used);
       for (int s = used; s < k; ++s) ids[s] = ids[0];
     }
   });
   return el;
 }
 
-// spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
-// r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
-// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex rows: column v
-// sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
-// (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
-// P_f D at +32 (row-major 4x4).
-// Connectivity-only part of the global-projection Laplacian: edge elements and the CSR pattern
-// (sorted rows of each column). Cached next to the vertex pattern it was built from (same
-// connectivity <=> same QuadVertexPattern object, which the entry keeps alive).
+// Connectivity-only part of the global-projection Laplacian (spec §3.6a), everything the value
+// passes need so that they only stream numbers: per edge its incidences (with the factor
+// s_{f,i} / n_e) and their element slots; per column its sorted rows, the positions of the corners
+// of each incident face, and its edges (ascending) with the positions of their element vertices.
+// Cached next to the vertex pattern it was built from (same connectivity <=> same
+// QuadVertexPattern object, which the entry keeps alive).
 struct ProjectionPattern {
   std::shared_ptr<const detail::QuadVertexPattern> key;
-  EdgeElements el;
+  int k = 0, num_edges = 0;
+  // Edge rows r_e of P D0 (per edge, k values, the first size[e] used).
+  std::vector<std::uint8_t> size;
+  std::vector<int> inc_start;           // #E + 1
+  std::vector<int> inc_row;             // 4 f + i: row i of P_f D
+  std::vector<double> inc_coef;         // s_{f,i} / n_e (spec §0 sign, flat averaged over n_e faces)
+  std::vector<std::uint8_t> inc_slot;   // 4 per incidence: element slot of corner j
+  // Columns of L.
   std::vector<int> outer, inner;
+  bool wide = false;                    // column positions stored as int (a column > 255 rows)
+  std::vector<std::uint8_t> face_pos8;  // 4 per vertex incidence (vc order): position of corner j
+  std::vector<int> face_pos32;
+  std::vector<int> ce_start, ce_edge;   // edges of the faces around v, ascending
+  std::vector<std::uint8_t> ce_sv;      // element slot of v in that edge
+  std::vector<std::uint8_t> ce_pos8;    // k per column edge: position of element slot s
+  std::vector<int> ce_pos32;
 };
 
 // Per thread: vertex stamps (ColumnScratch) and edge stamps; the edges of the faces around v are
@@ -232,26 +249,85 @@ inline int projection_vertices(const EdgeElements& el, ProjectionScratch& sc, in
 
 std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
   auto p = std::make_shared<ProjectionPattern>();
-  p->el = build_edge_elements(mesh, vc);
-  const EdgeElements& el = p->el;
-  const int V = mesh.num_vertices();
-  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(el.k) + 1;
-  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, el.num_edges, cap_n, cap_e); });
+  const EdgeElements el = build_edge_elements(mesh, vc);
+  const int V = mesh.num_vertices(), E = el.num_edges, k = el.k;
+  const int* faces = mesh.faces.data();
+  p->k = k;
+  p->num_edges = E;
+  p->size = el.size;
+  p->inc_start = el.start;
+  const std::size_t I = el.inc_face.size();
+  p->inc_row.resize(I);
+  p->inc_coef.resize(I);
+  p->inc_slot.resize(I * 4);
+  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int e = r.begin(); e != r.end(); ++e) {
+      const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
+      const double inv = 1.0 / double(a1 - a0);
+      for (int a = a0; a < a1; ++a) {
+        const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
+        p->inc_row[std::size_t(a)] = 4 * f + i;
+        // spec §0 edge sign: +1 if v_i < v_{i+1}.
+        p->inc_coef[std::size_t(a)] = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
+        for (int j = 0; j < 4; ++j) p->inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint8_t(el.inc_slot[std::size_t(a) * 4 + std::size_t(j)]);
+      }
+    }
+  });
+  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
+  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, E, cap_n, cap_e); });
   p->outer.assign(std::size_t(V) + 1, 0);
+  p->ce_start.assign(std::size_t(V) + 1, 0);
   // Stamps (edge and vertex arrays): v in pass 1, V + v in pass 2, so nothing is ever reset.
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
     ProjectionScratch& sc = scratch.local();
-    for (int v = range.begin(); v != range.end(); ++v)
-      p->outer[std::size_t(v) + 1] = projection_vertices(el, sc, projection_edges(el, vc, sc, v, v), v);
+    for (int v = range.begin(); v != range.end(); ++v) {
+      const int ne = projection_edges(el, vc, sc, v, v);
+      p->ce_start[std::size_t(v) + 1] = ne;
+      p->outer[std::size_t(v) + 1] = projection_vertices(el, sc, ne, v);
+    }
   });
-  for (int v = 0; v < V; ++v) p->outer[std::size_t(v) + 1] += p->outer[std::size_t(v)];
+  int widest = 0;
+  for (int v = 0; v < V; ++v) {
+    widest = std::max(widest, p->outer[std::size_t(v) + 1]);
+    p->outer[std::size_t(v) + 1] += p->outer[std::size_t(v)];
+    p->ce_start[std::size_t(v) + 1] += p->ce_start[std::size_t(v)];
+  }
+  p->wide = widest > 255;
+  const std::size_t CE = std::size_t(p->ce_start[std::size_t(V)]);
   p->inner.resize(std::size_t(p->outer[std::size_t(V)]));
+  p->ce_edge.resize(CE);
+  p->ce_sv.resize(CE);
+  (p->wide ? p->face_pos32.resize(vc.corner.size() * 4) : p->face_pos8.resize(vc.corner.size() * 4));
+  (p->wide ? p->ce_pos32.resize(CE * std::size_t(k)) : p->ce_pos8.resize(CE * std::size_t(k)));
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
     ProjectionScratch& sc = scratch.local();
+    int* pos = sc.col.pos.data();
+    auto put = [&](std::uint8_t* p8, int* p32, std::size_t idx, int value) {
+      if (p32) p32[idx] = value;
+      else p8[idx] = std::uint8_t(value);
+    };
     for (int v = range.begin(); v != range.end(); ++v) {
-      const int n = projection_vertices(el, sc, projection_edges(el, vc, sc, v, V + v), V + v);
+      const int ne = projection_edges(el, vc, sc, v, V + v);
+      const int n = projection_vertices(el, sc, ne, V + v);
       std::sort(sc.col.list.begin(), sc.col.list.begin() + n);
       std::copy_n(sc.col.list.begin(), n, p->inner.begin() + p->outer[std::size_t(v)]);
+      for (int t = 0; t < n; ++t) pos[sc.col.list[std::size_t(t)]] = t;
+      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
+        for (int j = 0; j < 4; ++j)
+          put(p->face_pos8.data(), p->wide ? p->face_pos32.data() : nullptr, std::size_t(a) * 4 + std::size_t(j), pos[f[j]]);
+      }
+      std::size_t c = std::size_t(p->ce_start[std::size_t(v)]);
+      for (int t = 0; t < ne; ++t, ++c) {
+        const int e = sc.edges[std::size_t(t)];
+        const int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
+        int sv = 0;
+        while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
+        p->ce_edge[c] = e;
+        p->ce_sv[c] = std::uint8_t(sv);
+        for (int s = 0; s < k; ++s)
+          put(p->ce_pos8.data(), p->wide ? p->ce_pos32.data() : nullptr, c * std::size_t(k) + std::size_t(s), pos[ids[s]]);
+      }
     }
   });
   return p;
@@ -275,78 +351,107 @@ std::shared_ptr<const ProjectionPattern> projection_pattern(const SurfelMesh& me
   return built;
 }
 
+// Sized output with the given column structure (values uninitialized; the fill writes them all).
+void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
+  const Eigen::Index nnz = outer[V];
+  A.resize(V, V);
+  A.resizeNonZeros(nnz);
+  advise_huge_pages(A.valuePtr(), std::size_t(nnz) * sizeof(double));
+  advise_huge_pages(A.innerIndexPtr(), std::size_t(nnz) * sizeof(int));
+  std::copy(outer, outer + V + 1, A.outerIndexPtr());
+}
+
 // spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
 // r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
-// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex rows: column v
-// sums the face terms of its faces and the r_e r_e^T of the edges of its faces, in a fixed order
-// (deterministic for any thread count). `data` holds per face K1 = D^T (S^T S/ubar^z) D at +16 and
-// P_f D at +32 (row-major 4x4). The pattern is cached per connectivity (key = vertex pattern).
-Eigen::SparseMatrix<double> global_projection_laplacian(const SurfelMesh& mesh, const detail::VertexCorners& vc,
-                                                        const std::shared_ptr<const detail::QuadVertexPattern>& key,
-                                                        const double* data, std::size_t stride, double lambda) {
-  const auto pp = projection_pattern(mesh, vc, key);
-  const EdgeElements& el = pp->el;
-  const int k = el.k, E = el.num_edges, V = mesh.num_vertices();
-  const int* faces = mesh.faces.data();
-  detail::ReusedScratch r(std::size_t(E) * std::size_t(k));
-  tbb::parallel_for(tbb::blocked_range<int>(0, E, 8192), [&](const tbb::blocked_range<int>& range) {
-    for (int e = range.begin(); e != range.end(); ++e) {
-      double* re = r.data() + std::size_t(e) * std::size_t(k);
-      std::fill_n(re, k, 0.0);
-      const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
-      const double inv = 1.0 / double(a1 - a0);
-      for (int a = a0; a < a1; ++a) {
-        const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
-        const std::int8_t* slot = el.inc_slot.data() + std::size_t(a) * 4;
-        // spec §0 edge sign: +1 if v_i < v_{i+1}.
-        const double sgn = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
-        const double* pd = data + std::size_t(f) * stride + 32 + 4 * i;
-        for (int j = 0; j < 4; ++j) re[slot[j]] += sgn * pd[j];
-      }
-    }
-  });
-  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
-  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, E, cap_n, cap_e); });
-  const int* outer = pp->outer.data();
-  const Eigen::Index nnz = outer[V];
-  Eigen::SparseMatrix<double> L(V, V);
-  L.resizeNonZeros(nnz);
-  advise_huge_pages(L.valuePtr(), std::size_t(nnz) * sizeof(double));
-  advise_huge_pages(L.innerIndexPtr(), std::size_t(nnz) * sizeof(int));
-  std::copy(pp->outer.begin(), pp->outer.end(), L.outerIndexPtr());
+// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex columns: column v
+// sums the face terms of its faces (incidences ascending) and then lambda r_e[v] r_e over the
+// edges of its faces (ascending), so the result is the same for any thread count.
+// `faceterms` holds the per-face records of interpolated_face_terms; `r` the edge rows (k per edge).
+// When `mpat` is given, M (spec §3.2, M = sum_f M0_f) is filled in the same column pass, with the
+// same summation order as detail::gather_quad_rows.
+template <class Pos>
+void fill_columns(const ProjectionPattern& pp, const detail::VertexCorners& vc, const detail::QuadVertexPattern* mpat,
+                  const double* faceterms, const double* r, double lambda, const Pos* face_pos, const Pos* ce_pos,
+                  Eigen::SparseMatrix<double>& L, Eigen::SparseMatrix<double>* M) {
+  const int V = int(vc.start.size()) - 1, k = pp.k;
+  const int* outer = pp.outer.data();
+  const int* pin = pp.inner.data();
   int* inner = L.innerIndexPtr();
   double* val = L.valuePtr();
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& range) {
-    ProjectionScratch& sc = scratch.local();
-    int* pos = sc.col.pos.data();
+  const int* vstart = vc.start.data();
+  const int* vcorner = vc.corner.data();
+  const int* ce_start = pp.ce_start.data();
+  const int* ce_edge = pp.ce_edge.data();
+  const std::uint8_t* ce_sv = pp.ce_sv.data();
+  const std::uint8_t* esize = pp.size.data();
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 1024), [&](const tbb::blocked_range<int>& range) {
+    // Rows and zeroed values of the whole block first (sequential streams), then accumulation.
+    const std::size_t b = std::size_t(outer[range.begin()]), e = std::size_t(outer[range.end()]);
+    std::copy(pin + b, pin + e, inner + b);
+    std::fill(val + b, val + e, 0.0);
+    const int* mouter = nullptr;
+    double* mval = nullptr;
+    const std::uint16_t* mslot = nullptr;
+    if (M) {
+      mouter = mpat->outer.data();
+      mval = M->valuePtr();
+      mslot = mpat->slot.data();
+      const std::size_t mb = std::size_t(mouter[range.begin()]), me = std::size_t(mouter[range.end()]);
+      std::copy(mpat->inner.data() + mb, mpat->inner.data() + me, M->innerIndexPtr() + mb);
+      std::fill(mval + mb, mval + me, 0.0);
+    }
+    constexpr int ahead = 2;  // columns: the edge rows and face records are scattered in memory
     for (int v = range.begin(); v != range.end(); ++v) {
-      const int ne = projection_edges(el, vc, sc, v, v);
-      const std::size_t o = std::size_t(outer[v]);
-      const int n = outer[v + 1] - outer[v];
-      const int* rows = pp->inner.data() + o;
-      for (int t = 0; t < n; ++t) pos[rows[t]] = t;
-      std::copy_n(rows, n, inner + o);
-      double* col = val + o;
-      std::fill_n(col, n, 0.0);
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int c = vc.corner[std::size_t(a)];
-        const int f = c >> 2, i = c & 3;
-        const double* k1 = data + std::size_t(f) * stride + 16 + 4 * i;
-        for (int j = 0; j < 4; ++j) col[pos[faces[4 * f + j]]] -= k1[j];
+      if (v + ahead < V) {
+        for (int q = ce_start[v + ahead]; q < ce_start[v + ahead + 1]; ++q)
+          __builtin_prefetch(r + std::size_t(ce_edge[q]) * std::size_t(k));
+        for (int a = vstart[v + ahead]; a < vstart[v + ahead + 1]; ++a)
+          __builtin_prefetch(faceterms + std::size_t(vcorner[a] >> 2) * detail::kTermsStride);
       }
-      for (int t = 0; t < ne; ++t) {
-        const std::size_t e = std::size_t(sc.edges[std::size_t(t)]);
-        const int* ids = el.ids.data() + e * std::size_t(k);
-        const double* re = r.data() + e * std::size_t(k);
-        int sv = 0;
-        while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
-        const double a = lambda * re[sv];
+      double* col = val + outer[v];
+      double* mcol = M ? mval + mouter[v] : nullptr;
+      for (int a = vstart[v]; a < vstart[v + 1]; ++a) {
+        const int c = vcorner[a];
+        const double* t = faceterms + std::size_t(c >> 2) * detail::kTermsStride;
+        const int i = c & 3;
+        const Pos* fp = face_pos + 4 * std::size_t(a);
+        for (int j = 0; j < 4; ++j) col[fp[j]] -= t[detail::kTermsK1 + detail::kSym[i][j]];
+        if (mcol) {
+          double row[4];
+          detail::interpolated_mass_row(t, i, row);
+          const std::uint16_t* ms = mslot + 4 * std::size_t(a);
+          for (int j = 0; j < 4; ++j) mcol[ms[j]] += row[j];
+        }
+      }
+      for (int q = ce_start[v]; q < ce_start[v + 1]; ++q) {
+        const std::size_t ed = std::size_t(ce_edge[q]);
+        const double* re = r + ed * std::size_t(k);
+        const double a = lambda * re[ce_sv[q]];
         if (a == 0.0) continue;
-        for (int s = 0; s < k; ++s) col[pos[ids[s]]] -= a * re[s];
+        const Pos* cp = ce_pos + std::size_t(q) * std::size_t(k);
+        const int n = esize[ed];
+        for (int s = 0; s < n; ++s) col[cp[s]] -= a * re[s];
       }
     }
   });
-  return L;
+}
+
+// Rows r_e of P D0 (spec §3.6a), one per edge, on the element slots: sum over the incidences in
+// face order of s_{f,i} / n_e (P_f D)[i, :]. `pd` holds P_f D per face (row-major 4x4).
+void edge_rows(const ProjectionPattern& pp, const double* pd, double* r) {
+  const int k = pp.k;
+  tbb::parallel_for(tbb::blocked_range<int>(0, pp.num_edges, 4096), [&](const tbb::blocked_range<int>& range) {
+    for (int e = range.begin(); e != range.end(); ++e) {
+      double* re = r + std::size_t(e) * std::size_t(k);
+      std::fill_n(re, pp.size[std::size_t(e)], 0.0);
+      for (int a = pp.inc_start[std::size_t(e)]; a < pp.inc_start[std::size_t(e) + 1]; ++a) {
+        const double* row = pd + 4 * std::size_t(pp.inc_row[std::size_t(a)]);
+        const std::uint8_t* slot = pp.inc_slot.data() + 4 * std::size_t(a);
+        const double coef = pp.inc_coef[std::size_t(a)];
+        for (int j = 0; j < 4; ++j) re[slot[j]] += coef * row[j];
+      }
+    }
+  });
 }
 
 class InterpolatedCorrected final : public Discretization {
@@ -379,92 +484,128 @@ class InterpolatedCorrected final : public Discretization {
     Operators ops;
     const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
     const int F = mesh.num_faces();
-    // Per face: [0,16) M0_f; [16,32) global: K1 = D^T (S^T S / ubar^z) D, local: L_f;
-    // [32,48) P_f D (global only); extras: [48,60) U_f, [60,72) V_f, [72,88) M1_f, [88] a_f.
-    const std::size_t stride = extras ? 89 : 48;
-    detail::ReusedScratch data(std::size_t(F) * stride);  // reused: no page faults (every read entry is written)
-    const Eigen::Matrix4d& D = quad_difference();
+    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
+    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
+    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
+    const auto pp = global ? projection_pattern(mesh, vc, pat) : nullptr;
+    // One reused buffer (no first-touch page faults in steady state; every read entry is
+    // written first): the face records of interpolated_face_terms (local assembly: L_f packed in
+    // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
+    const std::size_t pd_off = std::size_t(F) * detail::kTermsStride, r_off = pd_off + std::size_t(F) * 16;
+    detail::ReusedScratch data(r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
+    double* terms = data.data();
+    double* pdata = data.data() + pd_off;
+    const double* px = mesh.positions.col(0).data();
+    const double* py = mesh.positions.col(1).data();
+    const double* pz = mesh.positions.col(2).data();
+    const Eigen::Index VN = mesh.positions.rows();
+    const int* faces = mesh.faces.data();
     std::atomic<int> non_square{-1};
-    tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
       for (int f = r.begin(); f != r.end(); ++f) {
-        const QuadCorners x = quad_corners(mesh, f);
+        double xs[4][3], us[4][3];
+        const double* xp[4];
+        const double* up[4];
+        for (int k = 0; k < 4; ++k) {
+          const Eigen::Index v = faces[4 * f + k];
+          xs[k][0] = px[v];
+          xs[k][1] = py[v];
+          xs[k][2] = pz[v];
+          us[k][0] = u(v, 0);
+          us[k][1] = u(v, 1);
+          us[k][2] = u(v, 2);
+          xp[k] = xs[k];
+          up[k] = us[k];
+        }
+        double* t = terms + std::size_t(f) * detail::kTermsStride;
         // The closed forms of spec §3.2-§3.4 hold on surfels (squares); reject other quads.
-        const Eigen::Vector3d e0 = (x.row(1) - x.row(0)).transpose(), e1 = (x.row(2) - x.row(1)).transpose();
-        const Eigen::Vector3d e2 = (x.row(3) - x.row(2)).transpose();
-        const double l0 = e0.norm();
-        if (!(std::abs(e1.norm() - l0) <= 1e-6 * l0 && std::abs(e0.dot(e1)) <= 1e-6 * l0 * l0 &&
-              (e0 + e2).norm() <= 1e-6 * l0)) {
+        double* pd = pdata + std::size_t(f) * 16;
+        if (!detail::interpolated_face_terms(xp, up, kappa, t, pd)) {
           int cur = non_square.load();
           while ((cur < 0 || f < cur) && !non_square.compare_exchange_weak(cur, f)) {}
           continue;
         }
-        const InterpolatedLocal loc = interpolated_local(x, quad_corner_rows(mesh, u, f), lambda, kappa);
-        double* d = data.data() + std::size_t(f) * stride;
-        Eigen::Map<RowMat4>{d} = loc.mass;
-        if (global) {
-          Eigen::Map<RowMat4>{d + 16} = D.transpose() * (loc.S.transpose() * loc.S / loc.ubar_z) * D;
-          Eigen::Map<RowMat4>{d + 32} = loc.projection * D;
-        } else {
-          Eigen::Map<RowMat4>{d + 16} = loc.laplacian;
-        }
-        if (extras) {
-          Eigen::Map<QuadSharp>{d + 48} = loc.sharp;
-          Eigen::Map<QuadFlat>{d + 60} = loc.flat;
-          Eigen::Map<RowMat4>{d + 72} = loc.inner_product;
-          d[88] = loc.area;
+        if (!global) {
+          // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
+          for (int i = 0; i < 4; ++i)
+            for (int j = i; j < 4; ++j) {
+              double s = 0.0;
+              for (int m = 0; m < 4; ++m) s += pd[4 * m + i] * pd[4 * m + j];
+              double& k = t[detail::kTermsK1 + detail::kSym[i][j]];
+              k = -(k + lambda * s);
+            }
         }
       }
     });
+    (void)VN;
     if (non_square.load() >= 0)
       throw InputError("interpolated: face " + std::to_string(non_square.load()) +
                        " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
-    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
-    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
-    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
-    std::optional<EdgeTopology> topo;
-    if (extras) topo = build_edges(mesh);
     if (global) {
-      detail::gather_quad_rows<1>(
-          mesh, pat.get(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
-          {&ops.M});
-      ops.L = global_projection_laplacian(mesh, vc, pat, data.data(), stride, lambda);
+      double* r = data.data() + r_off;
+      edge_rows(*pp, pdata, r);
+      allocate_like(ops.L, mesh.num_vertices(), pp->outer.data());
+      if (pat) allocate_like(ops.M, mesh.num_vertices(), pat->outer.data());
+      else
+        detail::gather_quad_rows<1>(
+            mesh, nullptr, vc,
+            [&](int f, int i, double* row) { detail::interpolated_mass_row(terms + std::size_t(f) * detail::kTermsStride, i, row); },
+            {&ops.M});
+      Eigen::SparseMatrix<double>* M = pat ? &ops.M : nullptr;
+      if (pp->wide)
+        fill_columns<int>(*pp, vc, pat.get(), terms, r, lambda, pp->face_pos32.data(), pp->ce_pos32.data(), ops.L, M);
+      else
+        fill_columns<std::uint8_t>(*pp, vc, pat.get(), terms, r, lambda, pp->face_pos8.data(), pp->ce_pos8.data(), ops.L, M);
     } else {
       detail::gather_quad_rows<2>(
           mesh, pat.get(), vc,
           [&](int f, int i, double* rows) {
-            const double* d = data.data() + std::size_t(f) * stride;
-            std::copy_n(d + 4 * i, 4, rows);
-            std::copy_n(d + 16 + 4 * i, 4, rows + 4);
+            const double* t = terms + std::size_t(f) * detail::kTermsStride;
+            detail::interpolated_mass_row(t, i, rows);
+            for (int j = 0; j < 4; ++j) rows[4 + j] = t[detail::kTermsK1 + detail::kSym[i][j]];
           },
           {&ops.M, &ops.L});
     }
-    if (extras) {
-      ops.M_lumped = row_sum_lumped(ops.M);  // spec §3.2: DGtal's lumpedM0() is not diagonal
-      ops.D0 = global_d0(*topo, mesh.num_vertices());
-      std::vector<double> sharp(std::size_t(F) * 12), flat(std::size_t(F) * 12);
-      for (int f = 0; f < F; ++f) {
-        std::copy_n(data.data() + std::size_t(f) * stride + 48, 12, sharp.data() + std::size_t(f) * 12);
-        std::copy_n(data.data() + std::size_t(f) * stride + 60, 12, flat.data() + std::size_t(f) * 12);
-      }
-      ops.sharp = global_sharp(*topo, sharp.data());
-      ops.flat = global_flat(*topo, flat.data());
-      if (global) {
-        Eigen::SparseMatrix<double> CA(3 * F, 3 * F);
-        CA.reserve(Eigen::VectorXi::Constant(3 * F, 1));
-        for (int f = 0; f < F; ++f)
-          for (int c = 0; c < 3; ++c) CA.insert(3 * f + c, 3 * f + c) = data[std::size_t(f) * stride + 88];
-        Eigen::SparseMatrix<double> I(topo->num_edges(), topo->num_edges());
-        I.setIdentity();
-        const Eigen::SparseMatrix<double> P = I - Eigen::SparseMatrix<double>(*ops.flat * *ops.sharp);
-        ops.M1 = Eigen::SparseMatrix<double>(ops.sharp->transpose() * CA * *ops.sharp) +
-                 lambda * Eigen::SparseMatrix<double>(P.transpose() * P);
-      } else {
-        ops.M1 = corrlap::assemble(quad_edge_plan(*topo), [&](std::size_t b, std::size_t e, double* out) {
-          for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 72, 16, out);
-        });
-      }
-    }
+    if (extras) add_extras(mesh, u, lambda, kappa, global, ops);
     return ops;
+  }
+
+ private:
+  // D0, sharp, flat, M1 and the row-sum lumped M (spec §2.3, §3.6), from the reference local
+  // operators (not a hot path).
+  static void add_extras(const SurfelMesh& mesh, const Eigen::MatrixX3d& u, double lambda, double kappa, bool global,
+                         Operators& ops) {
+    const int F = mesh.num_faces();
+    const EdgeTopology topo = build_edges(mesh);
+    std::vector<double> sharp(std::size_t(F) * 12), flat(std::size_t(F) * 12), m1(std::size_t(F) * 16), areas(static_cast<std::size_t>(F));
+    tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
+      for (int f = r.begin(); f != r.end(); ++f) {
+        const InterpolatedLocal loc = interpolated_local(quad_corners(mesh, f), quad_corner_rows(mesh, u, f), lambda, kappa);
+        Eigen::Map<QuadSharp>{sharp.data() + std::size_t(f) * 12} = loc.sharp;
+        Eigen::Map<QuadFlat>{flat.data() + std::size_t(f) * 12} = loc.flat;
+        Eigen::Map<RowMat4>{m1.data() + std::size_t(f) * 16} = loc.inner_product;
+        areas[std::size_t(f)] = loc.area;
+      }
+    });
+    ops.M_lumped = row_sum_lumped(ops.M);  // spec §3.2: DGtal's lumpedM0() is not diagonal
+    ops.D0 = global_d0(topo, mesh.num_vertices());
+    ops.sharp = global_sharp(topo, sharp.data());
+    ops.flat = global_flat(topo, flat.data());
+    if (global) {
+      Eigen::SparseMatrix<double> CA(3 * F, 3 * F);
+      CA.reserve(Eigen::VectorXi::Constant(3 * F, 1));
+      for (int f = 0; f < F; ++f)
+        for (int c = 0; c < 3; ++c) CA.insert(3 * f + c, 3 * f + c) = areas[std::size_t(f)];
+      Eigen::SparseMatrix<double> I(topo.num_edges(), topo.num_edges());
+      I.setIdentity();
+      const Eigen::SparseMatrix<double> P = I - Eigen::SparseMatrix<double>(*ops.flat * *ops.sharp);
+      ops.M1 = Eigen::SparseMatrix<double>(ops.sharp->transpose() * CA * *ops.sharp) +
+               lambda * Eigen::SparseMatrix<double>(P.transpose() * P);
+    } else {
+      ops.M1 = corrlap::assemble(quad_edge_plan(topo), [&](std::size_t b, std::size_t e, double* out) {
+        for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(m1.data() + f * 16, 16, out);
+      });
+    }
   }
 };
 
