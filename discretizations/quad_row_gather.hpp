@@ -110,11 +110,21 @@ inline int column_rows(const int* faces, const VertexCorners& vc, int V, int v, 
   return n;
 }
 
-/// Assembles Count symmetric matrices. kernel(f, i, rows) writes row i of the local matrix m of
-/// face f into rows[4 m .. 4 m + 3]. Local matrices must be symmetric (column v is row v).
-template <int Count, class RowKernel>
+/// No-op column finisher (see the overloads taking `finish`).
+struct NoColumnFinish {
+  template <std::size_t N>
+  void operator()(int, const std::array<double*, N>&, int) const {}
+};
+
+/// Assembles Count matrices. kernel(f, i, rows) writes column i of the local matrix m of face f
+/// into rows[4 m .. 4 m + 3] (rows[4 m + j] = A_f[j, i], added at row v_j of column v_i); for the
+/// usual symmetric local matrices that is row i. Then finish(v, column_values, n) once per column
+/// v after its sums are complete, where column_values[m] points at the n values of column v in
+/// matrix m (e.g. to negate a column while it is in cache: the same bits as scaling the finished
+/// matrix afterwards).
+template <int Count, class RowKernel, class ColumnFinish>
 void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel&& kernel,
-                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
   const int V = mesh.num_vertices();
   const int* faces = mesh.faces.data();
   const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
@@ -154,8 +164,17 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
           for (int m = 0; m < Count; ++m) val[std::size_t(m)][k] += rows[4 * m + j];
         }
       }
+      std::array<double*, Count> col;
+      for (int m = 0; m < Count; ++m) col[std::size_t(m)] = val[std::size_t(m)] + o;
+      finish(v, col, n);
     }
   });
+}
+
+template <int Count, class RowKernel>
+void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  gather_quad_rows<Count>(mesh, vc, kernel, out, NoColumnFinish{});
 }
 
 /// Per-face scratch (double values) reused across assemblies: a fresh multi-MiB buffer costs more
@@ -201,9 +220,9 @@ void clear_quad_vertex_pattern_cache();
 /// Same result, bit for bit, as gather_quad_rows(mesh, vc, ...) (same entries, same summation
 /// order: incident faces ascending), but with the pattern precomputed: per column it copies the
 /// row indices and accumulates the rows at their cached slots.
-template <int Count, class RowKernel>
+template <int Count, class RowKernel, class ColumnFinish>
 void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
-                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
   const int V = p.num_vertices;
   const Eigen::Index nnz = p.outer[std::size_t(V)];
   for (auto* A : out) {
@@ -241,8 +260,17 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
         for (int j = 0; j < 4; ++j)
           for (int m = 0; m < Count; ++m) val[std::size_t(m)][o + s[j]] += rows[4 * m + j];
       }
+      std::array<double*, Count> col;
+      for (int m = 0; m < Count; ++m) col[std::size_t(m)] = val[std::size_t(m)] + o;
+      finish(v, col, outer[v + 1] - outer[v]);
     }
   });
+}
+
+template <int Count, class RowKernel>
+void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  gather_quad_rows<Count>(p, kernel, out, NoColumnFinish{});
 }
 
 /// Vertex gather through the cached pattern when there is one, else the direct gather (same bits).
@@ -251,6 +279,44 @@ void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, cons
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
   if (pat) gather_quad_rows<Count>(*pat, kernel, out);
   else gather_quad_rows<Count>(mesh, vc, kernel, out);
+}
+template <int Count, class RowKernel, class ColumnFinish>
+void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
+  if (pat) gather_quad_rows<Count>(*pat, kernel, out, finish);
+  else gather_quad_rows<Count>(mesh, vc, kernel, out, finish);
+}
+
+/// Diagonal matrix of the row sums of A, for A with a structurally symmetric pattern (every
+/// vertex-based quad assembly): bitwise the sequential column-major scan d[row] += value (each
+/// row summed over ascending columns, from +0.0), but parallel over rows: row r's columns are the
+/// rows of column r, and A(r, c) is found by binary search in column c.
+inline Eigen::SparseMatrix<double> row_sum_diagonal_symmetric(const Eigen::SparseMatrix<double>& A) {
+  const int n = int(A.rows());
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  const double* values = A.valuePtr();
+  Eigen::SparseMatrix<double> D(n, n);
+  D.resizeNonZeros(n);
+  int* douter = D.outerIndexPtr();
+  int* dinner = D.innerIndexPtr();
+  double* dval = D.valuePtr();
+  douter[n] = n;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 8192), [&](const tbb::blocked_range<int>& rg) {
+    for (int r = rg.begin(); r != rg.end(); ++r) {
+      double s = 0.0;
+      for (int a = outer[r]; a < outer[r + 1]; ++a) {
+        const int c = inner[a];
+        const int* b = inner + outer[c];
+        const int* e = inner + outer[c + 1];
+        s += values[std::lower_bound(b, e, r) - inner];
+      }
+      douter[r] = r;
+      dinner[r] = r;
+      dval[r] = s;
+    }
+  });
+  return D;
 }
 
 /// Diagonal matrix with entry v = sum over the corners (f, i) at v, ascending f, of value(f, i).
