@@ -15,6 +15,7 @@
 #include <corrlap/core/parallel_assembly.hpp>
 
 #include "normal_policy.hpp"
+#include "quad_assembly.hpp"
 #include "quad_row_gather.hpp"
 
 namespace corrlap {
@@ -335,7 +336,7 @@ class Vrm final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     params.check_parameters(parameters(), name());
-    mesh.validate(name().c_str());
+    validate_mesh(mesh, name().c_str());
     Operators ops;
     const int F = mesh.num_faces();
     if (F == 0) throw InputError(name() + ": the mesh has no face");
