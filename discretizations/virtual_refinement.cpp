@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -359,11 +360,14 @@ class Vrm final : public Discretization {
     }
 
     // Per face: K_f (16 values, row-major) then M_f: its diagonal (4 values) when the mass is
-    // lumped (vrm always, spec §5.1 step 5), else the full 4x4. One pooled buffer, no zero fill:
-    // a fresh one costs more in first-touch page faults than the kernels (quad_row_gather.hpp).
+    // lumped (vrm always, spec §5.1 step 5), else the full 4x4. Not zero-filled: the parallel
+    // kernel loop writes every value, so the first-touch page faults are spread over the threads
+    // (huge pages where possible). Not pooled either (unlike fem's small per-face scratch): the
+    // kernels dominate here, and a pooled 20-32 doubles per face would stay resident.
     const bool full_mass = corrected_ && !lumped_mass;
     const std::size_t S = full_mass ? 32 : 20;
-    detail::ReusedScratch loc(std::size_t(F) * S);
+    std::unique_ptr<double[]> loc(new double[std::size_t(F) * S]);
+    advise_huge_pages(loc.get(), std::size_t(F) * S * sizeof(double));
     // Rare events (skipped fan triangles, minimizer failures) collected per thread and merged in
     // face order below: no per-face report arrays.
     struct Report {
@@ -378,7 +382,7 @@ class Vrm final : public Discretization {
       Report& rep = reports.local();
       for (int f = r.begin(); f != r.end(); ++f) {
         const QuadPositions X = corners_of(mesh, f);
-        double* out = loc.data() + std::size_t(f) * S;
+        double* out = loc.get() + std::size_t(f) * S;
         Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> K(out);
         int skipped = 0;
         if (corrected_) {
@@ -411,7 +415,7 @@ class Vrm final : public Discretization {
     const auto pat = detail::quad_vertex_pattern(mesh);
     const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
     const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
-    const double* lp = loc.data();
+    const double* lp = loc.get();
     // spec §5.1 step 6: L = -sum K_f (negative semi-definite); negating each finished column gives
     // the bits of negating the finished matrix.
     auto negate_L = [](int, const auto& col, int len) {
