@@ -73,7 +73,8 @@ void run(benchmark::State& state, const std::string& method, double h, int threa
   set_thread_count(0);
 }
 
-// Construction of the generic AssemblyPlan (used by vrm, corrected-vrm, cotan) for the quad faces.
+// Construction of the generic AssemblyPlan (cotan, edge plans; vrm and corrected-vrm use the cached
+// vertex pattern instead) for the quad faces.
 void run_plan(benchmark::State& state, double h, int threads) {
   const Input& in = sphere(h);
   set_thread_count(threads);

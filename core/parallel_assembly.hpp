@@ -6,6 +6,9 @@
 #include <Eigen/Sparse>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace corrlap {
@@ -32,8 +35,29 @@ class AssemblyPlan {
   int k_ = 0, n_ = 0;
   std::size_t num_elements_ = 0;
   Eigen::SparseMatrix<double> pattern_;
-  std::vector<std::int64_t> start_;     // per stored entry: range in contributions_
-  std::vector<std::int64_t> contributions_;  // (local entry index + 1) * sign
+  // Allocator that leaves elements uninitialized: every element is written in a parallel loop,
+  // where the first-touch page faults are then spread over the threads (a zero fill would be a
+  // serial pass over memory that is overwritten anyway).
+  template <class T>
+  struct UninitAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+      using other = UninitAllocator<U>;
+    };
+    UninitAllocator() = default;
+    template <class U>
+    UninitAllocator(const UninitAllocator<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept {
+      ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  };
+  std::vector<std::int64_t, UninitAllocator<std::int64_t>> start_;          // per stored entry: range in contributions_
+  std::vector<std::int64_t, UninitAllocator<std::int64_t>> contributions_;  // (local entry index + 1) * sign
 };
 
 /// Hints the kernel to back the 2 MiB-aligned interior of [p, p + bytes) with transparent huge

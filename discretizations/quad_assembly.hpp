@@ -47,6 +47,8 @@ Eigen::SparseMatrix<double> global_flat(const EdgeTopology& topology, const doub
 /// Diagonal matrix of the row sums of A (row-sum lumping).
 Eigen::SparseMatrix<double> row_sum_lumped(const Eigen::SparseMatrix<double>& A);
 
+/// SurfelMesh::validate(what) with the checks run in parallel (same exceptions and messages).
+void validate_mesh(const SurfelMesh& mesh, const char* what);
 /// Throws InputError when the mesh is empty or invalid (context names the method).
 void check_quad_mesh(const SurfelMesh& mesh, const std::string& method);
 

@@ -110,11 +110,21 @@ inline int column_rows(const int* faces, const VertexCorners& vc, int V, int v, 
   return n;
 }
 
-/// Assembles Count symmetric matrices. kernel(f, i, rows) writes row i of the local matrix m of
-/// face f into rows[4 m .. 4 m + 3]. Local matrices must be symmetric (column v is row v).
-template <int Count, class RowKernel>
+/// No-op column finisher (see the overloads taking `finish`).
+struct NoColumnFinish {
+  template <std::size_t N>
+  void operator()(int, const std::array<double*, N>&, int) const {}
+};
+
+/// Assembles Count matrices. kernel(f, i, rows) writes column i of the local matrix m of face f
+/// into rows[4 m .. 4 m + 3] (rows[4 m + j] = A_f[j, i], added at row v_j of column v_i); for the
+/// usual symmetric local matrices that is row i. Then finish(v, column_values, n) once per column
+/// v after its sums are complete, where column_values[m] points at the n values of column v in
+/// matrix m (e.g. to negate a column while it is in cache: the same bits as scaling the finished
+/// matrix afterwards).
+template <int Count, class RowKernel, class ColumnFinish>
 void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel&& kernel,
-                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
   const int V = mesh.num_vertices();
   const int* faces = mesh.faces.data();
   const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
@@ -154,8 +164,17 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
           for (int m = 0; m < Count; ++m) val[std::size_t(m)][k] += rows[4 * m + j];
         }
       }
+      std::array<double*, Count> col;
+      for (int m = 0; m < Count; ++m) col[std::size_t(m)] = val[std::size_t(m)] + o;
+      finish(v, col, n);
     }
   });
+}
+
+template <int Count, class RowKernel>
+void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  gather_quad_rows<Count>(mesh, vc, kernel, out, NoColumnFinish{});
 }
 
 /// Per-face scratch (double values) reused across assemblies: a fresh multi-MiB buffer costs more
@@ -201,9 +220,9 @@ void clear_quad_vertex_pattern_cache();
 /// Same result, bit for bit, as gather_quad_rows(mesh, vc, ...) (same entries, same summation
 /// order: incident faces ascending), but with the pattern precomputed: per column it copies the
 /// row indices and accumulates the rows at their cached slots.
-template <int Count, class RowKernel>
+template <int Count, class RowKernel, class ColumnFinish>
 void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
-                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
   const int V = p.num_vertices;
   const Eigen::Index nnz = p.outer[std::size_t(V)];
   for (auto* A : out) {
@@ -211,38 +230,62 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
     A->resizeNonZeros(nnz);
     advise_huge_pages(A->valuePtr(), std::size_t(nnz) * sizeof(double));
     advise_huge_pages(A->innerIndexPtr(), std::size_t(nnz) * sizeof(int));
-    std::copy(p.outer.begin(), p.outer.end(), A->outerIndexPtr());
   }
   std::array<int*, Count> inner;
   std::array<double*, Count> val;
+  std::array<int*, Count> outer_out;
   for (int m = 0; m < Count; ++m) {
     inner[std::size_t(m)] = out[std::size_t(m)]->innerIndexPtr();
     val[std::size_t(m)] = out[std::size_t(m)]->valuePtr();
+    outer_out[std::size_t(m)] = out[std::size_t(m)]->outerIndexPtr();
   }
   const int* vstart = p.vc.start.data();
   const int* vcorner = p.vc.corner.data();
   const std::uint16_t* slot = p.slot.data();
   const int* outer = p.outer.data();
   const int* pin = p.inner.data();
+  // Columns of up to kStack entries (all of them on surfel meshes, at most 25) are summed in a
+  // stack buffer and then stored once: the outputs are fresh memory, each value is written once
+  // instead of zeroed and then updated 4 times in place (the summation order, hence every bit,
+  // is the in-place one). Longer columns sum in place. (Streaming stores were measured: no gain.)
+  constexpr int kStack = 64;
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& r) {
     double rows[4 * Count];
-    // Rows and values of the whole block first (sequential streams), then accumulation.
+    double acc[Count][kStack];
     const std::size_t b = std::size_t(outer[r.begin()]), e = std::size_t(outer[r.end()]);
     for (int m = 0; m < Count; ++m) {
       std::copy(pin + b, pin + e, inner[std::size_t(m)] + b);
-      std::fill(val[std::size_t(m)] + b, val[std::size_t(m)] + e, 0.0);
+      std::copy(outer + r.begin(), outer + r.end(), outer_out[std::size_t(m)] + r.begin());
     }
     for (int v = r.begin(); v != r.end(); ++v) {
       const std::size_t o = std::size_t(outer[v]);
+      const int n = outer[v + 1] - outer[v];
+      std::array<double*, Count> col;
+      const bool on_stack = n <= kStack;
+      for (int m = 0; m < Count; ++m) {
+        col[std::size_t(m)] = on_stack ? acc[m] : val[std::size_t(m)] + o;
+        std::fill_n(col[std::size_t(m)], n, 0.0);
+      }
       for (int a = vstart[v]; a < vstart[v + 1]; ++a) {
         const int c = vcorner[a];
         kernel(c >> 2, c & 3, rows);
         const std::uint16_t* s = slot + 4 * std::size_t(a);
         for (int j = 0; j < 4; ++j)
-          for (int m = 0; m < Count; ++m) val[std::size_t(m)][o + s[j]] += rows[4 * m + j];
+          for (int m = 0; m < Count; ++m) col[std::size_t(m)][s[j]] += rows[4 * m + j];
       }
+      finish(v, col, n);
+      if (on_stack)
+        for (int m = 0; m < Count; ++m) std::copy_n(acc[m], n, val[std::size_t(m)] + o);
     }
   });
+  outer_out[0][V] = int(nnz);
+  for (int m = 1; m < Count; ++m) outer_out[std::size_t(m)][V] = int(nnz);
+}
+
+template <int Count, class RowKernel>
+void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  gather_quad_rows<Count>(p, kernel, out, NoColumnFinish{});
 }
 
 /// Vertex gather through the cached pattern when there is one, else the direct gather (same bits).
@@ -251,6 +294,44 @@ void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, cons
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
   if (pat) gather_quad_rows<Count>(*pat, kernel, out);
   else gather_quad_rows<Count>(mesh, vc, kernel, out);
+}
+template <int Count, class RowKernel, class ColumnFinish>
+void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
+                      const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
+  if (pat) gather_quad_rows<Count>(*pat, kernel, out, finish);
+  else gather_quad_rows<Count>(mesh, vc, kernel, out, finish);
+}
+
+/// Diagonal matrix of the row sums of A, for A with a structurally symmetric pattern (every
+/// vertex-based quad assembly): bitwise the sequential column-major scan d[row] += value (each
+/// row summed over ascending columns, from +0.0), but parallel over rows: row r's columns are the
+/// rows of column r, and A(r, c) is found by binary search in column c.
+inline Eigen::SparseMatrix<double> row_sum_diagonal_symmetric(const Eigen::SparseMatrix<double>& A) {
+  const int n = int(A.rows());
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  const double* values = A.valuePtr();
+  Eigen::SparseMatrix<double> D(n, n);
+  D.resizeNonZeros(n);
+  int* douter = D.outerIndexPtr();
+  int* dinner = D.innerIndexPtr();
+  double* dval = D.valuePtr();
+  douter[n] = n;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 8192), [&](const tbb::blocked_range<int>& rg) {
+    for (int r = rg.begin(); r != rg.end(); ++r) {
+      double s = 0.0;
+      for (int a = outer[r]; a < outer[r + 1]; ++a) {
+        const int c = inner[a];
+        const int* b = inner + outer[c];
+        const int* e = inner + outer[c + 1];
+        s += values[std::lower_bound(b, e, r) - inner];
+      }
+      douter[r] = r;
+      dinner[r] = r;
+      dval[r] = s;
+    }
+  });
+  return D;
 }
 
 /// Diagonal matrix with entry v = sum over the corners (f, i) at v, ascending f, of value(f, i).

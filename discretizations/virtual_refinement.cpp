@@ -1,12 +1,14 @@
 #include "virtual_refinement.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/QR>
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -14,6 +16,8 @@
 #include <corrlap/core/parallel_assembly.hpp>
 
 #include "normal_policy.hpp"
+#include "quad_assembly.hpp"
+#include "quad_row_gather.hpp"
 
 namespace corrlap {
 
@@ -316,22 +320,6 @@ QuadPositions corners_of(const SurfelMesh& mesh, int f) {
   return X;
 }
 
-Eigen::SparseMatrix<double> diagonal_matrix(const Eigen::VectorXd& d) {
-  Eigen::SparseMatrix<double> D(d.size(), d.size());
-  D.reserve(Eigen::VectorXi::Ones(d.size()));
-  for (Eigen::Index i = 0; i < d.size(); ++i) D.insert(i, i) = d[i];
-  D.makeCompressed();
-  return D;
-}
-
-// Row sums of a sparse matrix, as a diagonal (row-sum lumping).
-Eigen::SparseMatrix<double> lumped(const Eigen::SparseMatrix<double>& M) {
-  Eigen::VectorXd d = Eigen::VectorXd::Zero(M.rows());
-  for (int c = 0; c < M.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(M, c); it; ++it) d[it.row()] += it.value();
-  return diagonal_matrix(d);
-}
-
 class Vrm final : public Discretization {
  public:
   explicit Vrm(bool corrected) : corrected_(corrected) {}
@@ -349,14 +337,10 @@ class Vrm final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     params.check_parameters(parameters(), name());
-    mesh.validate(name().c_str());
+    validate_mesh(mesh, name().c_str());
     Operators ops;
-    const int F = mesh.num_faces(), V = mesh.num_vertices();
+    const int F = mesh.num_faces();
     if (F == 0) throw InputError(name() + ": the mesh has no face");
-    const AssemblyPlan plan(mesh.faces.data(), std::size_t(F), 4, V);
-    std::vector<double> Kloc(std::size_t(F) * 16), Mloc(std::size_t(F) * 16);
-    std::vector<int> skipped(std::size_t(F), 0);
-    std::vector<VirtualPoint> points(corrected_ ? std::size_t(F) : 0);
 
     bool lumped_mass = false;
     VirtualPointOptions vopt;
@@ -375,44 +359,99 @@ class Vrm final : public Discretization {
       n = trivial_face_normals(mesh);  // spec §1.3/§1.5: outward trivial normal
     }
 
-    // One parallel pass computes both local matrices of each face (no per-face allocation);
-    // the plan's gather then sums them in a fixed order: bitwise identical for any thread count.
+    // Per face: K_f (16 values, row-major) then M_f: its diagonal (4 values) when the mass is
+    // lumped (vrm always, spec §5.1 step 5), else the full 4x4. Not zero-filled: the parallel
+    // kernel loop writes every value, so the first-touch page faults are spread over the threads
+    // (huge pages where possible). Not pooled either (unlike fem's small per-face scratch): the
+    // kernels dominate here, and a pooled 20-32 doubles per face would stay resident.
+    const bool full_mass = corrected_ && !lumped_mass;
+    const std::size_t S = full_mass ? 32 : 20;
+    std::unique_ptr<double[]> loc(new double[std::size_t(F) * S]);
+    advise_huge_pages(loc.get(), std::size_t(F) * S * sizeof(double));
+    // Rare events (skipped fan triangles, minimizer failures) collected per thread and merged in
+    // face order below: no per-face report arrays.
+    struct Report {
+      long long skipped = 0;
+      int first_skip = -1;
+      std::vector<std::pair<int, VirtualPoint>> failed;
+    };
+    tbb::enumerable_thread_specific<Report> reports;
+
+    // One parallel pass computes both local matrices of each face (no per-face allocation).
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
+      Report& rep = reports.local();
       for (int f = r.begin(); f != r.end(); ++f) {
         const QuadPositions X = corners_of(mesh, f);
-        Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> K(&Kloc[std::size_t(f) * 16]);
-        Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> M(&Mloc[std::size_t(f) * 16]);
+        double* out = loc.get() + std::size_t(f) * S;
+        Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> K(out);
+        int skipped = 0;
         if (corrected_) {
           QuadPositions Uf;
           for (int k = 0; k < 4; ++k) Uf.row(k) = u.row(mesh.faces(f, k));
-          const CorrectedVrmLocal loc = corrected_vrm_local(X, Uf, n.row(f).transpose(), lumped_mass, vopt);
-          K = loc.K;
-          M = loc.M;
-          skipped[std::size_t(f)] = loc.skipped_triangles;
-          points[std::size_t(f)] = loc.point;
+          const CorrectedVrmLocal l = corrected_vrm_local(X, Uf, n.row(f).transpose(), lumped_mass, vopt);
+          K = l.K;
+          if (full_mass) Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(out + 16) = l.M;
+          else
+            for (int k = 0; k < 4; ++k) out[16 + k] = l.M(k, k);
+          skipped = l.skipped_triangles;
+          if (!l.point.converged) rep.failed.emplace_back(f, l.point);
         } else {
-          const VrmLocal loc = vrm_local(X);
-          K = loc.K;
-          M = loc.M;
-          skipped[std::size_t(f)] = loc.skipped_triangles;
+          const VrmLocal l = vrm_local(X);
+          K = l.K;
+          for (int k = 0; k < 4; ++k) out[16 + k] = l.M(k, k);
+          skipped = l.skipped_triangles;
+        }
+        if (skipped) {
+          rep.skipped += skipped;
+          if (rep.first_skip < 0 || f < rep.first_skip) rep.first_skip = f;
         }
       }
     });
 
-    ops.L = plan.gather(Kloc.data());
-    ops.L *= -1.0;  // spec §5.1 step 6: L = -sum K_f (negative semi-definite)
-    ops.M = plan.gather(Mloc.data());
-    if (!corrected_ || lumped_mass) ops.M = lumped(ops.M);  // diagonal: drop the structural zeros
-    else
-      ops.M_lumped = lumped(ops.M);
+    // Vertex-row gather through the per-connectivity pattern (quad_row_gather.hpp): every entry is
+    // the sum of its face contributions in ascending face order, from +0.0 -- the order of the
+    // generic AssemblyPlan this replaces, so the bits are unchanged -- and is written once.
+    // Local matrices are not bitwise symmetric (P^T K P), so the kernel hands columns.
+    const auto pat = detail::quad_vertex_pattern(mesh);
+    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
+    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
+    const double* lp = loc.get();
+    // spec §5.1 step 6: L = -sum K_f (negative semi-definite); negating each finished column gives
+    // the bits of negating the finished matrix.
+    auto negate_L = [](int, const auto& col, int len) {
+      for (int t = 0; t < len; ++t) col[0][t] *= -1.0;
+    };
+    if (full_mass) {
+      auto columns = [&](int f, int i, double* c) {
+        const double* o = lp + std::size_t(f) * S;
+        for (int j = 0; j < 4; ++j) c[j] = o[4 * j + i], c[4 + j] = o[16 + 4 * j + i];
+      };
+      detail::gather_quad_rows<2>(mesh, pat.get(), vc, columns, {&ops.L, &ops.M}, negate_L);
+      // Row sums of the assembled M, bitwise as a sequential scan (the lumped alternative).
+      ops.M_lumped = detail::row_sum_diagonal_symmetric(ops.M);
+    } else {
+      auto columns = [&](int f, int i, double* c) {
+        const double* o = lp + std::size_t(f) * S;
+        for (int j = 0; j < 4; ++j) c[j] = o[4 * j + i];
+      };
+      detail::gather_quad_rows<1>(mesh, pat.get(), vc, columns, {&ops.L}, negate_L);
+      // Diagonal local masses: the assembled M is diagonal, entry v = sum over the corners at v in
+      // ascending face order (what summing the assembled zeros of the off-diagonal gives, bit for bit).
+      ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int i) { return lp[std::size_t(f) * S + 16 + std::size_t(i)]; });
+    }
+
+    // Merge the per-thread reports in face order.
+    long long nskip = 0;
+    int first_skip = -1;
+    std::vector<std::pair<int, VirtualPoint>> failed;
+    for (const Report& rep : reports) {
+      nskip += rep.skipped;
+      if (rep.first_skip >= 0 && (first_skip < 0 || rep.first_skip < first_skip)) first_skip = rep.first_skip;
+      failed.insert(failed.end(), rep.failed.begin(), rep.failed.end());
+    }
+    std::sort(failed.begin(), failed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
 
     // Reports, in face order (deterministic).
-    int nskip = 0, first_skip = -1;
-    for (int f = 0; f < F; ++f)
-      if (skipped[std::size_t(f)]) {
-        nskip += skipped[std::size_t(f)];
-        if (first_skip < 0) first_skip = f;
-      }
     if (nskip > 0) {
       std::ostringstream os;
       os << name() << ": " << nskip << " degenerate fan triangle(s) (zero " << (corrected_ ? "corrected " : "")
@@ -423,14 +462,13 @@ class Vrm final : public Discretization {
     if (corrected_) {
       int bad = 0, worst = -1;
       double worst_g = -1;
-      for (int f = 0; f < F; ++f) {
-        const VirtualPoint& vp = points[std::size_t(f)];
-        if (!vp.converged) {
-          ++bad;
-          if (!(vp.gradient_norm <= worst_g)) {
-            worst_g = vp.gradient_norm;
-            worst = f;
-          }
+      const VirtualPoint* worst_point = nullptr;
+      for (const auto& [f, vp] : failed) {
+        ++bad;
+        if (!(vp.gradient_norm <= worst_g)) {
+          worst_g = vp.gradient_norm;
+          worst = f;
+          worst_point = &vp;
         }
       }
       if (bad > 0) {
@@ -438,7 +476,7 @@ class Vrm final : public Discretization {
         os.precision(3);
         os << name() << ": the virtual-point minimizer did not converge on " << bad << " of " << F
            << " faces (worst: face " << worst << ", |grad E/h^4| = " << worst_g << ", (s0, t0) = ("
-           << points[std::size_t(worst)].s << ", " << points[std::size_t(worst)].t << "))";
+           << worst_point->s << ", " << worst_point->t << "))";
         if (policy == "error") throw NumericalError(os.str());
         ops.warnings.push_back(os.str());
       }

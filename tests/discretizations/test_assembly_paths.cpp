@@ -4,13 +4,17 @@
 // change of connectivity.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstring>
+#include <string>
 #include <map>
 #include <random>
 
 #include <corrlap/core/config.hpp>
+#include <corrlap/core/error.hpp>
 #include <corrlap/core/parallel_assembly.hpp>
 #include <corrlap/core/threads.hpp>
+#include <corrlap/discretizations/quad_assembly.hpp>
 #include <corrlap/discretizations/quad_row_gather.hpp>
 #include <corrlap/discretizations/registry.hpp>
 
@@ -139,6 +143,81 @@ TEST_CASE("AssemblyPlan gather is bitwise the sequential ordered sum, with and w
           all = all && it->first == std::make_pair(c, int(a.row())) &&
                 std::memcmp(&it->second, &a.valueRef(), sizeof(double)) == 0;
       CHECK(all);
+    }
+  }
+  set_thread_count(0);
+}
+
+TEST_CASE("parallel row-sum lumping is bitwise the sequential row_sum_lumped") {
+  const SphereCase s = sphere_case(0.13, Eigen::Vector3d(0.02, 0.01, -0.03));
+  const detail::VertexCorners vc = detail::vertex_corners(s.mesh);
+  Eigen::SparseMatrix<double> A, B;
+  detail::gather_quad_rows<2>(s.mesh, vc, test_kernel, {&A, &B});
+  for (int t : {1, 2, 8}) {
+    set_thread_count(t);
+    INFO(t << " threads");
+    CHECK(same_bits(detail::row_sum_diagonal_symmetric(A), row_sum_lumped(A)));
+    CHECK(same_bits(detail::row_sum_diagonal_symmetric(B), row_sum_lumped(B)));
+  }
+  set_thread_count(0);
+}
+
+TEST_CASE("the column finish hook sees every finished column once, on both gather paths") {
+  const SphereCase s = sphere_case(0.17);
+  const detail::VertexCorners vc = detail::vertex_corners(s.mesh);
+  Eigen::SparseMatrix<double> A0, B0;
+  detail::gather_quad_rows<2>(s.mesh, vc, test_kernel, {&A0, &B0});
+  auto negate_first = [](int, const auto& col, int n) {
+    for (int t = 0; t < n; ++t) col[0][t] *= -1.0;
+  };
+  Eigen::SparseMatrix<double> A1, B1, A2, B2;
+  detail::gather_quad_rows<2>(s.mesh, vc, test_kernel, {&A1, &B1}, negate_first);
+  const auto pat = detail::quad_vertex_pattern(s.mesh);
+  REQUIRE(pat);
+  detail::gather_quad_rows<2>(*pat, test_kernel, {&A2, &B2}, negate_first);
+  Eigen::SparseMatrix<double> negA0 = A0;
+  negA0 *= -1.0;
+  CHECK(same_bits(A1, negA0));
+  CHECK(same_bits(A2, negA0));
+  CHECK(same_bits(B1, B0));
+  CHECK(same_bits(B2, B0));
+}
+
+TEST_CASE("parallel mesh validation reports what SurfelMesh::validate reports") {
+  const SphereCase s = sphere_case(0.3);
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK(message([&] { validate_mesh(s.mesh, "m"); }) == "no error");
+  SurfelMesh bad = s.mesh;
+  const int F = bad.num_faces();
+  bad.faces(F - 1, 2) = bad.num_vertices();   // out of range, late
+  bad.faces(F / 2, 3) = bad.faces(F / 2, 0);  // duplicate corner, earlier
+  CHECK(message([&] { validate_mesh(bad, "m"); }) == message([&] { bad.validate("m"); }));
+  CHECK(message([&] { validate_mesh(bad, "m"); }).find("face " + std::to_string(F / 2)) != std::string::npos);
+  SurfelMesh nan = s.mesh;
+  nan.positions(nan.num_vertices() - 1, 1) = std::nan("");
+  CHECK(message([&] { validate_mesh(nan, "m"); }) == message([&] { nan.validate("m"); }));
+  CHECK(message([&] { validate_mesh(nan, "m"); }) != "no error");
+}
+
+TEST_CASE("AssemblyPlan reports the first out-of-range index in element order") {
+  std::vector<int> ids(4000 * 4);
+  for (std::size_t a = 0; a < ids.size(); ++a) ids[a] = int(a % 97);
+  ids[3001 * 4 + 2] = 500;
+  ids[2999 * 4 + 1] = -3;
+  for (int t : {1, 2, 8}) {
+    set_thread_count(t);
+    try {
+      AssemblyPlan plan(ids.data(), 4000, 4, 97);
+      FAIL("no error");
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()) == "assembly: element 2999 refers to index -3 outside [0, 97)");
     }
   }
   set_thread_count(0);
