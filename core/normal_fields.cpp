@@ -81,4 +81,10 @@ void validate_normals(Eigen::MatrixX3d& normals, Eigen::Index expected_rows, con
   }
 }
 
+void check_normals(const Eigen::MatrixX3d& normals, Eigen::Index expected_rows, const std::string& what,
+                   double tolerance) {
+  // validate_normals writes only when normalizing, so the cast never leads to a write.
+  validate_normals(const_cast<Eigen::MatrixX3d&>(normals), expected_rows, what, false, tolerance);
+}
+
 }  // namespace corrlap

@@ -29,5 +29,8 @@ Eigen::MatrixX3d vertex_normals_from_face_normals(const Eigen::MatrixX3d& face_n
 /// With normalize = true, rows are normalized in place instead of rejected for their length.
 void validate_normals(Eigen::MatrixX3d& normals, Eigen::Index expected_rows, const std::string& what,
                       bool normalize = false, double tolerance = 1e-6);
+/// The same checks without normalization, on a field that stays unchanged (no copy needed).
+void check_normals(const Eigen::MatrixX3d& normals, Eigen::Index expected_rows, const std::string& what,
+                   double tolerance = 1e-6);
 
 }  // namespace corrlap

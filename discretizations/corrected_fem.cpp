@@ -143,7 +143,8 @@ class CorrectedFem final : public Discretization {
     check_quad_mesh(mesh, "fem");
 
     Operators ops;
-    const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops.warnings);
+    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops.warnings);
+    const Eigen::MatrixX3d& u = prepared.matrix();
     const int F = mesh.num_faces();
     // Per face (x, y, z, area) -> the distinct values of its local matrices (spec §4.3, §4.4).
     constexpr std::size_t G = 8;

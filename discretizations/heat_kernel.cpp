@@ -341,7 +341,8 @@ class HeatKernel final : public Discretization {
       throw InputError("heat-kernel: distance=tangent needs variant=dual (one normal per surfel)");
 
     Operators ops;
-    const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops.warnings);
+    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops.warnings);
+    const Eigen::MatrixX3d& u = prepared.matrix();
     const Eigen::MatrixX3d n = trivial_face_normals(mesh);
     const int F = mesh.num_faces();
     // spec §6: mu(s) = h^2 |u_s . n_s| (DGtal takes the absolute value); h^2 = |(x1-x0) x (x3-x0)|.

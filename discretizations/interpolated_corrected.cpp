@@ -482,7 +482,9 @@ class InterpolatedCorrected final : public Discretization {
     check_quad_mesh(mesh, "interpolated");
 
     Operators ops;
-    const Eigen::MatrixX3d u = prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
+    const PreparedNormals prepared =
+        prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
+    const Eigen::MatrixX3d& u = prepared.matrix();
     const int F = mesh.num_faces();
     const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
     const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);

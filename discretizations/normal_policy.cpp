@@ -44,22 +44,38 @@ Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh) {
   return n;
 }
 
-Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                 const Config& params, const std::string& method,
-                                 std::vector<std::string>& warnings, OrientationReport* out_report) {
-  if (kind == NormalKind::None) return {};
+PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
+                                const Config& params, const std::string& method,
+                                std::vector<std::string>& warnings, OrientationReport* out_report) {
+  if (kind == NormalKind::None) return PreparedNormals(Eigen::MatrixX3d());
   const bool face = kind == NormalKind::Face;
-  Eigen::MatrixX3d u = face ? normals.face : normals.vertex;
+  const Eigen::MatrixX3d& given = face ? normals.face : normals.vertex;
   const std::string what = method + ": " + (face ? "face" : "vertex") + " normals";
-  if (u.rows() == 0)
+  if (given.rows() == 0)
     throw InputError(method + " needs " + (face ? "one normal per face" : "one normal per vertex") +
                      " (none given)");
-  validate_normals(u, face ? mesh.num_faces() : mesh.num_vertices(), what, params.get_bool("normalize", false));
+  const Eigen::Index expected = face ? mesh.num_faces() : mesh.num_vertices();
+  // Copy only when the normals change (normalize here, clamp below).
+  PreparedNormals result(given);
+  if (params.get_bool("normalize", false)) {
+    Eigen::MatrixX3d u = given;
+    validate_normals(u, expected, what, true);
+    result = PreparedNormals(std::move(u));
+  } else {
+    check_normals(given, expected, what);
+  }
+  const Eigen::MatrixX3d& u = result.matrix();
   const OrientationPolicy policy = parse_orientation_policy(params.get_string("orientation", "warn"));
   const double clamp_min = params.get_double("clamp_min", 0.05);
   if (!(clamp_min > 0.0 && clamp_min < 1.0)) throw InputError(method + ": clamp_min must be in (0, 1)");
 
-  const Eigen::MatrixX3d n = trivial_face_normals(mesh);
+  // Trivial normals on the fly from the surfels (no F x 3 matrix); from positions otherwise.
+  const Eigen::MatrixX3d from_positions =
+      mesh.has_surfels() ? Eigen::MatrixX3d() : mesh.face_normals_from_positions();
+  const auto trivial = [&](int f) -> Eigen::Vector3d {
+    return mesh.has_surfels() ? mesh.surfels[std::size_t(f)].trivial_normal()
+                              : Eigen::Vector3d(from_positions.row(f).transpose());
+  };
   // Parallel check; the reduction keeps the first minimum in face order, like a serial scan.
   struct Scan {
     int inconsistent = 0;
@@ -78,12 +94,13 @@ Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& nor
       tbb::blocked_range<int>(0, mesh.num_faces(), 4096), Scan{},
       [&](const tbb::blocked_range<int>& range, Scan acc) {
         for (int f = range.begin(); f != range.end(); ++f) {
+          const Eigen::Vector3d n = trivial(f);
           if (face) {
-            const double d = u.row(f).dot(n.row(f));
+            const double d = u.row(f).dot(n);
             if (!(d > 0.0)) acc.note(f, -1, d);
           } else {
             for (int c = 0; c < 4; ++c) {
-              const double d = u.row(mesh.faces(f, c)).dot(n.row(f));
+              const double d = u.row(mesh.faces(f, c)).dot(n);
               if (!(d > 0.0)) acc.note(f, c, d);
             }
           }
@@ -104,7 +121,7 @@ Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& nor
   r.worst_corner = scan.worst_corner;
   if (!face && r.inconsistent == 0) r.worst_corner = -1;
   if (out_report) *out_report = r;
-  if (r.inconsistent == 0) return u;
+  if (r.inconsistent == 0) return result;
   if (2 * r.inconsistent > r.checked)
     throw InputError(r.summary(method) + ": the normals point inward (flipped); flip them or the face orientation");
   switch (policy) {
@@ -112,10 +129,12 @@ Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& nor
       throw InputError(r.summary(method));
     case OrientationPolicy::Warn:
       warnings.push_back(r.summary(method));
-      return u;
+      return result;
     case OrientationPolicy::Clamp:
       break;
   }
+  Eigen::MatrixX3d clamped = u;
+  const Eigen::MatrixX3d n = trivial_face_normals(mesh);
   // Clamp: push u toward the trivial normal until u.n >= clamp_min on every face (for vertex
   // normals: every incident face), renormalizing after each correction.
   for (int pass = 0; pass < 8; ++pass) {
@@ -123,17 +142,17 @@ Eigen::MatrixX3d prepare_normals(const SurfelMesh& mesh, const NormalFields& nor
     for (int f = 0; f < mesh.num_faces(); ++f)
       for (int c = 0; c < (face ? 1 : 4); ++c) {
         const Eigen::Index row = face ? f : mesh.faces(f, c);
-        const double d = u.row(row).dot(n.row(f));
+        const double d = clamped.row(row).dot(n.row(f));
         if (d < clamp_min - 1e-12) {
-          u.row(row) += (clamp_min - d + 1e-9) * n.row(f);
-          u.row(row).normalize();
+          clamped.row(row) += (clamp_min - d + 1e-9) * n.row(f);
+          clamped.row(row).normalize();
           changed = true;
         }
       }
     if (!changed) break;
   }
   warnings.push_back(r.summary(method) + "; clamped to u.n >= " + std::to_string(clamp_min));
-  return u;
+  return PreparedNormals(std::move(clamped));
 }
 
 }  // namespace corrlap

@@ -355,7 +355,7 @@ class Vrm final : public Discretization {
       if (vopt.max_iterations < 1) throw InputError(name() + ": max_iterations must be >= 1");
       if (!(vopt.gradient_tolerance > 0)) throw InputError(name() + ": gradient_tolerance must be > 0");
       policy = params.get_string("orientation", "warn");
-      u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops.warnings);
+      u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops.warnings).matrix();
       n = trivial_face_normals(mesh);  // spec §1.3/§1.5: outward trivial normal
     }
 

@@ -1,0 +1,54 @@
+// prepare_normals (discretizations/normal_policy.hpp): validation, orientation policy, and no
+// copy of the caller's normals unless they change.
+#include <doctest/doctest.h>
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/discretizations/normal_policy.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+
+#include "discretizations/test_vrm_support.hpp"
+
+using namespace corrlap;
+
+TEST_CASE("prepare_normals borrows valid normals and copies only when it changes them") {
+  const SurfelMesh mesh = test::sphere1_surface(0.25);
+  NormalFields nf;
+  nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
+  std::vector<std::string> warnings;
+  OrientationReport report;
+
+  const PreparedNormals plain = prepare_normals(mesh, nf, NormalKind::Face, Config(), "test", warnings, &report);
+  CHECK_FALSE(plain.is_copy());
+  CHECK(&plain.matrix() == &nf.face);
+  CHECK(report.inconsistent == 0);
+  CHECK(warnings.empty());
+
+  // normalize: a rescaled copy; the caller's field is left as it was
+  NormalFields scaled = nf;
+  scaled.face *= 2.0;
+  const PreparedNormals normalized =
+      prepare_normals(mesh, scaled, NormalKind::Face, Config::from_key_values({"normalize=true"}), "test", warnings);
+  CHECK(normalized.is_copy());
+  CHECK((normalized.matrix() - nf.face).cwiseAbs().maxCoeff() < 1e-15);
+  CHECK(scaled.face.row(0).norm() == doctest::Approx(2.0));
+  CHECK_THROWS_WITH_AS(prepare_normals(mesh, scaled, NormalKind::Face, Config(), "test", warnings),
+                       doctest::Contains("length"), InputError);
+
+  // one face tangent to its surfel: warn borrows (exact reference values), clamp copies
+  NormalFields tangent = nf;
+  const Eigen::Vector3d n0 = trivial_face_normals(mesh).row(0).transpose();
+  tangent.face.row(0) = n0.unitOrthogonal().transpose();
+  warnings.clear();
+  const PreparedNormals warned = prepare_normals(mesh, tangent, NormalKind::Face, Config(), "test", warnings, &report);
+  CHECK_FALSE(warned.is_copy());
+  CHECK(report.inconsistent == 1);
+  CHECK(report.worst_face == 0);
+  CHECK(warnings.size() == 1);
+  const PreparedNormals clamped = prepare_normals(mesh, tangent, NormalKind::Face,
+                                                  Config::from_key_values({"orientation=clamp"}), "test", warnings);
+  CHECK(clamped.is_copy());
+  CHECK(clamped.matrix().row(0).dot(n0) >= 0.05 - 1e-12);
+  CHECK(clamped.matrix().row(0).norm() == doctest::Approx(1.0));
+  CHECK(tangent.face.row(0).dot(n0) == doctest::Approx(0.0));  // caller's field untouched
+  CHECK((clamped.matrix().bottomRows(mesh.num_faces() - 1) - nf.face.bottomRows(mesh.num_faces() - 1)).norm() == 0.0);
+}
