@@ -136,13 +136,28 @@ class CorrectedFem final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    Operators ops;
+    assemble_into(mesh, normals, params, ops);
+    return ops;
+  }
+
+  // L and M are filled by gather_quad_rows, whose resize keeps the matrices' allocated storage:
+  // with a reused `ops` nothing is allocated for them.
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                     Operators& ops) const override {
     params.check_parameters(parameters(), "fem parameters");
     const std::string mass = params.get_string("mass", "full");
     if (mass != "full" && mass != "lumped") throw InputError("fem: mass '" + mass + "': expected full or lumped");
     const bool extras = params.get_bool("extras", false);
     check_quad_mesh(mesh, "fem");
 
-    Operators ops;
+    ops.warnings.clear();
+    ops.M_lumped.reset();
+    ops.D0.reset();
+    ops.sharp.reset();
+    ops.flat.reset();
+    ops.M1.reset();
+    ops.domain = Operators::Domain::Vertices;
     const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops.warnings);
     const Eigen::MatrixX3d& u = prepared.matrix();
     const int F = mesh.num_faces();
@@ -188,7 +203,6 @@ class CorrectedFem final : public Discretization {
       ops.M_lumped = lumped ? ops.M : lumped_mass();
       ops.D0 = global_d0(build_edges(mesh), mesh.num_vertices());
     }
-    return ops;
   }
 };
 

@@ -1,9 +1,11 @@
 // prepare_normals (discretizations/normal_policy.hpp): validation, orientation policy, and no
-// copy of the caller's normals unless they change.
+// copy of the caller's normals unless they change; Discretization::assemble_into (output reuse).
 #include <doctest/doctest.h>
 
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/normal_policy.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <algorithm>
 #include <corrlap/estimators/implicit_normals.hpp>
 
 #include "discretizations/test_vrm_support.hpp"
@@ -51,4 +53,45 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   CHECK(clamped.matrix().row(0).norm() == doctest::Approx(1.0));
   CHECK(tangent.face.row(0).dot(n0) == doctest::Approx(0.0));  // caller's field untouched
   CHECK((clamped.matrix().bottomRows(mesh.num_faces() - 1) - nf.face.bottomRows(mesh.num_faces() - 1)).norm() == 0.0);
+}
+
+TEST_CASE("assemble_into reuses the output storage and gives the same bits as assemble") {
+  const SurfelMesh mesh = test::sphere1_surface(0.1);
+  NormalFields nf;
+  const ImplicitShape shape = make_implicit_shape("sphere1");
+  nf.face = true_face_normals(shape, mesh);
+  nf.vertex = true_vertex_normals(shape, mesh);
+  const auto same = [](const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
+    return a.rows() == b.rows() && a.nonZeros() == b.nonZeros() &&
+           std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1, b.outerIndexPtr()) &&
+           std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr()) &&
+           std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr());
+  };
+  for (const std::string method : {"fem", "polydec", "heat-kernel"}) {
+    CAPTURE(method);
+    const auto d = make_discretization(method);
+    const Operators fresh = d->assemble(mesh, nf, Config());
+    Operators reused;
+    d->assemble_into(mesh, nf, Config(), reused);
+    CHECK(same(fresh.L, reused.L));
+    CHECK(same(fresh.M, reused.M));
+    const double* L_storage = reused.L.valuePtr();
+    // Different normals, same mesh: new values in the same storage (fem), same bits as fresh.
+    NormalFields other = nf;
+    other.face.row(3) = (other.face.row(3) + Eigen::RowVector3d(0.05, 0, 0)).normalized();
+    other.vertex.row(3) = (other.vertex.row(3) + Eigen::RowVector3d(0.05, 0, 0)).normalized();
+    d->assemble_into(mesh, other, Config(), reused);
+    const Operators fresh_other = d->assemble(mesh, other, Config());
+    CHECK(same(fresh_other.L, reused.L));
+    CHECK(same(fresh_other.M, reused.M));
+    if (method == "fem") CHECK(reused.L.valuePtr() == L_storage);  // no reallocation
+  }
+  // extras and warnings do not leak from one call to the next
+  const auto fem = make_discretization("fem");
+  Operators ops;
+  fem->assemble_into(mesh, nf, Config::from_key_values({"extras=true"}), ops);
+  CHECK(ops.D0.has_value());
+  fem->assemble_into(mesh, nf, Config(), ops);
+  CHECK_FALSE(ops.D0.has_value());
+  CHECK_FALSE(ops.M_lumped.has_value());
 }
