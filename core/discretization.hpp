@@ -32,6 +32,17 @@ struct Operators {
   std::vector<std::string> warnings;  ///< e.g. normals inconsistent with the surfel orientation
 };
 
+/// Empties everything but the storage of L and M, for a method that refills `ops` (assemble_into).
+inline void reset_for_reuse(Operators& ops) {
+  ops.M_lumped.reset();
+  ops.D0.reset();
+  ops.sharp.reset();
+  ops.flat.reset();
+  ops.M1.reset();
+  ops.domain = Operators::Domain::Vertices;
+  ops.warnings.clear();
+}
+
 /// What a policy does with normals inconsistent with the surfel orientation (u.n <= 0).
 enum class OrientationPolicy { Error, Warn, Clamp };
 

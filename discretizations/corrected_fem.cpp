@@ -151,13 +151,7 @@ class CorrectedFem final : public Discretization {
     const bool extras = params.get_bool("extras", false);
     check_quad_mesh(mesh, "fem");
 
-    ops.warnings.clear();
-    ops.M_lumped.reset();
-    ops.D0.reset();
-    ops.sharp.reset();
-    ops.flat.reset();
-    ops.M1.reset();
-    ops.domain = Operators::Domain::Vertices;
+    reset_for_reuse(ops);
     const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops.warnings);
     const Eigen::MatrixX3d& u = prepared.matrix();
     const int F = mesh.num_faces();

@@ -67,6 +67,14 @@ class PolyDec final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    Operators ops;
+    assemble_into(mesh, normals, params, ops);
+    return ops;
+  }
+
+  // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                     Operators& ops) const override {
     const std::string who = name();
     params.check_parameters(parameters(), who + " parameters");
     const double lambda = params.get_double("lambda", 1.0);
@@ -74,7 +82,7 @@ class PolyDec final : public Discretization {
     const bool extras = params.get_bool("extras", false);
     check_quad_mesh(mesh, who);
 
-    Operators ops;
+    reset_for_reuse(ops);
     Eigen::MatrixX3d u;
     if (projected_) u = prepare_normals(mesh, normals, NormalKind::Face, params, who, ops.warnings).matrix();
     const int F = mesh.num_faces();
@@ -120,7 +128,6 @@ class PolyDec final : public Discretization {
         for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 41, 16, out);
       });
     }
-    return ops;
   }
 
  private:

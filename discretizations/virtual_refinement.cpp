@@ -336,9 +336,17 @@ class Vrm final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    Operators ops;
+    assemble_into(mesh, normals, params, ops);
+    return ops;
+  }
+
+  // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                     Operators& ops) const override {
     params.check_parameters(parameters(), name());
     validate_mesh(mesh, name().c_str());
-    Operators ops;
+    reset_for_reuse(ops);
     const int F = mesh.num_faces();
     if (F == 0) throw InputError(name() + ": the mesh has no face");
 
@@ -481,7 +489,6 @@ class Vrm final : public Discretization {
         ops.warnings.push_back(os.str());
       }
     }
-    return ops;
   }
 
  private:
