@@ -302,61 +302,54 @@ void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, cons
   else gather_quad_rows<Count>(mesh, vc, kernel, out, finish);
 }
 
-/// Diagonal matrix of the row sums of A, for A with a structurally symmetric pattern (every
-/// vertex-based quad assembly): bitwise the sequential column-major scan d[row] += value (each
-/// row summed over ascending columns, from +0.0), but parallel over rows: row r's columns are the
-/// rows of column r, and A(r, c) is found by binary search in column c.
-inline Eigen::SparseMatrix<double> row_sum_diagonal_symmetric(const Eigen::SparseMatrix<double>& A) {
-  const int n = int(A.rows());
-  const int* outer = A.outerIndexPtr();
-  const int* inner = A.innerIndexPtr();
-  const double* values = A.valuePtr();
+/// Diagonal n x n matrix with entry r = diagonal_value(r), the entries computed in parallel.
+template <class DiagonalValue>
+Eigen::SparseMatrix<double> parallel_diagonal(int n, DiagonalValue&& diagonal_value) {
   Eigen::SparseMatrix<double> D(n, n);
   D.resizeNonZeros(n);
-  int* douter = D.outerIndexPtr();
-  int* dinner = D.innerIndexPtr();
-  double* dval = D.valuePtr();
-  douter[n] = n;
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 8192), [&](const tbb::blocked_range<int>& rg) {
-    for (int r = rg.begin(); r != rg.end(); ++r) {
-      double s = 0.0;
-      for (int a = outer[r]; a < outer[r + 1]; ++a) {
-        const int c = inner[a];
-        const int* b = inner + outer[c];
-        const int* e = inner + outer[c + 1];
-        s += values[std::lower_bound(b, e, r) - inner];
-      }
-      douter[r] = r;
-      dinner[r] = r;
-      dval[r] = s;
+  int* outer = D.outerIndexPtr();
+  int* inner = D.innerIndexPtr();
+  double* val = D.valuePtr();
+  outer[n] = n;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 8192), [&](const tbb::blocked_range<int>& r) {
+    for (int v = r.begin(); v != r.end(); ++v) {
+      outer[v] = v;
+      inner[v] = v;
+      val[v] = diagonal_value(v);
     }
   });
   return D;
 }
 
+/// Diagonal matrix of the row sums of A, for A with a structurally symmetric pattern (every
+/// vertex-based quad assembly): bitwise the sequential column-major scan d[row] += value (each
+/// row summed over ascending columns, from +0.0), but parallel over rows: row r's columns are the
+/// rows of column r, and A(r, c) is found by binary search in column c.
+inline Eigen::SparseMatrix<double> row_sum_diagonal_symmetric(const Eigen::SparseMatrix<double>& A) {
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  const double* values = A.valuePtr();
+  return parallel_diagonal(int(A.rows()), [&](int r) {
+    double s = 0.0;
+    for (int a = outer[r]; a < outer[r + 1]; ++a) {
+      const int c = inner[a];
+      s += values[std::lower_bound(inner + outer[c], inner + outer[c + 1], r) - inner];
+    }
+    return s;
+  });
+}
+
 /// Diagonal matrix with entry v = sum over the corners (f, i) at v, ascending f, of value(f, i).
 template <class CornerValue>
 Eigen::SparseMatrix<double> gather_corner_diagonal(const SurfelMesh& mesh, const VertexCorners& vc, CornerValue&& value) {
-  const int V = mesh.num_vertices();
-  Eigen::SparseMatrix<double> D(V, V);
-  D.resizeNonZeros(V);
-  int* outer = D.outerIndexPtr();
-  int* inner = D.innerIndexPtr();
-  double* val = D.valuePtr();
-  outer[V] = V;
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 8192), [&](const tbb::blocked_range<int>& r) {
-    for (int v = r.begin(); v != r.end(); ++v) {
-      double s = 0.0;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int c = vc.corner[std::size_t(a)];
-        s += value(c >> 2, c & 3);
-      }
-      outer[v] = v;
-      inner[v] = v;
-      val[v] = s;
+  return parallel_diagonal(mesh.num_vertices(), [&](int v) {
+    double s = 0.0;
+    for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
+      const int c = vc.corner[std::size_t(a)];
+      s += value(c >> 2, c & 3);
     }
+    return s;
   });
-  return D;
 }
 
 }  // namespace corrlap::detail
