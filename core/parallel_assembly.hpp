@@ -10,6 +10,7 @@
 #include <new>
 #include <utility>
 #include <vector>
+#include "huge_pages.hpp"
 
 namespace corrlap {
 
@@ -60,12 +61,6 @@ class AssemblyPlan {
   std::vector<std::int64_t, UninitAllocator<std::int64_t>> contributions_;  // (local entry index + 1) * sign
 };
 
-/// Hints the kernel to back the 2 MiB-aligned interior of [p, p + bytes) with transparent huge
-/// pages (Linux madvise MADV_HUGEPAGE; no-op elsewhere or for small ranges). Call on freshly
-/// allocated, not yet touched output buffers: on this class of machine, first-touch page faults of
-/// 4 KiB pages cost ~0.7 ms per MiB, more than writing the matrix itself. Values are unaffected.
-/// Environment variable CORRLAP_NO_HUGEPAGES (any value) turns the hint off.
-void advise_huge_pages(const void* p, std::size_t bytes);
 
 /// Fills local matrices for elements [begin, end) into `locals` (already offset to element begin).
 using LocalKernel = std::function<void(std::size_t begin, std::size_t end, double* locals)>;

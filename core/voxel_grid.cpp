@@ -16,21 +16,6 @@ namespace {
 constexpr double kMaxVoxels = 137438953472.0;
 }  // namespace
 
-// Large grids (h = 0.0025 on sphere1: 221 MB) are zeroed page by page on first touch; with 4 KiB
-// pages the page faults cost more than all of digitization. Transparent huge pages (when the
-// kernel offers them on request) cut the number of faults by 512. Purely a speed hint.
-void advise_huge_pages(void* data, std::size_t bytes) {
-#ifdef MADV_HUGEPAGE
-  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
-  if (bytes < 4 * kHuge) return;
-  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-#else
-  (void)data;
-  (void)bytes;
-#endif
-}
 
 VoxelGrid::VoxelGrid(const Eigen::Vector3i& lower, const Eigen::Vector3i& upper, double h)
     : lower_(lower), upper_(upper), h_(h) {

@@ -8,13 +8,9 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+#include "huge_pages.hpp"
 
 namespace corrlap {
-
-/// Asks the kernel to back the 2 MiB-aligned interior of [data, data + bytes) with transparent
-/// huge pages (madvise MADV_HUGEPAGE; no-op elsewhere or for small buffers). Call before the first
-/// write: first-touch page faults dominate the cost of filling buffers of hundreds of MB.
-void advise_huge_pages(void* data, std::size_t bytes);
 
 namespace detail {
 /// Allocator for large zero-filled bit buffers: calloc hands out fresh kernel pages that are
