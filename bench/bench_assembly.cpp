@@ -130,12 +130,14 @@ int main(int argc, char** argv) {
       }
   for (double h : {0.01, 0.005})
     for (int threads : {1, 2}) {
-      const std::string name = std::string("assembly_into/fem/h=") + (h == 0.01 ? "0.01" : "0.005") +
-                               "/threads=" + std::to_string(threads);
-      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) { run_reuse(s, "fem", h, threads); })
-          ->Unit(benchmark::kMillisecond)
-          ->UseRealTime()
-          ->MinTime(0.5);
+      for (const std::string method : {"fem", "interpolated"}) {
+        const std::string name = "assembly_into/" + method + "/h=" + (h == 0.01 ? "0.01" : "0.005") +
+                                 "/threads=" + std::to_string(threads);
+        benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) { run_reuse(s, method, h, threads); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinTime(0.5);
+      }
     }
   for (double h : {0.01, 0.005})
     for (int threads : {1, 2}) {

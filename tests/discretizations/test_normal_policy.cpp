@@ -67,7 +67,7 @@ TEST_CASE("assemble_into reuses the output storage and gives the same bits as as
            std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr()) &&
            std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr());
   };
-  for (const std::string method : {"fem", "polydec", "projected-polydec", "vrm", "corrected-vrm", "heat-kernel"}) {
+  for (const std::string method : {"fem", "polydec", "projected-polydec", "interpolated", "vrm", "corrected-vrm", "heat-kernel"}) {
     CAPTURE(method);
     const auto d = make_discretization(method);
     const Operators fresh = d->assemble(mesh, nf, Config());
