@@ -59,7 +59,8 @@ class Discretization {
   /// keys, or an invalid mesh.
   virtual Operators assemble(const SurfelMesh& mesh, const NormalFields& normals,
                              const Config& params) const = 0;
-  /// Same result, bit for bit, written into `out`. Methods that support it (fem) reuse the
+  /// Same result, bit for bit, written into `out`. Methods that support it (fem, polydec,
+  /// projected-polydec, interpolated, vrm, corrected-vrm) reuse the
   /// storage of out.L and out.M when it is large enough, so repeated assembly on one mesh (a
   /// regularization loop, a study) fills memory that is already mapped instead of faulting in
   /// fresh pages (at h = 0.005 that is most of fem's cost on a VM). Default: assemble() and swap.

@@ -14,7 +14,8 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/voxel_grid.hpp>
+#include <corrlap/core/huge_pages.hpp>
+#include <corrlap/core/normal_fields.hpp>
 
 #include "normal_policy.hpp"
 
@@ -197,14 +198,7 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
                                                double cutoff, HeatKernelForm form, HeatKernelStorage storage,
                                                const Eigen::MatrixX3d* tangent_normals) {
   check_inputs(points, t, cutoff);
-  if (tangent_normals != nullptr) {
-    if (tangent_normals->rows() != points.rows())
-      throw InputError("heat kernel: " + std::to_string(tangent_normals->rows()) + " tangent normals for " +
-                       std::to_string(points.rows()) + " points");
-    for (Eigen::Index i = 0; i < points.rows(); ++i)
-      if (!tangent_normals->row(i).allFinite() || std::abs(tangent_normals->row(i).norm() - 1.0) > 1e-6)
-        throw InputError("heat kernel: tangent normal of point " + std::to_string(i) + " is not a unit vector");
-  }
+  if (tangent_normals != nullptr) check_normals(*tangent_normals, points.rows(), "heat kernel: tangent normals");
   if (storage == HeatKernelStorage::Upper && form != HeatKernelForm::Symmetric)
     throw InputError("heat kernel: upper-triangle storage needs the symmetric form");
   const Eigen::Index n = points.rows();

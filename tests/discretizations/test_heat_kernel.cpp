@@ -290,5 +290,5 @@ TEST_CASE("heat kernel tangent distance: symmetric graph Laplacian, bitwise thre
   bad.row(7) *= 2.0;
   CHECK_THROWS_WITH_AS(heat_kernel_matrix(x, Eigen::VectorXd::Ones(x.rows()), 0.01, 3.0, HeatKernelForm::Symmetric,
                                           HeatKernelStorage::Full, &bad),
-                       doctest::Contains("point 7"), InputError);
+                       doctest::Contains("normal 7"), InputError);
 }
