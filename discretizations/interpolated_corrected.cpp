@@ -510,35 +510,23 @@ class InterpolatedCorrected final : public Discretization {
     const double* px = mesh.positions.col(0).data();
     const double* py = mesh.positions.col(1).data();
     const double* pz = mesh.positions.col(2).data();
-    const Eigen::Index VN = mesh.positions.rows();
     const int* faces = mesh.faces.data();
     std::atomic<int> non_square{-1};
+    const double* const xc[3] = {px, py, pz};
+    const double* const uc[3] = {u.col(0).data(), u.col(1).data(), u.col(2).data()};
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
-      for (int f = r.begin(); f != r.end(); ++f) {
-        double xs[4][3], us[4][3];
-        const double* xp[4];
-        const double* up[4];
-        for (int k = 0; k < 4; ++k) {
-          const Eigen::Index v = faces[4 * f + k];
-          xs[k][0] = px[v];
-          xs[k][1] = py[v];
-          xs[k][2] = pz[v];
-          us[k][0] = u(v, 0);
-          us[k][1] = u(v, 1);
-          us[k][2] = u(v, 2);
-          xp[k] = xs[k];
-          up[k] = us[k];
-        }
-        double* t = terms + std::size_t(f) * detail::kTermsStride;
-        // The closed forms of spec §3.2-§3.4 hold on surfels (squares); reject other quads.
-        double* pd = pdata + std::size_t(f) * 16;
-        if (!detail::interpolated_face_terms(xp, up, kappa, t, pd)) {
-          int cur = non_square.load();
-          while ((cur < 0 || f < cur) && !non_square.compare_exchange_weak(cur, f)) {}
-          continue;
-        }
-        if (!global) {
+      // The closed forms of spec §3.2-§3.4 hold on surfels (squares); other quads are rejected.
+      const int bad = detail::interpolated_face_range(faces, r.begin(), r.end(), xc, uc, kappa, terms, pdata);
+      if (bad >= 0) {
+        int cur = non_square.load();
+        while ((cur < 0 || bad < cur) && !non_square.compare_exchange_weak(cur, bad)) {}
+        return;
+      }
+      if (!global)
+        for (int f = r.begin(); f != r.end(); ++f) {
           // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
+          double* t = terms + std::size_t(f) * detail::kTermsStride;
+          const double* pd = pdata + std::size_t(f) * 16;
           for (int i = 0; i < 4; ++i)
             for (int j = i; j < 4; ++j) {
               double s = 0.0;
@@ -547,9 +535,7 @@ class InterpolatedCorrected final : public Discretization {
               k = -(k + lambda * s);
             }
         }
-      }
     });
-    (void)VN;
     if (non_square.load() >= 0)
       throw InputError("interpolated: face " + std::to_string(non_square.load()) +
                        " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");

@@ -99,4 +99,19 @@ inline bool interpolated_face_terms(const double* const x[4], const double* cons
   return true;
 }
 
+/// Instruction set of interpolated_face_range: Best picks AVX2 when the CPU has it, else SSE2.
+enum class FaceKernelIsa { Best, Scalar, Sse2, Avx2 };
+
+/// True when the running CPU supports AVX2 (FaceKernelIsa::Avx2 may then be requested).
+bool cpu_has_avx2();
+
+/// The records of interpolated_face_terms for faces [b, e) of a quad mesh (`faces`: 4 vertex ids
+/// per face; positions and vertex normals as one array per component), written at
+/// terms + f kTermsStride and pd + 16 f. The vector paths compute several faces per register with
+/// exactly the scalar operations, so every ISA gives the same bits. Returns the first face of the
+/// range that is not a square, or -1 (faces after it may not be written).
+int interpolated_face_range(const int* faces, int b, int e, const double* const position[3],
+                            const double* const normal[3], double kappa, double* terms, double* pd,
+                            FaceKernelIsa isa = FaceKernelIsa::Best);
+
 }  // namespace corrlap::detail

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <random>
+#include <vector>
 
 #include <corrlap/discretizations/interpolated_corrected.hpp>
 #include <corrlap/discretizations/interpolated_kernel.hpp>
@@ -92,4 +93,51 @@ TEST_CASE("interpolated assembly kernel rejects a non-square quad") {
   const double* up[4] = {&u(0, 0), &u(1, 0), &u(2, 0), &u(3, 0)};
   double terms[detail::kTermsStride], pd[16];
   CHECK_FALSE(detail::interpolated_face_terms(xp, up, 2.0, terms, pd));
+}
+
+TEST_CASE("vectorized face kernel (SSE2, AVX2) gives the scalar kernel's bits and finds non-squares") {
+  // 103 random squares, each with its own 4 vertices: an odd count leaves a tail for the scalar
+  // loop after the vector batches.
+  std::mt19937 rng(5);
+  const int F = 103;
+  std::vector<int> faces(4 * F);
+  std::vector<double> pos[3], nrm[3];
+  for (int c = 0; c < 3; ++c) pos[c].resize(4 * F), nrm[c].resize(4 * F);
+  for (int f = 0; f < F; ++f) {
+    const KernelCase kc = random_case(rng, f % 2 == 0);
+    for (int k = 0; k < 4; ++k) {
+      faces[std::size_t(4 * f + k)] = 4 * f + k;
+      for (int c = 0; c < 3; ++c) pos[c][std::size_t(4 * f + k)] = kc.x(k, c), nrm[c][std::size_t(4 * f + k)] = kc.u(k, c);
+    }
+  }
+  const double* x[3] = {pos[0].data(), pos[1].data(), pos[2].data()};
+  const double* u[3] = {nrm[0].data(), nrm[1].data(), nrm[2].data()};
+  auto run = [&](detail::FaceKernelIsa isa, std::vector<double>& t, std::vector<double>& p) {
+    t.assign(std::size_t(F) * detail::kTermsStride, 0.0);
+    p.assign(std::size_t(F) * 16, 0.0);
+    return detail::interpolated_face_range(faces.data(), 0, F, x, u, 2.0, t.data(), p.data(), isa);
+  };
+  std::vector<double> t0, p0;
+  REQUIRE(run(detail::FaceKernelIsa::Scalar, t0, p0) == -1);
+  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Sse2, detail::FaceKernelIsa::Best};
+  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
+  for (const auto isa : isas) {
+    INFO("isa " << int(isa));
+    std::vector<double> t, p;
+    REQUIRE(run(isa, t, p) == -1);
+#ifdef __FMA__
+    // -march=native builds may contract into FMAs differently in scalar and vector code.
+    for (std::size_t i = 0; i < t.size(); ++i) CHECK(t[i] == doctest::Approx(t0[i]).epsilon(1e-13));
+    for (std::size_t i = 0; i < p.size(); ++i) CHECK(p[i] == doctest::Approx(p0[i]).epsilon(1e-13));
+#else
+    CHECK(t == t0);  // exact: the same IEEE operations in the same order
+    CHECK(p == p0);
+#endif
+  }
+  // A non-square face inside a vector batch: every ISA reports it.
+  pos[1][std::size_t(4 * 42 + 2)] += 1e-3;
+  for (const auto isa : {detail::FaceKernelIsa::Scalar, detail::FaceKernelIsa::Sse2, detail::FaceKernelIsa::Best}) {
+    std::vector<double> t, p;
+    CHECK(run(isa, t, p) == 42);
+  }
 }
