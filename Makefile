@@ -6,7 +6,7 @@ CMAKE_FLAGS ?=
 # Relative paths in the compiler cache, so that clones at other paths (CI) reuse it.
 export CCACHE_BASEDIR ?= $(CURDIR)
 
-.PHONY: all deps configure build demo test test-stress bench install clean
+.PHONY: all deps configure build demo test test-stress test-static bench install clean
 
 all: build
 
@@ -30,6 +30,15 @@ test: build
 test-stress: build
 	cd $(BUILD) && ctest --output-on-failure -L stress
 
+# The CMake package with static libraries (BUILD_SHARED_LIBS=OFF): builds only the libraries,
+# installs them into a scratch prefix and builds and runs the consumer against them.
+test-static: deps
+	cmake -S . -B $(BUILD)-static -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DBUILD_SHARED_LIBS=OFF \
+	  -DCORRLAP_BUILD_APPS=OFF -DCORRLAP_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	cmake --build $(BUILD)-static -j $(JOBS) --target corrlap_core corrlap_io corrlap_estimators \
+	  corrlap_discretizations corrlap_backends
+	cd $(BUILD)-static && ctest -R install_and_consume --output-on-failure
+
 bench: build
 	bash bench/run_all.sh $(BUILD)
 
@@ -37,4 +46,4 @@ install: build
 	cmake --install $(BUILD)
 
 clean:
-	rm -rf $(BUILD)
+	rm -rf $(BUILD) $(BUILD)-static

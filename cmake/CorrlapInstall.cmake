@@ -19,4 +19,5 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/corrlapConfigVersio
   COMPATIBILITY SameMinorVersion)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfig.cmake
   ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfigVersion.cmake
+  ${CMAKE_CURRENT_LIST_DIR}/FindCHOLMOD.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/corrlap)
