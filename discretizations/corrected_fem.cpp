@@ -1,12 +1,14 @@
 #include "corrected_fem.hpp"
 
 #include <cmath>
+#include <cstring>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <corrlap/core/error.hpp>
 
+#include "fem_kernel.hpp"
 #include "normal_policy.hpp"
 #include "quad_row_gather.hpp"
 
@@ -102,7 +104,92 @@ inline void fem_mass_into(double area, double z, bool lumped, double* M) {
   const double s = area * z / 36.0;
   for (int k = 0; k < 16; ++k) M[k] = s * w[k];
 }
+
+// fem_geo + fem_face_values for the N faces f0 .. f0 + N - 1, one per lane of `vec` (GCC vector
+// extensions), with the scalar operations in the scalar order: same bits (no FMA contraction in
+// the targets used). Square roots per lane in scalar code.
+template <class vec>
+__attribute__((always_inline)) inline void fem_face_batch(const double* P, std::size_t V, const int* faces,
+                                                          const double* U, std::size_t F, std::size_t f0, double* out) {
+  constexpr int N = int(sizeof(vec) / sizeof(double));
+  double lanes[6][3][N];  // corners 0, 1, 3 and the normal, gathered lane by lane
+  for (int l = 0; l < N; ++l) {
+    const int* q = faces + 4 * (f0 + std::size_t(l));
+    const int c[3] = {q[0], q[1], q[3]};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) lanes[k][d][l] = P[std::size_t(d) * V + std::size_t(c[k])];
+    for (int d = 0; d < 3; ++d) lanes[3][d][l] = U[std::size_t(d) * F + f0 + std::size_t(l)];
+  }
+  vec x[4][3];
+  std::memcpy(x, lanes, sizeof x);
+  const vec ax = x[1][0] - x[0][0], ay = x[1][1] - x[0][1], az = x[1][2] - x[0][2];
+  const vec bx = x[2][0] - x[0][0], by = x[2][1] - x[0][1], bz = x[2][2] - x[0][2];
+  const vec cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
+  const vec ux = x[3][0], uy = x[3][1], uz = x[3][2];
+  const vec a2 = cx * cx + cy * cy + cz * cz, na2 = ax * ax + ay * ay + az * az, nb2 = bx * bx + by * by + bz * bz;
+  vec area, na, nb;
+  for (int l = 0; l < N; ++l) {
+    area[l] = std::sqrt(a2[l]);
+    na[l] = na2[l] > 0.0 ? std::sqrt(na2[l]) : 1.0;  // 1: the scalar code leaves the vector as is
+    nb[l] = nb2[l] > 0.0 ? std::sqrt(nb2[l]) : 1.0;
+  }
+  // Dividing by 1.0 is exact, so the lanes with a zero edge keep the scalar result.
+  const vec gx = ux * (ax / na) + uy * (ay / na) + uz * (az / na);
+  const vec gy = ux * (bx / nb) + uy * (by / nb) + uz * (bz / nb);
+  const vec gz = ux * (cx / area) + uy * (cy / area) + uz * (cz / area);
+  const vec iz = 1.0 / gz;
+  const vec sx = 1.0 - gx * gx, sy = 1.0 - gy * gy, eta = gx * gy * 0.5 * iz;
+  const vec self = eta + (sx + sy) / 3.0 * iz;
+  const vec o1 = (-2.0 * sy + sx) / 6.0 * iz;
+  const vec o2 = (-2.0 * sx + sy) / 6.0 * iz;
+  const vec o = -eta - (sx + sy) / 6.0 * iz;
+  const vec s2 = self - 2.0 * eta, oe = o + 2.0 * eta;
+  const vec m36 = area * gz / 36.0, m4 = area * gz / 4.0;
+  for (int l = 0; l < N; ++l) {
+    double* g = out + std::size_t(l) * detail::kFemFaceValues;
+    g[0] = self[l], g[1] = o1[l], g[2] = o2[l], g[3] = o[l], g[4] = s2[l], g[5] = oe[l], g[6] = m36[l], g[7] = m4[l];
+  }
+}
+
+typedef double FemLanes2 __attribute__((vector_size(16)));
+typedef double FemLanes4 __attribute__((vector_size(32)));
+
+template <class vec>
+__attribute__((always_inline)) inline void fem_range_body(const double* P, std::size_t V, const int* faces,
+                                                          const double* U, std::size_t F, int b, int e, double* g) {
+  constexpr int N = int(sizeof(vec) / sizeof(double));
+  int f = b;
+  if constexpr (N > 1)
+    for (; f + N <= e; f += N) fem_face_batch<vec>(P, V, faces, U, F, std::size_t(f), g + std::size_t(f) * detail::kFemFaceValues);
+  for (; f < e; ++f) {
+    double* gf = g + std::size_t(f) * detail::kFemFaceValues;
+    fem_geo(P, V, faces + 4 * std::size_t(f), U, F, std::size_t(f), gf);
+    fem_face_values(gf);
+  }
+}
+
+__attribute__((target("avx2"))) void fem_range_avx2(const double* P, std::size_t V, const int* faces, const double* U,
+                                                    std::size_t F, int b, int e, double* g) {
+  fem_range_body<FemLanes4>(P, V, faces, U, F, b, e, g);
+}
+void fem_range_sse2(const double* P, std::size_t V, const int* faces, const double* U, std::size_t F, int b, int e,
+                    double* g) {
+  fem_range_body<FemLanes2>(P, V, faces, U, F, b, e, g);
+}
+void fem_range_scalar(const double* P, std::size_t V, const int* faces, const double* U, std::size_t F, int b, int e,
+                      double* g) {
+  fem_range_body<double>(P, V, faces, U, F, b, e, g);
+}
 }  // namespace
+
+void detail::fem_face_range(const double* positions, std::size_t num_vertices, const int* faces,
+                            const double* normals, std::size_t num_faces, int b, int e, double* g, FaceKernelIsa isa) {
+  switch (resolve_face_kernel_isa(isa)) {
+    case FaceKernelIsa::Avx2: return fem_range_avx2(positions, num_vertices, faces, normals, num_faces, b, e, g);
+    case FaceKernelIsa::Sse2: return fem_range_sse2(positions, num_vertices, faces, normals, num_faces, b, e, g);
+    default: return fem_range_scalar(positions, num_vertices, faces, normals, num_faces, b, e, g);
+  }
+}
 
 Eigen::Matrix4d corrected_fem_local_stiffness(const Eigen::Vector3d& u) {
   Eigen::Matrix<double, 4, 4, Eigen::RowMajor> K;
@@ -156,15 +243,11 @@ class CorrectedFem final : public Discretization {
     const Eigen::MatrixX3d& u = prepared.matrix();
     const int F = mesh.num_faces();
     // Per face (x, y, z, area) -> the distinct values of its local matrices (spec §4.3, §4.4).
-    constexpr std::size_t G = 8;
+    constexpr std::size_t G = detail::kFemFaceValues;
     detail::ReusedScratch geo(std::size_t(F) * G);
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 2048), [&](const tbb::blocked_range<int>& r) {
-      const std::size_t V = std::size_t(mesh.num_vertices());
-      for (int f = r.begin(); f != r.end(); ++f) {
-        double* g = geo.data() + std::size_t(f) * G;
-        fem_geo(mesh.positions.data(), V, mesh.faces.data() + 4 * std::size_t(f), u.data(), std::size_t(F), std::size_t(f), g);
-        fem_face_values(g);
-      }
+      detail::fem_face_range(mesh.positions.data(), std::size_t(mesh.num_vertices()), mesh.faces.data(), u.data(),
+                             std::size_t(F), r.begin(), r.end(), geo.data());
     });
     // Fused kernel + vertex-row gather: the local matrices depend only on (x, y, z, area), so each
     // row is computed where it is summed and every matrix entry is written once (memory-bound).

@@ -4,7 +4,6 @@
 
 #include <cstddef>
 #include <cstring>
-#include <stdexcept>
 
 namespace corrlap::detail {
 
@@ -169,24 +168,13 @@ int face_range_scalar(const int* faces, int b, int e, const double* const x[3], 
 
 }  // namespace
 
-bool cpu_has_avx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
-
 int interpolated_face_range(const int* faces, int b, int e, const double* const position[3],
                             const double* const normal[3], double kappa, double* terms, double* pd, FaceKernelIsa isa) {
-  switch (isa) {
-    case FaceKernelIsa::Best:
-      return cpu_has_avx2() ? face_range_avx2(faces, b, e, position, normal, kappa, terms, pd)
-                            : face_range_sse2(faces, b, e, position, normal, kappa, terms, pd);
-    case FaceKernelIsa::Avx2:
-      if (!cpu_has_avx2()) throw std::logic_error("interpolated_face_range: this CPU has no AVX2");
-      return face_range_avx2(faces, b, e, position, normal, kappa, terms, pd);
+  switch (resolve_face_kernel_isa(isa)) {
+    case FaceKernelIsa::Avx2: return face_range_avx2(faces, b, e, position, normal, kappa, terms, pd);
     case FaceKernelIsa::Sse2: return face_range_sse2(faces, b, e, position, normal, kappa, terms, pd);
-    case FaceKernelIsa::Scalar: return face_range_scalar(faces, b, e, position, normal, kappa, terms, pd);
+    default: return face_range_scalar(faces, b, e, position, normal, kappa, terms, pd);
   }
-  return face_range_scalar(faces, b, e, position, normal, kappa, terms, pd);
 }
 
 }  // namespace corrlap::detail

@@ -6,6 +6,8 @@
 // matrices the assembly reads.
 #include <cmath>
 
+#include "face_kernel_isa.hpp"
+
 namespace corrlap::detail {
 
 /// Layout of the per-face records written by interpolated_face_terms: `terms` (16 doubles) for
@@ -98,12 +100,6 @@ inline bool interpolated_face_terms(const double* const x[4], const double* cons
   terms[4] = h * h / 144.0;
   return true;
 }
-
-/// Instruction set of interpolated_face_range: Best picks AVX2 when the CPU has it, else SSE2.
-enum class FaceKernelIsa { Best, Scalar, Sse2, Avx2 };
-
-/// True when the running CPU supports AVX2 (FaceKernelIsa::Avx2 may then be requested).
-bool cpu_has_avx2();
 
 /// The records of interpolated_face_terms for faces [b, e) of a quad mesh (`faces`: 4 vertex ids
 /// per face; positions and vertex normals as one array per component), written at

@@ -1,0 +1,20 @@
+#pragma once
+// Per-face values of the corrected FEM (spec §4.2-§4.4) for the assembly hot loop. Internal header.
+#include <cstddef>
+
+#include "face_kernel_isa.hpp"
+
+namespace corrlap::detail {
+
+/// Values per face written by fem_face_range: the six distinct entries of K_f
+/// (self, o1, o2, o, self - 2 eta, o + 2 eta; spec §4.3 pattern) and the mass scales
+/// area z / 36 and area z / 4 (spec §4.4).
+inline constexpr std::size_t kFemFaceValues = 8;
+
+/// Values of faces [b, e) into g + kFemFaceValues f. `positions` (V x 3) and `normals` (F x 3,
+/// face normals) are column-major; `faces` holds 4 vertex ids per face. The vector paths compute
+/// one face per lane with the scalar operations, so every ISA gives the same bits.
+void fem_face_range(const double* positions, std::size_t num_vertices, const int* faces, const double* normals,
+                    std::size_t num_faces, int b, int e, double* g, FaceKernelIsa isa = FaceKernelIsa::Best);
+
+}  // namespace corrlap::detail
