@@ -106,8 +106,8 @@ inline void fem_mass_into(double area, double z, bool lumped, double* M) {
 }
 
 // fem_geo + fem_face_values for the N faces f0 .. f0 + N - 1, one per lane of `vec` (GCC vector
-// extensions), with the scalar operations in the scalar order: same bits (no FMA contraction in
-// the targets used). Square roots per lane in scalar code.
+// extensions), with the scalar operations in the scalar order: same bits (nothing is contracted
+// into FMAs, -ffp-contract=off). Square roots per lane in scalar code.
 template <class vec>
 __attribute__((always_inline)) inline void fem_face_batch(const double* P, std::size_t V, const int* faces,
                                                           const double* U, std::size_t F, std::size_t f0, double* out) {
@@ -168,7 +168,7 @@ __attribute__((always_inline)) inline void fem_range_body(const double* P, std::
   }
 }
 
-__attribute__((target("avx2"))) void fem_range_avx2(const double* P, std::size_t V, const int* faces, const double* U,
+CORRLAP_AVX2_TARGET void fem_range_avx2(const double* P, std::size_t V, const int* faces, const double* U,
                                                     std::size_t F, int b, int e, double* g) {
   fem_range_body<FemLanes4>(P, V, faces, U, F, b, e, g);
 }

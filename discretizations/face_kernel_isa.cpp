@@ -5,8 +5,12 @@
 namespace corrlap::detail {
 
 bool cpu_has_avx2() {
+#if defined(__x86_64__) || defined(__i386__)
   static const bool has = __builtin_cpu_supports("avx2");
   return has;
+#else
+  return false;
+#endif
 }
 
 FaceKernelIsa resolve_face_kernel_isa(FaceKernelIsa isa) {

@@ -1,12 +1,22 @@
 #pragma once
 // Run-time choice of the instruction set for the per-face assembly kernels (interpolated_kernel,
 // fem_kernel). Internal header. The vector versions compute one face per SIMD lane with exactly the
-// scalar operations in the same order and no FMA contraction, so every choice gives the same bits.
+// scalar operations in the same order and no FMA contraction (-ffp-contract=off, CMakeLists.txt),
+// so every choice gives the same bits.
 
 namespace corrlap::detail {
 
-/// Best picks AVX2 when the CPU has it, else SSE2 (every x86-64 CPU has it).
+/// Best picks AVX2 when the CPU has it, else two lanes (SSE2 on x86-64, the target's 128-bit
+/// vectors elsewhere). Avx2 exists only on x86.
 enum class FaceKernelIsa { Best, Scalar, Sse2, Avx2 };
+
+// Attribute of the 4-lane kernels: AVX2 code on x86 (selected at run time), plain code elsewhere
+// (never selected there, since cpu_has_avx2() is false).
+#if defined(__x86_64__) || defined(__i386__)
+#define CORRLAP_AVX2_TARGET __attribute__((target("avx2")))
+#else
+#define CORRLAP_AVX2_TARGET
+#endif
 
 /// True when the running CPU supports AVX2 (FaceKernelIsa::Avx2 may then be requested).
 bool cpu_has_avx2();

@@ -20,7 +20,7 @@ typedef double Lanes4 __attribute__((vector_size(32)));  // an AVX register of d
 // lane (GCC vector extensions: compiled as AVX2 or SSE2 by the caller's target). Every lane
 // performs exactly the operations of the scalar function in the same order (square roots and the
 // square test per lane in scalar code), so the results are bitwise the scalar ones as long as
-// the compiler does not contract into FMAs (a plain x86-64 or "avx2" target has none).
+// nothing is contracted into FMAs (-ffp-contract=off).
 // Corners come from `faces` (4 per face), positions px/py/pz and normals ux/uy/uz (one array per
 // component). Returns false, having written nothing, when some face is not a square.
 typedef double Lanes2 __attribute__((vector_size(16)));  // SSE2 register of doubles
@@ -149,8 +149,7 @@ __attribute__((always_inline)) inline int face_range_body(const int* faces, int 
   return -1;
 }
 
-// The "avx2" target alone has no FMA, so nothing is contracted and the lanes keep the scalar bits.
-__attribute__((target("avx2"))) int face_range_avx2(const int* faces, int b, int e, const double* const x[3],
+CORRLAP_AVX2_TARGET int face_range_avx2(const int* faces, int b, int e, const double* const x[3],
                                                     const double* const u[3], double kappa, double* terms,
                                                     double* pd) {
   return face_range_body<Lanes4>(faces, b, e, x, u, kappa, terms, pd);
