@@ -37,7 +37,7 @@ test-static: deps
 	  -DCORRLAP_BUILD_APPS=OFF -DCORRLAP_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 	cmake --build $(BUILD)-static -j $(JOBS) --target corrlap_core corrlap_io corrlap_estimators \
 	  corrlap_discretizations corrlap_backends
-	cd $(BUILD)-static && ctest -R install_and_consume --output-on-failure
+	cd $(BUILD)-static && ctest -R install_and_consume --no-tests=error --output-on-failure
 
 bench: build
 	bash bench/run_all.sh $(BUILD)

@@ -8,6 +8,7 @@
 
 #include <corrlap/core/error.hpp>
 
+#include "avx2_target.inc"
 #include "fem_kernel.hpp"
 #include "normal_policy.hpp"
 #include "quad_row_gather.hpp"
@@ -112,7 +113,7 @@ template <class vec>
 __attribute__((always_inline)) inline void fem_face_batch(const double* P, std::size_t V, const int* faces,
                                                           const double* U, std::size_t F, std::size_t f0, double* out) {
   constexpr int N = int(sizeof(vec) / sizeof(double));
-  double lanes[6][3][N];  // corners 0, 1, 3 and the normal, gathered lane by lane
+  double lanes[4][3][N];  // corners 0, 1, 3 and the normal, gathered lane by lane
   for (int l = 0; l < N; ++l) {
     const int* q = faces + 4 * (f0 + std::size_t(l));
     const int c[3] = {q[0], q[1], q[3]};

@@ -10,14 +10,6 @@ namespace corrlap::detail {
 /// vectors elsewhere). Avx2 exists only on x86.
 enum class FaceKernelIsa { Best, Scalar, Sse2, Avx2 };
 
-// Attribute of the 4-lane kernels: AVX2 code on x86 (selected at run time), plain code elsewhere
-// (never selected there, since cpu_has_avx2() is false).
-#if defined(__x86_64__) || defined(__i386__)
-#define CORRLAP_AVX2_TARGET __attribute__((target("avx2")))
-#else
-#define CORRLAP_AVX2_TARGET
-#endif
-
 /// True when the running CPU supports AVX2 (FaceKernelIsa::Avx2 may then be requested).
 bool cpu_has_avx2();
 

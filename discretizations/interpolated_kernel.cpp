@@ -2,6 +2,8 @@
 // register (one face per lane), bitwise the scalar interpolated_face_terms (spec §3.2-§3.5).
 #include "interpolated_kernel.hpp"
 
+#include "avx2_target.inc"
+
 #include <cstddef>
 #include <cstring>
 
@@ -23,8 +25,6 @@ typedef double Lanes4 __attribute__((vector_size(32)));  // an AVX register of d
 // nothing is contracted into FMAs (-ffp-contract=off).
 // Corners come from `faces` (4 per face), positions px/py/pz and normals ux/uy/uz (one array per
 // component). Returns false, having written nothing, when some face is not a square.
-typedef double Lanes2 __attribute__((vector_size(16)));  // SSE2 register of doubles
-typedef double Lanes4 __attribute__((vector_size(32)));  // AVX register of doubles
 
 template <class vec>
 __attribute__((always_inline)) inline bool interpolated_face_terms_batch(const int* faces, int f0, const double* px,

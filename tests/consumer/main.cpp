@@ -1,15 +1,55 @@
-// A program that embeds corrlap through its installed CMake package.
+// A program that embeds corrlap through its installed CMake package. It touches every library
+// (core, estimators, discretizations, backends with CHOLMOD, io) so that a static build's link
+// dependencies are all exercised.
+#include <corrlap/backends/registry.hpp>
+#include <corrlap/core/config.hpp>
 #include <corrlap/core/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/io/text_io.hpp>
+#include <corrlap/io/volume_io.hpp>
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 int main() {
   corrlap::DigitizationParams p;
   p.h = 0.25;
-  const auto mesh = corrlap::extract_surface(corrlap::digitize(corrlap::make_implicit_shape("sphere1"), p));
+  const corrlap::ImplicitShape shape = corrlap::make_implicit_shape("sphere1");
+  const auto grid = corrlap::digitize(shape, p);
+  const auto mesh = corrlap::extract_surface(grid);
   const auto info = corrlap::compute_mesh_info(mesh);
   std::printf("V=%d F=%d E=%d\n", info.vertices, info.faces, info.edges);
   // spec §12.1: sphere1 at h = 0.25 has V = 296, F = 294, E = 588
-  return (info.vertices == 296 && info.faces == 294 && info.edges == 588) ? 0 : 1;
+  if (!(info.vertices == 296 && info.faces == 294 && info.edges == 588)) return 1;
+
+  // Corrected FEM with true normals, then (M - L) x = M 1 with CHOLMOD: L 1 = 0, so x = 1.
+  corrlap::NormalFields normals;
+  normals.face = corrlap::true_face_normals(shape, mesh);
+  const corrlap::Operators ops = corrlap::make_discretization("fem")->assemble(mesh, normals, corrlap::Config{});
+  const Eigen::SparseMatrix<double> A = ops.M - ops.L;
+  corrlap::Config solver;
+  solver.set("solver", std::string("cholmod"));
+  auto chol = corrlap::make_linear_solver(solver);
+  chol->compute(A);
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(A.rows());
+  const Eigen::MatrixXd x = chol->solve(ops.M * ones);
+  const double err = (x.col(0) - ones).cwiseAbs().maxCoeff();
+  std::printf("solver %s, max |x - 1| = %.2e\n", chol->name().c_str(), err);
+  if (!(err < 1e-10)) return 2;
+
+  // io: the volume round trip and a Matrix Market file.
+  const auto dir = std::filesystem::temp_directory_path() / "corrlap_consumer";
+  std::filesystem::create_directories(dir);
+  const corrlap::Volume vol = corrlap::voxels_to_volume(grid);
+  corrlap::write_volume((dir / "v.vol").string(), vol);
+  const corrlap::Volume back = corrlap::read_volume((dir / "v.vol").string());
+  corrlap::write_matrix_market((dir / "M.mtx").string(), ops.M);
+  const auto M2 = corrlap::read_matrix_market((dir / "M.mtx").string());
+  std::filesystem::remove_all(dir);
+  std::printf("volume %s, M.mtx %s, gzip NRRD %s\n", back.values == vol.values ? "same" : "DIFFERENT",
+              (M2 - ops.M).norm() == 0.0 ? "same" : "DIFFERENT", corrlap::nrrd_gzip_supported() ? "yes" : "no");
+  return back.values == vol.values && (M2 - ops.M).norm() == 0.0 ? 0 : 3;
 }
