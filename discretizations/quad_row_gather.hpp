@@ -13,12 +13,17 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include <corrlap/core/parallel_assembly.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::detail {
+
+/// Two doubles in one SSE2 / NEON register (GCC and Clang vector extension): the stiffness and mass
+/// sums of one column entry (gather_quad_row_pairs).
+typedef double PairLanes __attribute__((vector_size(16)));
 
 /// Face corners (4 f + i) incident to each vertex, ascending.
 struct VertexCorners {
@@ -217,6 +222,64 @@ std::shared_ptr<const QuadVertexPattern> quad_vertex_pattern(const SurfelMesh& m
 /// Drops the cached pattern (frees its memory).
 void clear_quad_vertex_pattern_cache();
 
+/// Columns of at most this many entries are summed on the stack by gather_quad_row_pairs.
+inline constexpr int kPairColumnMax = 64;
+
+/// gather_quad_rows through the pattern for two matrices and no column finisher, when every
+/// column has at most kPairColumnMax entries (pair_gather_fits; surfel meshes have at most 25). Entry k of both columns
+/// is summed in one 2-lane vector, so a corner's contribution is one vector add instead of two
+/// scalar read-modify-writes; lane m adds exactly what the scalar sum of matrix m adds, in the same
+/// order, so the bits are the same. fem's gather at h = 0.005 on one thread: 30 -> 26.5 ms
+/// (isolated, min of 15).
+template <class RowKernel>
+void gather_quad_row_pairs(const QuadVertexPattern& p, RowKernel&& kernel, Eigen::SparseMatrix<double>& A0,
+                           Eigen::SparseMatrix<double>& A1) {
+  const int V = p.num_vertices;
+  const Eigen::Index nnz = p.outer[std::size_t(V)];
+  for (Eigen::SparseMatrix<double>* A : {&A0, &A1}) {
+    A->resize(V, V);
+    A->resizeNonZeros(nnz);
+    advise_huge_pages(A->valuePtr(), std::size_t(nnz) * sizeof(double));
+    advise_huge_pages(A->innerIndexPtr(), std::size_t(nnz) * sizeof(int));
+  }
+  int* const inner0 = A0.innerIndexPtr();
+  int* const inner1 = A1.innerIndexPtr();
+  double* const val0 = A0.valuePtr();
+  double* const val1 = A1.valuePtr();
+  int* const outer0 = A0.outerIndexPtr();
+  int* const outer1 = A1.outerIndexPtr();
+  const int* const vstart = p.vc.start.data();
+  const int* const vcorner = p.vc.corner.data();
+  const std::uint16_t* const slot = p.slot.data();
+  const int* const outer = p.outer.data();
+  const int* const pin = p.inner.data();
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& r) {
+    double rows[8];
+    PairLanes sum[kPairColumnMax];
+    const std::size_t b = std::size_t(outer[r.begin()]), e = std::size_t(outer[r.end()]);
+    std::copy(pin + b, pin + e, inner0 + b);
+    std::copy(pin + b, pin + e, inner1 + b);
+    std::copy(outer + r.begin(), outer + r.end(), outer0 + r.begin());
+    std::copy(outer + r.begin(), outer + r.end(), outer1 + r.begin());
+    for (int v = r.begin(); v != r.end(); ++v) {
+      const std::size_t o = std::size_t(outer[v]);
+      const int n = outer[v + 1] - outer[v];
+      for (int k = 0; k < n; ++k) sum[k] = PairLanes{0.0, 0.0};
+      for (int a = vstart[v]; a < vstart[v + 1]; ++a) {
+        const int c = vcorner[a];
+        kernel(c >> 2, c & 3, rows);
+        const std::uint16_t* s = slot + 4 * std::size_t(a);
+        for (int j = 0; j < 4; ++j) sum[s[j]] += PairLanes{rows[j], rows[4 + j]};
+      }
+      double* const c0 = val0 + o;
+      double* const c1 = val1 + o;
+      for (int k = 0; k < n; ++k) c0[k] = sum[k][0], c1[k] = sum[k][1];
+    }
+  });
+  outer0[V] = int(nnz);
+  outer1[V] = int(nnz);
+}
+
 /// Same result, bit for bit, as gather_quad_rows(mesh, vc, ...) (same entries, same summation
 /// order: incident faces ascending), but with the pattern precomputed: per column it copies the
 /// row indices and accumulates the rows at their cached slots.
@@ -285,6 +348,10 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
 template <int Count, class RowKernel>
 void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
+  if constexpr (Count == 2) {
+    // A column holds at most 4 rows per incident face plus the diagonal.
+    if (4 * p.vc.max_degree + 1 <= kPairColumnMax) return gather_quad_row_pairs(p, kernel, *out[0], *out[1]);
+  }
   gather_quad_rows<Count>(p, kernel, out, NoColumnFinish{});
 }
 

@@ -58,6 +58,7 @@ TEST_CASE("cached-pattern vertex gather is bitwise the direct gather on several 
       const auto pat = detail::quad_vertex_pattern(s.mesh);
       REQUIRE(pat);
       Eigen::SparseMatrix<double> A, B;
+      // two matrices, no finisher: the paired path (gather_quad_row_pairs)
       detail::gather_quad_rows<2>(*pat, test_kernel, {&A, &B});
       INFO(t << " threads");
       CHECK(same_bits(A, A0));
