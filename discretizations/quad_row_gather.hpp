@@ -13,7 +13,6 @@
 #include <array>
 #include <cstdint>
 #include <memory>
-#include <type_traits>
 #include <vector>
 
 #include <corrlap/core/parallel_assembly.hpp>
@@ -226,11 +225,11 @@ void clear_quad_vertex_pattern_cache();
 inline constexpr int kPairColumnMax = 64;
 
 /// gather_quad_rows through the pattern for two matrices and no column finisher, when every
-/// column has at most kPairColumnMax entries (pair_gather_fits; surfel meshes have at most 25). Entry k of both columns
-/// is summed in one 2-lane vector, so a corner's contribution is one vector add instead of two
-/// scalar read-modify-writes; lane m adds exactly what the scalar sum of matrix m adds, in the same
-/// order, so the bits are the same. fem's gather at h = 0.005 on one thread: 30 -> 26.5 ms
-/// (isolated, min of 15).
+/// column has at most kPairColumnMax entries (surfel meshes have at most 25). Entry k of both
+/// columns is summed in one 2-lane vector, so a corner's contribution is one vector add instead of
+/// two scalar read-modify-writes; lane m adds exactly what the scalar sum of matrix m adds, in the
+/// same order, so the bits are the same. fem at h = 0.005 on one thread: gather 30 -> 26.5 ms
+/// (isolated, min of 15), whole assemble_into 68 -> 60 ms (A/B interleaved).
 template <class RowKernel>
 void gather_quad_row_pairs(const QuadVertexPattern& p, RowKernel&& kernel, Eigen::SparseMatrix<double>& A0,
                            Eigen::SparseMatrix<double>& A1) {
