@@ -68,6 +68,35 @@ TEST_CASE("cached-pattern vertex gather is bitwise the direct gather on several 
   set_thread_count(0);
 }
 
+TEST_CASE("two-matrix gather through the pattern falls back to the generic path for high-valence vertices") {
+  // A fan of 40 quads around vertex 0: its column has 81 rows, more than the paired path's stack
+  // column (kPairColumnMax = 64), so gather_quad_rows must take the generic path (which sums long
+  // columns in place).
+  constexpr int n = 40;
+  SurfelMesh fan;
+  fan.positions.resize(1 + 2 * n, 3);
+  fan.positions.row(0) = Eigen::RowVector3d(0, 0, 0);
+  fan.faces.resize(n, 4);
+  for (int k = 0; k < n; ++k) {
+    const double a = 2 * M_PI * k / n, b = 2 * M_PI * (k + 0.5) / n;
+    fan.positions.row(1 + k) = Eigen::RowVector3d(std::cos(a), std::sin(a), 0);
+    fan.positions.row(1 + n + k) = Eigen::RowVector3d(2 * std::cos(b), 2 * std::sin(b), 0.1);
+    fan.faces.row(k) << 0, 1 + k, 1 + n + k, 1 + (k + 1) % n;
+  }
+  const detail::VertexCorners vc = detail::vertex_corners(fan);
+  REQUIRE(4 * vc.max_degree + 1 > detail::kPairColumnMax);
+  REQUIRE(1 + 2 * n > detail::kPairColumnMax);
+  Eigen::SparseMatrix<double> A0, B0;
+  detail::gather_quad_rows<2>(fan, vc, test_kernel, {&A0, &B0});
+  const auto pat = detail::quad_vertex_pattern(fan);
+  REQUIRE(pat);
+  Eigen::SparseMatrix<double> A, B;
+  detail::gather_quad_rows<2>(*pat, test_kernel, {&A, &B});
+  CHECK(A0.col(0).nonZeros() == 1 + 2 * n);
+  CHECK(same_bits(A, A0));
+  CHECK(same_bits(B, B0));
+}
+
 TEST_CASE("the vertex pattern cache is rebuilt when the connectivity changes") {
   const SphereCase a = sphere_case(0.25), b = sphere_case(0.2);
   const auto pa = detail::quad_vertex_pattern(a.mesh);
