@@ -353,11 +353,7 @@ std::shared_ptr<const ProjectionPattern> projection_pattern(const SurfelMesh& me
 
 // Sized output with the given column structure (values uninitialized; the fill writes them all).
 void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
-  const Eigen::Index nnz = outer[V];
-  A.resize(V, V);
-  A.resizeNonZeros(nnz);
-  advise_huge_pages(A.valuePtr(), std::size_t(nnz) * sizeof(double));
-  advise_huge_pages(A.innerIndexPtr(), std::size_t(nnz) * sizeof(int));
+  detail::size_for_fill(A, V, outer[V]);
   std::copy(outer, outer + V + 1, A.outerIndexPtr());
 }
 

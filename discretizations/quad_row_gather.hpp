@@ -24,6 +24,21 @@ namespace corrlap::detail {
 /// sums of one column entry (gather_quad_row_pairs).
 typedef double PairLanes __attribute__((vector_size(16)));
 
+/// Sizes A as a V x V matrix with nnz stored entries whose values and row indices the caller will
+/// write (contents left uninitialized), keeping A's storage when it is large enough (assemble_into).
+/// New storage gets 2 MiB of spare capacity past the last entry and a huge-page hint up to its
+/// end, so that the last, partly used 2 MiB of each array is one huge page instead of up to 511
+/// 4 KiB page faults (glibc's large chunks are not 2 MiB aligned).
+inline void size_for_fill(Eigen::SparseMatrix<double>& A, int V, Eigen::Index nnz) {
+  constexpr Eigen::Index kSpare = (Eigen::Index(2) << 20) / Eigen::Index(sizeof(int));  // 2 MiB of indices
+  A.resize(V, V);  // keeps the allocation of the values and indices
+  if (A.data().allocatedSize() < nnz) A.data().reserve(nnz + kSpare);
+  A.resizeNonZeros(nnz);
+  const std::size_t capacity = std::size_t(A.data().allocatedSize());
+  advise_huge_pages(A.valuePtr(), capacity * sizeof(double));
+  advise_huge_pages(A.innerIndexPtr(), capacity * sizeof(int));
+}
+
 /// Face corners (4 f + i) incident to each vertex, ascending.
 struct VertexCorners {
   std::vector<int> start;   // #V + 1
@@ -235,12 +250,8 @@ void gather_quad_row_pairs(const QuadVertexPattern& p, RowKernel&& kernel, Eigen
                            Eigen::SparseMatrix<double>& A1) {
   const int V = p.num_vertices;
   const Eigen::Index nnz = p.outer[std::size_t(V)];
-  for (Eigen::SparseMatrix<double>* A : {&A0, &A1}) {
-    A->resize(V, V);
-    A->resizeNonZeros(nnz);
-    advise_huge_pages(A->valuePtr(), std::size_t(nnz) * sizeof(double));
-    advise_huge_pages(A->innerIndexPtr(), std::size_t(nnz) * sizeof(int));
-  }
+  size_for_fill(A0, V, nnz);
+  size_for_fill(A1, V, nnz);
   int* const inner0 = A0.innerIndexPtr();
   int* const inner1 = A1.innerIndexPtr();
   double* const val0 = A0.valuePtr();
@@ -287,12 +298,7 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
   const int V = p.num_vertices;
   const Eigen::Index nnz = p.outer[std::size_t(V)];
-  for (auto* A : out) {
-    A->resize(V, V);
-    A->resizeNonZeros(nnz);
-    advise_huge_pages(A->valuePtr(), std::size_t(nnz) * sizeof(double));
-    advise_huge_pages(A->innerIndexPtr(), std::size_t(nnz) * sizeof(int));
-  }
+  for (auto* A : out) size_for_fill(*A, V, nnz);
   std::array<int*, Count> inner;
   std::array<double*, Count> val;
   std::array<int*, Count> outer_out;

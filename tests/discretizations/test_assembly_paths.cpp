@@ -97,6 +97,27 @@ TEST_CASE("two-matrix gather through the pattern falls back to the generic path 
   CHECK(same_bits(B, B0));
 }
 
+TEST_CASE("size_for_fill: fresh storage has 2 MiB of spare capacity, sufficient storage is kept") {
+  Eigen::SparseMatrix<double> A;
+  const Eigen::Index nnz = 3'000'000;  // 24 MB of values: above glibc's mmap threshold
+  detail::size_for_fill(A, 1000, nnz);
+  CHECK(A.rows() == 1000);
+  CHECK(A.cols() == 1000);
+  CHECK(A.data().size() == nnz);  // the outer index is the caller's to fill
+  const Eigen::Index spare = (Eigen::Index(2) << 20) / Eigen::Index(sizeof(int));
+  CHECK(A.data().allocatedSize() == nnz + spare);
+  const double* values = A.valuePtr();
+  const int* indices = A.innerIndexPtr();
+  detail::size_for_fill(A, 900, nnz - 1000);  // fits: same storage (assemble_into refills it)
+  CHECK(A.rows() == 900);
+  CHECK(A.data().size() == nnz - 1000);
+  CHECK(A.valuePtr() == values);
+  CHECK(A.innerIndexPtr() == indices);
+  detail::size_for_fill(A, 900, nnz + 2 * spare);  // does not fit: new storage, again with spare room
+  CHECK(A.data().size() == nnz + 2 * spare);
+  CHECK(A.data().allocatedSize() == nnz + 3 * spare);
+}
+
 TEST_CASE("the vertex pattern cache is rebuilt when the connectivity changes") {
   const SphereCase a = sphere_case(0.25), b = sphere_case(0.2);
   const auto pa = detail::quad_vertex_pattern(a.mesh);
