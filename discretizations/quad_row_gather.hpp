@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -250,8 +251,12 @@ void gather_quad_row_pairs(const QuadVertexPattern& p, RowKernel&& kernel, Eigen
                            Eigen::SparseMatrix<double>& A1) {
   const int V = p.num_vertices;
   const Eigen::Index nnz = p.outer[std::size_t(V)];
-  size_for_fill(A0, V, nnz);
-  size_for_fill(A1, V, nnz);
+  // Sized in two tasks. Measured effect (fem, fresh output, h = 0.005, 2 threads): 2 482 -> 457
+  // minor faults per call, min 59-72 -> 41-48 ms. Mostly glibc's doing: when a TBB worker runs the
+  // second task, that matrix's arrays (the 3 MB outer index that Eigen's resize zeroes, among
+  // others) come from the worker's arena, which keeps and reuses freed pages. On one thread both
+  // run inline, as before. Same bits either way.
+  tbb::parallel_invoke([&] { size_for_fill(A0, V, nnz); }, [&] { size_for_fill(A1, V, nnz); });
   int* const inner0 = A0.innerIndexPtr();
   int* const inner1 = A1.innerIndexPtr();
   double* const val0 = A0.valuePtr();
