@@ -12,12 +12,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <string>
-#include <utility>
-#include <vector>
 #include <exception>
 #include <map>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/implicit_shape.hpp>

@@ -153,8 +153,7 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
   count_column_rows(faces, vc, V, scratch, outer.data());
   const Eigen::Index nnz = outer[std::size_t(V)];
   for (auto* A : out) {
-    A->resize(V, V);
-    A->resizeNonZeros(nnz);
+    size_for_fill(*A, V, nnz);
     std::copy(outer.begin(), outer.end(), A->outerIndexPtr());
   }
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
