@@ -25,15 +25,26 @@ namespace corrlap::detail {
 /// sums of one column entry (gather_quad_row_pairs).
 typedef double PairLanes __attribute__((vector_size(16)));
 
+/// Smallest capacity >= n whose value (8 bytes per entry) and row-index (4 bytes per entry)
+/// arrays, each with glibc's 16-byte header and rounded up to 4 KiB pages, are whole multiples of
+/// 2 MiB (4 c + 2048 is a multiple of 2 MiB). Linux maps anonymous regions of such lengths at
+/// 2 MiB-aligned addresses, so when malloc serves them with their own mapping, both end blocks lie
+/// inside it and advise_huge_pages can make the whole array huge pages.
+inline Eigen::Index mapping_friendly_capacity(Eigen::Index n) {
+  constexpr Eigen::Index step = (Eigen::Index(2) << 20) / 4;  // entries per 2 MiB of indices
+  return ((n + 512 + step - 1) / step) * step - 512;
+}
+
 /// Sizes A as a V x V matrix with nnz stored entries whose values and row indices the caller will
 /// write (contents left uninitialized), keeping A's storage when it is large enough (assemble_into).
-/// New storage gets 2 MiB of spare capacity past the last entry and a huge-page hint up to its
-/// end, so that the last, partly used 2 MiB of each array is one huge page instead of up to 511
-/// 4 KiB page faults (glibc's large chunks are not 2 MiB aligned).
+/// New storage gets at least 2 MiB of spare capacity past the last entry (a mapping-friendly
+/// capacity, above) and advise_huge_pages over all of it: one fresh 2 MiB block then costs one
+/// fault instead of up to 512. Fresh fem output at h = 0.005: 2 778 -> 1 521 faults per call on one
+/// thread (the rest is Eigen's outer index), 645 -> 52 on two.
 inline void size_for_fill(Eigen::SparseMatrix<double>& A, int V, Eigen::Index nnz) {
   constexpr Eigen::Index kSpare = (Eigen::Index(2) << 20) / Eigen::Index(sizeof(int));  // 2 MiB of indices
   A.resize(V, V);  // keeps the allocation of the values and indices
-  if (A.data().allocatedSize() < nnz) A.data().reserve(nnz + kSpare);
+  if (A.data().allocatedSize() < nnz) A.data().reserve(mapping_friendly_capacity(nnz + kSpare));
   A.resizeNonZeros(nnz);
   const std::size_t capacity = std::size_t(A.data().allocatedSize());
   advise_huge_pages(A.valuePtr(), capacity * sizeof(double));
