@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/huge_pages.hpp>
 
 #include "interpolated_kernel.hpp"
 #include "normal_policy.hpp"
@@ -330,6 +331,21 @@ std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMe
       }
     }
   });
+  // Streamed by every assembly on this connectivity: huge pages (see collapse_to_huge_pages).
+  collapse_to_huge_pages(p->inc_row);
+  collapse_to_huge_pages(p->inc_coef);
+  collapse_to_huge_pages(p->inc_slot);
+  collapse_to_huge_pages(p->inc_start);
+  collapse_to_huge_pages(p->size);
+  collapse_to_huge_pages(p->outer);
+  collapse_to_huge_pages(p->inner);
+  collapse_to_huge_pages(p->face_pos8);
+  collapse_to_huge_pages(p->face_pos32);
+  collapse_to_huge_pages(p->ce_start);
+  collapse_to_huge_pages(p->ce_edge);
+  collapse_to_huge_pages(p->ce_sv);
+  collapse_to_huge_pages(p->ce_pos8);
+  collapse_to_huge_pages(p->ce_pos32);
   return p;
 }
 

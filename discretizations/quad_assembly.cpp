@@ -131,6 +131,13 @@ std::shared_ptr<const QuadVertexPattern> build_quad_vertex_pattern(const SurfelM
       }
     }
   });
+  // Read by every assembly on this connectivity: huge pages (see collapse_to_huge_pages).
+  collapse_to_huge_pages(p->faces);
+  collapse_to_huge_pages(p->vc.start);
+  collapse_to_huge_pages(p->vc.corner);
+  collapse_to_huge_pages(p->outer);
+  collapse_to_huge_pages(p->inner);
+  collapse_to_huge_pages(p->slot);
   return p;
 }
 

@@ -4,7 +4,9 @@
 // change of connectivity.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
@@ -148,6 +150,21 @@ TEST_CASE("advise_huge_pages keeps the contents of the buffer and of its neighbo
   for (std::size_t i = 0; i < n; ++i)
     written = written && all[i] == (i >= b && i < e ? -double(i) : double(i) * 0.5 + 1.0);
   CHECK(written);
+}
+
+TEST_CASE("collapse_to_huge_pages keeps the contents of a written buffer") {
+  // Cached patterns are moved onto huge pages after they are written: the kernel copies them.
+  std::vector<std::uint16_t> v(5'000'001);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::uint16_t(i * 2654435761u >> 7);
+  std::vector<int> small(1000, 7);  // under 2 MiB: left alone
+  collapse_to_huge_pages(v);
+  collapse_to_huge_pages(small);
+  bool kept = true;
+  for (std::size_t i = 0; i < v.size(); ++i) kept = kept && v[i] == std::uint16_t(i * 2654435761u >> 7);
+  CHECK(kept);
+  CHECK(std::count(small.begin(), small.end(), 7) == 1000);
+  v[4'999'999] = 1;  // still writable
+  CHECK(v[4'999'999] == 1);
 }
 
 TEST_CASE("the vertex pattern cache is rebuilt when the connectivity changes") {
