@@ -38,15 +38,14 @@ void collapse_to_huge_pages(const void* p, std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
   static const bool disabled = std::getenv("CORRLAP_NO_HUGEPAGES") != nullptr;
-  if (disabled || bytes < huge) return;
-  const std::uintptr_t lo = reinterpret_cast<std::uintptr_t>(p) & ~(huge - 1);
-  const std::uintptr_t hi = (reinterpret_cast<std::uintptr_t>(p) + bytes + huge - 1) & ~(huge - 1);
-  // Block by block: a block that is not entirely inside one mapping (the ends of a buffer that
-  // has its own unaligned mapping) fails alone instead of failing the whole range.
-  for (std::uintptr_t b = lo; b < hi; b += huge) {
-    (void)madvise(reinterpret_cast<void*>(b), huge, MADV_HUGEPAGE);
-    (void)madvise(reinterpret_cast<void*>(b), huge, MADV_COLLAPSE);
-  }
+  if (disabled || bytes < 2 * huge) return;
+  // Only the aligned interior: the end blocks may hold other (heap) data, and collapsing those
+  // changed where later allocations fault (fresh output at h = 0.01: 34 -> 224-531 faults per call).
+  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(p) + huge - 1) & ~(huge - 1);
+  const std::uintptr_t hi = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(huge - 1);
+  if (hi <= lo) return;
+  (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+  (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_COLLAPSE);
 #else
   (void)p;
   (void)bytes;

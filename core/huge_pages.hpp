@@ -16,8 +16,8 @@ namespace corrlap {
 void advise_huge_pages(const void* p, std::size_t bytes);
 
 /// Moves an already written, long-lived buffer (a cached assembly pattern) onto transparent huge
-/// pages: hints every 2 MiB block it touches and collapses them now (MADV_COLLAPSE; the kernel
-/// copies the contents). Costs about one copy of the buffer, once. Worth it for data read on every
+/// pages: hints the 2 MiB blocks inside it and collapses them now (MADV_COLLAPSE; the kernel
+/// copies the contents). No-op under 4 MiB. Costs about one copy of the buffer, once. Worth it for data read on every
 /// assembly: on a VM each TLB miss is a two-level page walk, and with 4 KiB pages the streaming
 /// pattern reads of the interpolated fill made its steady-state time vary by ~1.7x.
 /// Failures are ignored; CORRLAP_NO_HUGEPAGES turns it off.

@@ -156,7 +156,7 @@ TEST_CASE("collapse_to_huge_pages keeps the contents of a written buffer") {
   // Cached patterns are moved onto huge pages after they are written: the kernel copies them.
   std::vector<std::uint16_t> v(5'000'001);
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::uint16_t(i * 2654435761u >> 7);
-  std::vector<int> small(1000, 7);  // under 2 MiB: left alone
+  std::vector<int> small(1000, 7);  // under 4 MiB: left alone
   collapse_to_huge_pages(v);
   collapse_to_huge_pages(small);
   bool kept = true;
