@@ -34,22 +34,4 @@ void advise_huge_pages(const void* p, std::size_t bytes) {
 #endif
 }
 
-void collapse_to_huge_pages(const void* p, std::size_t bytes) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
-  static const bool disabled = std::getenv("CORRLAP_NO_HUGEPAGES") != nullptr;
-  if (disabled || bytes < 2 * huge) return;
-  // Only the aligned interior: the end blocks may hold other (heap) data, and collapsing those
-  // changed where later allocations fault (fresh output at h = 0.01: 34 -> 224-531 faults per call).
-  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(p) + huge - 1) & ~(huge - 1);
-  const std::uintptr_t hi = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(huge - 1);
-  if (hi <= lo) return;
-  (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
-  (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_COLLAPSE);
-#else
-  (void)p;
-  (void)bytes;
-#endif
-}
-
 }  // namespace corrlap

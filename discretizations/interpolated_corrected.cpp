@@ -137,7 +137,7 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCor
         count[std::size_t(4 * f + i)] = n;
       }
   });
-  el.corner_edge.resize(std::size_t(F) * 4);
+  assign_on_huge_pages(el.corner_edge, std::size_t(F) * 4);
   std::vector<int> rep_of_edge;
   rep_of_edge.reserve(std::size_t(F) * 2 + 4);
   el.start.assign(1, 0);
@@ -155,11 +155,11 @@ EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCor
   el.k = k;
   el.num_edges = E;
   const std::size_t total = std::size_t(el.start[std::size_t(E)]);
-  el.inc_face.resize(total);
-  el.inc_local.resize(total);
-  el.inc_slot.assign(total * 4, 0);
-  el.ids.assign(std::size_t(E) * std::size_t(k), 0);
-  el.size.assign(std::size_t(E), 0);
+  assign_on_huge_pages(el.inc_face, total);
+  assign_on_huge_pages(el.inc_local, total);
+  assign_on_huge_pages(el.inc_slot, total * 4);
+  assign_on_huge_pages(el.ids, std::size_t(E) * std::size_t(k));
+  assign_on_huge_pages(el.size, std::size_t(E));
   tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int e = r.begin(); e != r.end(); ++e) {
       const int rep = rep_of_edge[std::size_t(e)];
@@ -255,12 +255,13 @@ std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMe
   const int* faces = mesh.faces.data();
   p->k = k;
   p->num_edges = E;
-  p->size = el.size;
-  p->inc_start = el.start;
+  assign_on_huge_pages(p->size, el.size.data(), el.size.data() + el.size.size());
+  assign_on_huge_pages(p->inc_start, el.start.data(), el.start.data() + el.start.size());
   const std::size_t I = el.inc_face.size();
-  p->inc_row.resize(I);
-  p->inc_coef.resize(I);
-  p->inc_slot.resize(I * 4);
+  // Pattern arrays are streamed by every assembly on this connectivity: huge pages from the start.
+  assign_on_huge_pages(p->inc_row, I);
+  assign_on_huge_pages(p->inc_coef, I);
+  assign_on_huge_pages(p->inc_slot, I * 4);
   tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int e = r.begin(); e != r.end(); ++e) {
       const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
@@ -276,8 +277,8 @@ std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMe
   });
   const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
   tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, E, cap_n, cap_e); });
-  p->outer.assign(std::size_t(V) + 1, 0);
-  p->ce_start.assign(std::size_t(V) + 1, 0);
+  assign_on_huge_pages(p->outer, std::size_t(V) + 1);
+  assign_on_huge_pages(p->ce_start, std::size_t(V) + 1);
   // Stamps (edge and vertex arrays): v in pass 1, V + v in pass 2, so nothing is ever reset.
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
     ProjectionScratch& sc = scratch.local();
@@ -295,11 +296,16 @@ std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMe
   }
   p->wide = widest > 255;
   const std::size_t CE = std::size_t(p->ce_start[std::size_t(V)]);
-  p->inner.resize(std::size_t(p->outer[std::size_t(V)]));
-  p->ce_edge.resize(CE);
-  p->ce_sv.resize(CE);
-  (p->wide ? p->face_pos32.resize(vc.corner.size() * 4) : p->face_pos8.resize(vc.corner.size() * 4));
-  (p->wide ? p->ce_pos32.resize(CE * std::size_t(k)) : p->ce_pos8.resize(CE * std::size_t(k)));
+  assign_on_huge_pages(p->inner, std::size_t(p->outer[std::size_t(V)]));
+  assign_on_huge_pages(p->ce_edge, CE);
+  assign_on_huge_pages(p->ce_sv, CE);
+  if (p->wide) {
+    assign_on_huge_pages(p->face_pos32, vc.corner.size() * 4);
+    assign_on_huge_pages(p->ce_pos32, CE * std::size_t(k));
+  } else {
+    assign_on_huge_pages(p->face_pos8, vc.corner.size() * 4);
+    assign_on_huge_pages(p->ce_pos8, CE * std::size_t(k));
+  }
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
     ProjectionScratch& sc = scratch.local();
     int* pos = sc.col.pos.data();
@@ -331,21 +337,6 @@ std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMe
       }
     }
   });
-  // Streamed by every assembly on this connectivity: huge pages (see collapse_to_huge_pages).
-  collapse_to_huge_pages(p->inc_row);
-  collapse_to_huge_pages(p->inc_coef);
-  collapse_to_huge_pages(p->inc_slot);
-  collapse_to_huge_pages(p->inc_start);
-  collapse_to_huge_pages(p->size);
-  collapse_to_huge_pages(p->outer);
-  collapse_to_huge_pages(p->inner);
-  collapse_to_huge_pages(p->face_pos8);
-  collapse_to_huge_pages(p->face_pos32);
-  collapse_to_huge_pages(p->ce_start);
-  collapse_to_huge_pages(p->ce_edge);
-  collapse_to_huge_pages(p->ce_sv);
-  collapse_to_huge_pages(p->ce_pos8);
-  collapse_to_huge_pages(p->ce_pos32);
   return p;
 }
 

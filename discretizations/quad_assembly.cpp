@@ -107,17 +107,18 @@ std::shared_ptr<const QuadVertexPattern> build_quad_vertex_pattern(const SurfelM
   const int V = mesh.num_vertices(), F = mesh.num_faces();
   const int* faces = mesh.faces.data();
   p->num_vertices = V;
-  p->faces.assign(faces, faces + std::size_t(F) * 4);
+  // Read by every assembly on this connectivity: huge pages from the start.
+  assign_on_huge_pages(p->faces, faces, faces + std::size_t(F) * 4);
   p->vc = vertex_corners(mesh);
   const VertexCorners& vc = p->vc;
   const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
   if (cap > 65535) return nullptr;
   tbb::enumerable_thread_specific<ColumnScratch> scratch([&] { return ColumnScratch(V, cap); });
-  p->outer.assign(std::size_t(V) + 1, 0);
+  assign_on_huge_pages(p->outer, std::size_t(V) + 1);
   int* outer = p->outer.data();
   count_column_rows(faces, vc, V, scratch, outer);  // pass 1: distinct rows per column
-  p->inner.resize(std::size_t(outer[V]));
-  p->slot.resize(std::size_t(F) * 16);  // 4 incidences per face, 4 slots each
+  assign_on_huge_pages(p->inner, std::size_t(outer[V]));
+  assign_on_huge_pages(p->slot, std::size_t(F) * 16);  // 4 incidences per face, 4 slots each
   // Pass 2: sorted rows and the slot of every (incidence, corner).
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
     ColumnScratch& sc = scratch.local();
@@ -131,13 +132,6 @@ std::shared_ptr<const QuadVertexPattern> build_quad_vertex_pattern(const SurfelM
       }
     }
   });
-  // Read by every assembly on this connectivity: huge pages (see collapse_to_huge_pages).
-  collapse_to_huge_pages(p->faces);
-  collapse_to_huge_pages(p->vc.start);
-  collapse_to_huge_pages(p->vc.corner);
-  collapse_to_huge_pages(p->outer);
-  collapse_to_huge_pages(p->inner);
-  collapse_to_huge_pages(p->slot);
   return p;
 }
 

@@ -62,13 +62,13 @@ inline VertexCorners vertex_corners(const SurfelMesh& mesh) {
   VertexCorners vc;
   const int V = mesh.num_vertices(), C = 4 * mesh.num_faces();
   const int* ids = mesh.faces.data();
-  vc.start.assign(std::size_t(V) + 1, 0);
+  assign_on_huge_pages(vc.start, std::size_t(V) + 1);
   for (int c = 0; c < C; ++c) ++vc.start[std::size_t(ids[c]) + 1];
   for (int v = 0; v < V; ++v) {
     vc.max_degree = std::max(vc.max_degree, vc.start[std::size_t(v) + 1]);
     vc.start[std::size_t(v) + 1] += vc.start[std::size_t(v)];
   }
-  vc.corner.resize(std::size_t(C));
+  assign_on_huge_pages(vc.corner, std::size_t(C));
   std::vector<int> fill(vc.start.begin(), vc.start.end() - 1);
   for (int c = 0; c < C; ++c) vc.corner[std::size_t(fill[std::size_t(ids[c])]++)] = c;
   return vc;

@@ -152,19 +152,21 @@ TEST_CASE("advise_huge_pages keeps the contents of the buffer and of its neighbo
   CHECK(written);
 }
 
-TEST_CASE("collapse_to_huge_pages keeps the contents of a written buffer") {
-  // Cached patterns are moved onto huge pages after they are written: the kernel copies them.
-  std::vector<std::uint16_t> v(5'000'001);
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::uint16_t(i * 2654435761u >> 7);
-  std::vector<int> small(1000, 7);  // under 4 MiB: left alone
-  collapse_to_huge_pages(v);
-  collapse_to_huge_pages(small);
-  bool kept = true;
-  for (std::size_t i = 0; i < v.size(); ++i) kept = kept && v[i] == std::uint16_t(i * 2654435761u >> 7);
-  CHECK(kept);
-  CHECK(std::count(small.begin(), small.end(), 7) == 1000);
-  v[4'999'999] = 1;  // still writable
-  CHECK(v[4'999'999] == 1);
+TEST_CASE("assign_on_huge_pages gives the same vector as assign") {
+  std::vector<std::uint16_t> v(3, 9);
+  assign_on_huge_pages(v, std::size_t(5'000'001), std::uint16_t(7));  // 10 MB: hinted
+  CHECK(v.size() == 5'000'001);
+  CHECK(std::size_t(std::count(v.begin(), v.end(), std::uint16_t(7))) == v.size());
+  std::vector<int> source(3'000'000);
+  for (std::size_t i = 0; i < source.size(); ++i) source[i] = int(i * 2654435761u >> 3);
+  std::vector<int> copy;
+  assign_on_huge_pages(copy, source.data(), source.data() + source.size());
+  CHECK(copy == source);
+  std::vector<double> small;
+  assign_on_huge_pages(small, 10, 1.5);  // under 4 MiB: a plain vector
+  CHECK(small == std::vector<double>(10, 1.5));
+  assign_on_huge_pages(small, 0);
+  CHECK(small.empty());
 }
 
 TEST_CASE("the vertex pattern cache is rebuilt when the connectivity changes") {
