@@ -10,7 +10,7 @@
 #include <cholmod.h>
 #include <omp.h>
 
-#include "solver_support.hpp"
+#include <corrlap/backends/detail/solver_support.hpp>
 
 extern "C" void openblas_set_num_threads(int) __attribute__((weak));
 

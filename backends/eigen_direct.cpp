@@ -6,7 +6,7 @@
 
 #include <Eigen/SparseCholesky>
 
-#include "solver_support.hpp"
+#include <corrlap/backends/detail/solver_support.hpp>
 
 namespace corrlap {
 

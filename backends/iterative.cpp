@@ -8,7 +8,7 @@
 
 #include <Eigen/IterativeLinearSolvers>
 
-#include "solver_support.hpp"
+#include <corrlap/backends/detail/solver_support.hpp>
 
 namespace corrlap {
 

@@ -9,7 +9,7 @@
 #include <Spectra/SymGEigsShiftSolver.h>
 
 #include "registry.hpp"
-#include "solver_support.hpp"
+#include <corrlap/backends/detail/solver_support.hpp>
 
 namespace corrlap {
 

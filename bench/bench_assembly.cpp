@@ -19,9 +19,10 @@
 #include <utility>
 #include <vector>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/config.hpp>
-#include <corrlap/core/implicit_shape.hpp>
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>

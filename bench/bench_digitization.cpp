@@ -21,7 +21,8 @@
 #include <utility>
 #include <vector>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 

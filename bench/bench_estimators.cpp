@@ -5,7 +5,8 @@
 // Run one size: ./bench_estimators --benchmark_filter='BM_ii_normals/125'
 #include <benchmark/benchmark.h>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>

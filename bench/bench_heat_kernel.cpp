@@ -14,10 +14,11 @@
 #include <memory>
 #include <string>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/heat_kernel.hpp>
-#include <corrlap/discretizations/normal_policy.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 

@@ -16,9 +16,10 @@
 #include <memory>
 #include <mutex>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/backends/spectra_eigs.hpp>
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/discretizations/registry.hpp>

@@ -14,12 +14,16 @@ function(corrlap_warnings target)
 endfunction()
 
 # corrlap_library(<folder-name> [PUBLIC deps...] [PRIVATE deps...])
-# One library per top-level folder; every .cpp in the folder belongs to it, every .hpp is installed.
+# One library per top-level folder: every .cpp below the folder belongs to it. Headers below the
+# folder are installed with their sub-folders, except those in a detail/ folder: internal headers
+# (TBB, intrinsics, assembly machinery) are never installed, so installed headers include Eigen and
+# the standard library only (tests/install_tree_check.cmake verifies it).
 function(corrlap_library name)
   cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE" ${ARGN})
-  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
-  file(GLOB headers CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.hpp)
-  add_library(corrlap_${name} ${sources} ${headers})
+  file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
+  file(GLOB_RECURSE headers CONFIGURE_DEPENDS RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}
+    ${CMAKE_CURRENT_SOURCE_DIR}/*.hpp ${CMAKE_CURRENT_SOURCE_DIR}/*.inc)
+  add_library(corrlap_${name} ${sources})
   add_library(corrlap::${name} ALIAS corrlap_${name})
   set_target_properties(corrlap_${name} PROPERTIES EXPORT_NAME ${name} OUTPUT_NAME corrlap_${name}
     VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR})
@@ -28,6 +32,12 @@ function(corrlap_library name)
     $<INSTALL_INTERFACE:include>)
   target_link_libraries(corrlap_${name} PUBLIC ${ARG_PUBLIC} PRIVATE ${ARG_PRIVATE})
   corrlap_warnings(corrlap_${name})
-  install(FILES ${headers} DESTINATION include/corrlap/${name})
+  foreach(header ${headers})
+    if(header MATCHES "(^|/)detail/")
+      continue()
+    endif()
+    get_filename_component(subdir ${header} DIRECTORY)
+    install(FILES ${CMAKE_CURRENT_SOURCE_DIR}/${header} DESTINATION include/corrlap/${name}/${subdir})
+  endforeach()
   set_property(GLOBAL APPEND PROPERTY CORRLAP_EXPORTED_TARGETS corrlap_${name})
 endfunction()

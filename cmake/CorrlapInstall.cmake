@@ -21,3 +21,8 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfig.cmake
   ${CMAKE_CURRENT_BINARY_DIR}/corrlapConfigVersion.cmake
   ${CMAKE_CURRENT_LIST_DIR}/FindCHOLMOD.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/corrlap)
+
+# The build tree is a package too: find_package(corrlap CONFIG) with corrlap_DIR=<build dir> uses
+# the targets of this build (headers from the source tree, libraries from the build tree).
+export(EXPORT corrlapTargets NAMESPACE corrlap:: FILE ${CMAKE_CURRENT_BINARY_DIR}/corrlapTargets.cmake)
+configure_file(${CMAKE_CURRENT_LIST_DIR}/FindCHOLMOD.cmake ${CMAKE_CURRENT_BINARY_DIR}/FindCHOLMOD.cmake COPYONLY)

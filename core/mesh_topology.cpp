@@ -40,10 +40,7 @@ EdgeTopology build_edges(const SurfelMesh& mesh) {
     std::uint32_t other;      // the larger vertex
     std::uint32_t half_edge;  // 4 f + i
   };
-  std::vector<Slot> slots;
-  slots.reserve(4 * F);
-  advise_huge_pages(slots.data(), 4 * F * sizeof(Slot));
-  slots.resize(4 * F);
+  std::vector<Slot> slots(4 * F);
   {
     std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
     for (std::size_t k = 0; k < 4 * F; ++k) {
@@ -77,11 +74,8 @@ EdgeTopology build_edges(const SurfelMesh& mesh) {
   const std::size_t E = edge_start[V];
   EdgeTopology t;
   t.face_edges.resize(Eigen::Index(F), 4);
-  advise_huge_pages(t.face_edges.data(), 4 * F * sizeof(int));
   t.face_edge_signs.resize(Eigen::Index(F), 4);
-  advise_huge_pages(t.face_edge_signs.data(), 4 * F);
   t.edges.resize(Eigen::Index(E), 2);
-  advise_huge_pages(t.edges.data(), 2 * E * sizeof(int));
   t.faces_per_edge.assign(E, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, V, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t v = r.begin(); v != r.end(); ++v) {

@@ -8,10 +8,10 @@
 
 #include <corrlap/core/error.hpp>
 
-#include "avx2_target.inc"
-#include "fem_kernel.hpp"
-#include "normal_policy.hpp"
-#include "quad_row_gather.hpp"
+#include <corrlap/discretizations/assembly/detail/avx2_target.inc>
+#include <corrlap/discretizations/detail/fem_kernel.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 
 namespace corrlap {
 

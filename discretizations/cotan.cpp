@@ -8,7 +8,7 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 
 #include "virtual_refinement.hpp"
 

@@ -14,10 +14,10 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/huge_pages.hpp>
+#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
 #include <corrlap/core/normal_fields.hpp>
 
-#include "normal_policy.hpp"
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 
 namespace corrlap {
 

@@ -15,11 +15,11 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/huge_pages.hpp>
+#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
 
-#include "interpolated_kernel.hpp"
-#include "normal_policy.hpp"
-#include "quad_row_gather.hpp"
+#include <corrlap/discretizations/detail/interpolated_kernel.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 
 namespace corrlap {
 

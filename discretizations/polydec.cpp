@@ -7,8 +7,8 @@
 
 #include <corrlap/core/error.hpp>
 
-#include "normal_policy.hpp"
-#include "quad_row_gather.hpp"
+#include <corrlap/discretizations/detail/normal_policy.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 
 namespace corrlap {
 

@@ -7,7 +7,7 @@
 
 #include <corrlap/core/error.hpp>
 
-#include "quad_row_gather.hpp"
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 
 #include <tbb/parallel_reduce.h>
 

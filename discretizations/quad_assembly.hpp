@@ -8,7 +8,7 @@
 
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap {

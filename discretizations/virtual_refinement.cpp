@@ -13,11 +13,11 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 
-#include "normal_policy.hpp"
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include "quad_assembly.hpp"
-#include "quad_row_gather.hpp"
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 
 namespace corrlap {
 

@@ -3,7 +3,7 @@
 // gradient at the projection of the point onto {P = 0} by a damped Newton iteration.
 #include <Eigen/Core>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap {

@@ -3,7 +3,7 @@
 #include <Eigen/Core>
 #include <string>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
 

@@ -14,7 +14,7 @@
 
 namespace corrlap::test {
 
-/// Directory of the reference data (../shared/reference); tests that need it fail if absent.
+/// Directory of the reference data (tests/data, see its README.md).
 inline std::string reference_dir() { return CORRLAP_REFERENCE_DIR; }
 
 /// A fresh scratch file path under the build tree.

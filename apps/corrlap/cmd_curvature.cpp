@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>

@@ -7,9 +7,10 @@
 
 #include <Eigen/Geometry>
 
-#include <corrlap/backends/problems.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/problems/problems.hpp>
 #include <corrlap/backends/registry.hpp>
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/discretizations/registry.hpp>

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <mutex>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/normal_estimation.hpp>

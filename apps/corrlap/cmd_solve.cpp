@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include <corrlap/backends/problems.hpp>
+#include <corrlap/problems/problems.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>

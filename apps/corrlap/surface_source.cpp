@@ -3,8 +3,9 @@
 #include <iostream>
 #include <sstream>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/mesh_voxelization.hpp>
+#include <corrlap/surface/mesh_voxelization.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 

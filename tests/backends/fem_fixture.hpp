@@ -4,7 +4,8 @@
 // M the consistent mass (spec §4.4). Independent of the discretizations library on purpose.
 #include <Eigen/Sparse>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::test {

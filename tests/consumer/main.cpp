@@ -1,9 +1,10 @@
 // A program that embeds corrlap through its installed CMake package. It touches every library
 // (core, estimators, discretizations, backends with CHOLMOD, io) so that a static build's link
 // dependencies are all exercised.
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/config.hpp>
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>

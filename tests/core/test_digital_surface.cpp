@@ -3,8 +3,9 @@
 
 #include <cmath>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/io/mesh_io.hpp>
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
@@ -72,7 +73,7 @@ inline MatrixDiff compare_matrices(const Eigen::SparseMatrix<double>& A, const E
 
 }  // namespace corrlap::test
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 
 namespace corrlap::test {

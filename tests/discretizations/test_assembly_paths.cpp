@@ -16,11 +16,11 @@
 
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/huge_pages.hpp>
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/quad_assembly.hpp>
-#include <corrlap/discretizations/quad_row_gather.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 #include <corrlap/discretizations/registry.hpp>
 
 #include "reference_support.hpp"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include <corrlap/discretizations/corrected_fem.hpp>
-#include <corrlap/discretizations/fem_kernel.hpp>
+#include <corrlap/discretizations/detail/fem_kernel.hpp>
 
 using namespace corrlap;
 

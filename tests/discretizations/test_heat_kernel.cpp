@@ -8,7 +8,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/heat_kernel.hpp>
-#include <corrlap/discretizations/normal_policy.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 

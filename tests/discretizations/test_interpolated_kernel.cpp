@@ -9,7 +9,7 @@
 #include <vector>
 
 #include <corrlap/discretizations/interpolated_corrected.hpp>
-#include <corrlap/discretizations/interpolated_kernel.hpp>
+#include <corrlap/discretizations/detail/interpolated_kernel.hpp>
 
 using namespace corrlap;
 

@@ -3,7 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/normal_policy.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <algorithm>
 #include <corrlap/estimators/implicit_normals.hpp>

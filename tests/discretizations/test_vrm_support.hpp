@@ -8,8 +8,9 @@
 #include <functional>
 #include <vector>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::test {

@@ -3,7 +3,8 @@
 
 #include <cmath>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/text_io.hpp>
 

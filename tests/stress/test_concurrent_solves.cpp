@@ -15,9 +15,10 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/backends/registry.hpp>
-#include <corrlap/core/implicit_shape.hpp>
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 using namespace corrlap;

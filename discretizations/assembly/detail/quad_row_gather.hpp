@@ -16,7 +16,8 @@
 #include <memory>
 #include <vector>
 
-#include <corrlap/core/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
+#include "huge_pages.hpp"
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::detail {

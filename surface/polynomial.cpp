@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "error.hpp"
+#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 

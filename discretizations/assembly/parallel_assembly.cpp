@@ -1,5 +1,7 @@
 #include "parallel_assembly.hpp"
 
+#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
+
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
@@ -16,7 +18,7 @@
 #include <sys/mman.h>
 #endif
 
-#include "error.hpp"
+#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 

@@ -2,7 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 using namespace corrlap;
 

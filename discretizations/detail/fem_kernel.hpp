@@ -2,7 +2,7 @@
 // Per-face values of the corrected FEM (spec §4.2-§4.4) for the assembly hot loop. Internal header.
 #include <cstddef>
 
-#include "face_kernel_isa.hpp"
+#include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
 
 namespace corrlap::detail {
 

@@ -10,7 +10,6 @@
 #include <new>
 #include <utility>
 #include <vector>
-#include "huge_pages.hpp"
 
 namespace corrlap {
 

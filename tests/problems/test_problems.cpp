@@ -1,7 +1,7 @@
 // Dirichlet and pure-Neumann Poisson helpers (spec §10.4) with every backend.
 #include <doctest/doctest.h>
 
-#include <corrlap/backends/problems.hpp>
+#include <corrlap/problems/problems.hpp>
 #include <corrlap/backends/registry.hpp>
 
 #include "backends/fem_fixture.hpp"

@@ -10,7 +10,7 @@
 #include <numeric>
 #include <sstream>
 
-#include "error.hpp"
+#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 

@@ -8,7 +8,8 @@
 #include <random>
 #include <tuple>
 
-#include <corrlap/core/implicit_shape.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/threads.hpp>
 

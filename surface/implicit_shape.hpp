@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "polynomial.hpp"
-#include "voxel_grid.hpp"
+#include <corrlap/core/voxel_grid.hpp>
 
 namespace corrlap {
 

@@ -10,9 +10,10 @@
 #include <map>
 #include <random>
 
+#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/mesh_voxelization.hpp>
+#include <corrlap/surface/mesh_voxelization.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 

@@ -2,7 +2,7 @@
 // register (one face per lane), bitwise the scalar interpolated_face_terms (spec §3.2-§3.5).
 #include "interpolated_kernel.hpp"
 
-#include "avx2_target.inc"
+#include <corrlap/discretizations/assembly/detail/avx2_target.inc>
 
 #include <cstddef>
 #include <cstring>

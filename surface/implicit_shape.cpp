@@ -8,7 +8,7 @@
 #include <limits>
 #include <sstream>
 
-#include "error.hpp"
+#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 

@@ -6,7 +6,7 @@
 // matrices the assembly reads.
 #include <cmath>
 
-#include "face_kernel_isa.hpp"
+#include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
 
 namespace corrlap::detail {
 

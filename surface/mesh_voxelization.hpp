@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "polygon_mesh.hpp"
-#include "voxel_grid.hpp"
+#include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
 
 namespace corrlap {
 

@@ -1,0 +1,319 @@
+#include "extract_surface.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <sstream>
+
+#include <corrlap/core/error.hpp>
+
+namespace corrlap {
+
+namespace {
+
+constexpr int kBits = 21;
+constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
+
+// Surfel key (spec §1.4): positive flag, then Khalimsky coordinates relative to the box
+// (kc - 2 lower, all in [0, 2n]). Ascending keys = the reference's face order.
+inline std::uint64_t surfel_key(std::uint64_t positive, std::uint64_t kx, std::uint64_t ky, std::uint64_t kz) {
+  return (positive << 63) | (kx << 42) | (ky << 21) | kz;
+}
+
+// Appends, in "y-major" order, the keys of all surfels whose lower voxel has local y in [y0, y1):
+// for each y, first (pass A) the axis-0 and axis-2 surfels of the rows (y, z), z ascending, then
+// (pass B) the axis-1 surfels between rows (y, z) and (y+1, z), z ascending.
+// Why this order: among surfels with equal (positive, kc_x) it is exactly ascending (kc_y, kc_z)
+// (axis-2 surfels of row y have kc_y = 2y+1, axis-1 surfels kc_y = 2y+2, axis-0 surfels have their
+// own even kc_x), so a stable bucket sort by (positive, kc_x) yields the face order of spec §1.4.
+// Row (y, z) of the grid: all voxels outside, all inside, or mixed. Two equal uniform rows have
+// no surfel between them, and a uniform row has none inside it: the scan skips them.
+enum RowState : std::uint8_t { kEmptyRow = 0, kFullRow = 1, kMixedRow = 2 };
+
+std::vector<std::uint8_t> row_states(const VoxelGrid& g) {
+  const Eigen::Vector3i lo = g.lower(), n = g.size();
+  const std::size_t W = g.words_per_row();
+  const int rem = n.x() % 64;
+  const std::uint64_t last_mask = rem == 0 ? ~std::uint64_t{0} : (std::uint64_t{1} << rem) - 1;
+  std::vector<std::uint8_t> state(std::size_t(n.y()) * std::size_t(n.z()));
+  tbb::parallel_for(0, n.z(), [&](int lz) {
+    for (int ly = 0; ly < n.y(); ++ly) {
+      const std::uint64_t* r = g.row(lo.y() + ly, lo.z() + lz);
+      std::uint64_t any = 0, all = ~std::uint64_t{0};
+      for (std::size_t w = 0; w + 1 < W; ++w) {
+        any |= r[w];
+        all &= r[w];
+      }
+      const std::uint64_t last = r[W - 1] & last_mask;
+      any |= last;
+      all &= last | ~last_mask;
+      state[std::size_t(lz) * std::size_t(n.y()) + std::size_t(ly)] =
+          any == 0 ? kEmptyRow : (all == ~std::uint64_t{0} ? kFullRow : kMixedRow);
+    }
+  });
+  return state;
+}
+
+void scan_rows(const VoxelGrid& g, const std::vector<std::uint8_t>& state, int y0, int y1,
+               std::vector<std::uint64_t>& out) {
+  auto st = [&](int ly, int lz) { return state[std::size_t(lz) * std::size_t(g.size().y()) + std::size_t(ly)]; };
+  const Eigen::Vector3i lo = g.lower(), n = g.size();
+  const std::size_t W = g.words_per_row();
+  const int rem = n.x() % 64;
+  const std::uint64_t last_mask = rem == 0 ? ~std::uint64_t{0} : (std::uint64_t{1} << rem) - 1;
+  // axis 0 pairs (x, x+1) need x + 1 < n.x(): valid bits of the last word
+  // (only the last word can hold invalid bits: its largest valid x is n.x() - 2 - 64 (W - 1) <= 62)
+  const long last_valid0 = long(n.x()) - 2 - 64 * (long(W) - 1);
+  const std::uint64_t last_mask0 = last_valid0 < 0 ? 0 : (std::uint64_t{2} << last_valid0) - 1;
+  for (int ly = y0; ly < y1; ++ly) {
+    const int y = lo.y() + ly;
+    for (int lz = 0; lz < n.z(); ++lz) {
+      const std::uint8_t here = st(ly, lz);
+      if (here != kMixedRow && (lz + 1 == n.z() || st(ly, lz + 1) == here)) continue;
+      const std::uint64_t* r = g.row(y, lo.z() + lz);
+      const std::uint64_t* s = lz + 1 < n.z() ? g.row(y, lo.z() + lz + 1) : nullptr;
+      for (std::size_t w = 0; w < W; ++w) {
+        const bool last = w + 1 == W;
+        const std::uint64_t a = last ? r[w] & last_mask : r[w];
+        const std::uint64_t next = last ? 0 : r[w + 1];
+        std::uint64_t t0 = a ^ ((a >> 1) | (next << 63));
+        if (last) t0 &= last_mask0;
+        std::uint64_t t2 = 0;
+        if (s) t2 = (a ^ s[w]) & (last ? last_mask : ~std::uint64_t{0});
+        // Both kinds, x ascending; order between different kc_x does not matter (bucketed later).
+        while (t0) {
+          const int b = std::countr_zero(t0);
+          t0 &= t0 - 1;
+          const std::uint64_t lx = w * 64 + std::uint64_t(b);
+          const std::uint64_t inside = (a >> b) & 1u;  // lower voxel inside: outward +e0, negative
+          out.push_back(surfel_key(inside ^ 1u, 2 * lx + 2, 2 * std::uint64_t(ly) + 1, 2 * std::uint64_t(lz) + 1));
+        }
+        while (t2) {
+          const int b = std::countr_zero(t2);
+          t2 &= t2 - 1;
+          const std::uint64_t lx = w * 64 + std::uint64_t(b);
+          const std::uint64_t inside = (a >> b) & 1u;  // outward +e2: negative
+          out.push_back(surfel_key(inside ^ 1u, 2 * lx + 1, 2 * std::uint64_t(ly) + 1, 2 * std::uint64_t(lz) + 2));
+        }
+      }
+    }
+    if (ly + 1 >= n.y()) continue;
+    for (int lz = 0; lz < n.z(); ++lz) {
+      const std::uint8_t here = st(ly, lz);
+      if (here != kMixedRow && st(ly + 1, lz) == here) continue;
+      const std::uint64_t* r = g.row(y, lo.z() + lz);
+      const std::uint64_t* s = g.row(y + 1, lo.z() + lz);
+      for (std::size_t w = 0; w < W; ++w) {
+        std::uint64_t t1 = r[w] ^ s[w];
+        if (w + 1 == W) t1 &= last_mask;
+        while (t1) {
+          const int b = std::countr_zero(t1);
+          t1 &= t1 - 1;
+          const std::uint64_t lx = w * 64 + std::uint64_t(b);
+          const std::uint64_t inside = (r[w] >> b) & 1u;  // outward +e1: positive
+          out.push_back(surfel_key(inside, 2 * lx + 1, 2 * std::uint64_t(ly) + 2, 2 * std::uint64_t(lz) + 1));
+        }
+      }
+    }
+  }
+}
+
+struct DecodedFace {
+  int kc[3];
+  int axis;
+  bool positive;
+};
+inline DecodedFace decode(std::uint64_t key) {
+  DecodedFace d;
+  d.positive = key >> 63;
+  d.kc[0] = int((key >> 42) & kMask);
+  d.kc[1] = int((key >> 21) & kMask);
+  d.kc[2] = int(key & kMask);
+  d.axis = (d.kc[0] % 2 == 0) ? 0 : (d.kc[1] % 2 == 0 ? 1 : 2);  // the even coordinate
+  return d;
+}
+// Relative pointel (Khalimsky / 2) of corner c of the face (spec §1.4): base order
+// B = [(i-,j-),(i-,j+),(i+,j+),(i+,j-)], reversed for negative surfels.
+inline void corner_pointel(const DecodedFace& d, int c, int q[3]) {
+  static constexpr int si[4] = {-1, -1, +1, +1}, sj[4] = {-1, +1, +1, -1};
+  const int i = d.axis == 0 ? 1 : 0, j = d.axis == 2 ? 1 : 2;
+  const int b = d.positive ? c : 3 - c;
+  int p[3] = {d.kc[0], d.kc[1], d.kc[2]};
+  p[i] += si[b];
+  p[j] += sj[b];
+  q[0] = p[0] / 2;
+  q[1] = p[1] / 2;
+  q[2] = p[2] / 2;
+}
+
+}  // namespace
+
+SurfelMesh extract_surface(const VoxelGrid& grid) { return extract_surface(grid, nullptr); }
+
+SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
+  auto cpu_now = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+  };
+  auto t0 = std::chrono::steady_clock::now();
+  double c0 = timings ? cpu_now() : 0.0;
+  auto lap = [&](const char* name) {
+    if (!timings) return;
+    const auto t1 = std::chrono::steady_clock::now();
+    const double c1 = cpu_now();
+    timings->phases.push_back({name, std::chrono::duration<double>(t1 - t0).count(), c1 - c0});
+    t0 = t1;
+    c0 = c1;
+  };
+  if (grid.empty_box()) throw InputError("surface extraction: the voxel grid has no voxels");
+  const Eigen::Vector3i lo = grid.lower(), n = grid.size();
+  if ((n.array() * 2 + 4 >= (1 << kBits)).any())
+    throw InputError("surface extraction: the box is too large (more than 1M voxels along an axis)");
+
+  // 1. Surfel keys of chunks of y rows, in parallel (spec §1.3).
+  const int chunks = std::min(n.y(), 64);
+  std::vector<std::vector<std::uint64_t>> chunk_keys(std::size_t(chunks), std::vector<std::uint64_t>{});
+  auto chunk_begin = [&](int c) { return int((std::int64_t(n.y()) * c) / chunks); };
+  const std::vector<std::uint8_t> states = row_states(grid);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    scan_rows(grid, states, chunk_begin(c), chunk_begin(c + 1), chunk_keys[std::size_t(c)]);
+  });
+  std::size_t F = 0;
+  for (const auto& v : chunk_keys) F += v.size();
+  if (F == 0)
+    throw InputError("surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the box)");
+  // Corner occurrences 4 f + c must fit in 32 bits with one value left as the "none" marker.
+  if (F >= (std::size_t{1} << 30)) throw InputError("surface extraction: 2^30 or more surfels");
+  lap("transitions");
+
+  // 2. Face order (spec §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the
+  //    chunks are in y order and each chunk is already in (kc_y, kc_z) order (see scan_rows).
+  const std::size_t NKX = 2 * std::size_t(n.x()) + 2, NB = 2 * NKX;
+  auto bucket = [&](std::uint64_t key) { return std::size_t(key >> 63) * NKX + std::size_t((key >> 42) & kMask); };
+  std::vector<std::uint32_t> counts(std::size_t(chunks) * NB, 0);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    std::uint32_t* cnt = counts.data() + std::size_t(c) * NB;
+    for (std::uint64_t k : chunk_keys[std::size_t(c)]) ++cnt[bucket(k)];
+  });
+  std::vector<std::uint32_t> bucket_start(NB + 1);
+  {
+    std::uint32_t run = 0;
+    for (std::size_t b = 0; b < NB; ++b) {
+      bucket_start[b] = run;
+      for (int c = 0; c < chunks; ++c) {
+        std::uint32_t& x = counts[std::size_t(c) * NB + b];
+        const std::uint32_t k = x;
+        x = run;  // becomes the chunk's write offset in bucket b
+        run += k;
+      }
+    }
+    bucket_start[NB] = run;
+  }
+  std::vector<std::uint64_t> keys(F);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    std::uint32_t* off = counts.data() + std::size_t(c) * NB;
+    for (std::uint64_t k : chunk_keys[std::size_t(c)]) keys[off[bucket(k)]++] = k;
+    std::vector<std::uint64_t>().swap(chunk_keys[std::size_t(c)]);
+  });
+  std::vector<std::uint32_t>().swap(counts);
+  lap("face order");
+
+  SurfelMesh mesh;
+  mesh.h = grid.h();
+  mesh.surfels.resize(F);
+  mesh.faces.resize(Eigen::Index(F), 4);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      const DecodedFace d = decode(keys[f]);
+      Surfel& s = mesh.surfels[f];
+      s.axis = d.axis;
+      s.outward = (d.axis == 1) == d.positive ? 1 : -1;
+      // kc_rel = 2 (z - lo) + e_k + 1
+      for (int a = 0; a < 3; ++a) s.lower_voxel[a] = (d.kc[a] - (a == d.axis ? 2 : 1)) / 2 + lo[a];
+    }
+  });
+  lap("surfels");
+
+  // 3. Vertices numbered by first appearance (spec §1.4). A pointel with relative x index P is
+  //    a corner only of faces with kc_x in {2P-1, 2P, 2P+1}: per class a contiguous range of
+  //    faces. Each pointel slab P is handled by one task with a dense (y, z) table of first
+  //    occurrences, visiting the corners in increasing occurrence order 4 f + c.
+  //    faces() temporarily holds each corner's first occurrence; is_new marks first occurrences.
+  const std::size_t NYZ = std::size_t(n.y() + 1) * std::size_t(n.z() + 1);
+  constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  std::vector<std::uint8_t> is_new(4 * F, 0);
+  std::uint32_t* raw = reinterpret_cast<std::uint32_t*>(mesh.faces.data());
+  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> tables([&] { return std::vector<std::uint32_t>(NYZ, kNone); });
+  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> touched_lists;
+  tbb::parallel_for(0, n.x() + 1, [&](int P) {
+    std::vector<std::uint32_t>& first = tables.local();
+    std::vector<std::uint32_t>& touched = touched_lists.local();
+    touched.clear();
+    for (std::size_t cls = 0; cls < 2; ++cls) {
+      const std::size_t b0 = cls * NKX + std::size_t(std::max(0, 2 * P - 1)), b1 = cls * NKX + std::size_t(2 * P + 2);
+      for (std::size_t f = bucket_start[b0]; f < bucket_start[b1]; ++f) {
+        const DecodedFace d = decode(keys[f]);
+        for (int c = 0; c < 4; ++c) {
+          int q[3];
+          corner_pointel(d, c, q);
+          if (q[0] != P) continue;
+          const std::size_t idx = std::size_t(q[1]) * std::size_t(n.z() + 1) + std::size_t(q[2]);
+          const std::uint32_t o = std::uint32_t(4 * f + std::size_t(c));
+          if (first[idx] == kNone) {
+            first[idx] = o;
+            is_new[o] = 1;
+            touched.push_back(std::uint32_t(idx));
+          }
+          raw[o] = first[idx];
+        }
+      }
+    }
+    for (std::uint32_t idx : touched) first[idx] = kNone;
+  });
+  lap("first occurrences");
+
+  // Vertex id of a first occurrence = number of first occurrences before it.
+  std::vector<std::uint32_t> base(F + 1);
+  {
+    std::uint32_t run = 0;
+    for (std::size_t f = 0; f < F; ++f) {
+      base[f] = run;
+      run += std::uint32_t(is_new[4 * f] + is_new[4 * f + 1] + is_new[4 * f + 2] + is_new[4 * f + 3]);
+    }
+    base[F] = run;
+  }
+  const std::size_t V = base[F];
+  mesh.positions.resize(Eigen::Index(V), 3);
+  const double h = grid.h();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      DecodedFace d;
+      bool decoded = false;
+      for (int c = 0; c < 4; ++c) {
+        const std::uint32_t o = raw[4 * f + std::size_t(c)];
+        const std::size_t g = o / 4;
+        std::uint32_t id = base[g];
+        for (std::uint32_t k = 0; k < o % 4; ++k) id += is_new[4 * g + k];
+        mesh.faces(Eigen::Index(f), c) = int(id);
+        if (is_new[4 * f + std::size_t(c)]) {
+          if (!decoded) d = decode(keys[f]), decoded = true;
+          int q[3];
+          corner_pointel(d, c, q);
+          // pointel relative index q -> Khalimsky 2(q + lo); corner in grid units = (kc - 1) / 2
+          for (int a = 0; a < 3; ++a) mesh.positions(Eigen::Index(id), a) = (double(2 * (q[a] + lo[a]) - 1) * 0.5) * h;
+        }
+      }
+    }
+  });
+  lap("faces+positions");
+  return mesh;
+}
+
+}  // namespace corrlap
