@@ -6,7 +6,7 @@ CMAKE_FLAGS ?=
 # Relative paths in the compiler cache, so that clones at other paths (CI) reuse it.
 export CCACHE_BASEDIR ?= $(CURDIR)
 
-.PHONY: all deps configure build demo test test-stress test-static bench install clean
+.PHONY: all deps configure build demo test test-stress test-static bench install clean format check-format
 
 all: build
 
@@ -44,6 +44,12 @@ bench: build
 
 install: build
 	cmake --install $(BUILD)
+
+format:
+	bash scripts/check_format.sh --fix
+
+check-format:
+	bash scripts/check_format.sh
 
 clean:
 	rm -rf $(BUILD) $(BUILD)-static
