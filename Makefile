@@ -2,11 +2,12 @@
 BUILD ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
+FUZZ_SECONDS ?= 30
 CMAKE_FLAGS ?=
 # Relative paths in the compiler cache, so that clones at other paths (CI) reuse it.
 export CCACHE_BASEDIR ?= $(CURDIR)
 
-.PHONY: all deps configure build demo test test-stress test-static bench install clean format check-format
+.PHONY: all deps configure build demo test test-stress test-static bench install clean format check-format fuzz
 
 all: build
 
@@ -44,6 +45,10 @@ bench: build
 
 install: build
 	cmake --install $(BUILD)
+
+# libFuzzer targets of every reader and parser (clang-14), FUZZ_SECONDS each (default 30).
+fuzz: deps
+	FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh $(BUILD)-fuzz
 
 format:
 	bash scripts/check_format.sh --fix

@@ -1,0 +1,24 @@
+// libFuzzer target: key=value configurations (core/config.cpp); lines of the input are the items.
+#include <corrlap/core/config.hpp>
+
+#include <string>
+#include <vector>
+
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  std::vector<std::string> items(1);
+  for (std::size_t i = 0; i < size; ++i) {
+    if (data[i] == '\n') items.emplace_back();
+    else items.back() += char(data[i]);
+  }
+  corrlap::fuzz::expect_named_errors([&] {
+    const auto config = corrlap::Config::from_key_values(items);
+    for (const auto& key : config.keys()) {
+      corrlap::fuzz::expect_named_errors([&] { (void)config.get_double(key, 0.0); });
+      corrlap::fuzz::expect_named_errors([&] { (void)config.get_int(key, 0); });
+      corrlap::fuzz::expect_named_errors([&] { (void)config.get_bool(key, false); });
+    }
+  });
+  return 0;
+}

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang-14 + ASan + UBSan in BUILD (default build-fuzz) and runs
+# each for FUZZ_SECONDS (default 30) from its seed corpus (fuzz/corpus/<target>, copied into
+# BUILD/fuzz/corpus/<target> so that new inputs do not land in the repository).
+#   scripts/fuzz.sh [BUILD]      FUZZ_SECONDS=600 scripts/fuzz.sh      FUZZ_TARGETS="obj ply" scripts/fuzz.sh
+# Prints one line per target (executions, coverage, features); exits 1 at the first finding, whose
+# reproducer libFuzzer leaves in BUILD/fuzz/ (crash-*, timeout-*, leak-*, oom-*).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build-fuzz}
+seconds=${FUZZ_SECONDS:-30}
+cxx=${FUZZ_CXX:-clang++-14}
+cc=${FUZZ_CC:-clang-14}
+if [ ! -f "$build/build.ninja" ]; then
+  cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER="$cc" \
+    -DCMAKE_CXX_COMPILER="$cxx" -DCORRLAP_FUZZ=ON -DCORRLAP_BUILD_TESTS=OFF -DCORRLAP_BUILD_APPS=OFF \
+    -DCORRLAP_BUILD_BENCH=OFF >/dev/null
+fi
+cmake --build "$build" --target fuzzers -j "${JOBS:-$(nproc)}"
+read -r -a targets <<<"${FUZZ_TARGETS:-$(cat "$build/fuzz/targets.txt")}"
+for t in "${targets[@]}"; do
+  corpus="$build/fuzz/corpus/$t"
+  mkdir -p "$corpus"
+  cp -n fuzz/corpus/"$t"/* "$corpus"/ 2>/dev/null || true
+  log="$build/fuzz/$t.log"
+  # -rss_limit_mb: a reader must refuse absurd sizes before allocating, so 2 GB is plenty.
+  if ! (cd "$build/fuzz" && ./fuzz_"$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+        -print_final_stats=1 "corpus/$t" >"$t.log" 2>&1); then
+    echo "fuzz_$t: FINDING (see $log)"; tail -40 "$log"; exit 1
+  fi
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
+  ft=$(grep -o 'ft: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
+  printf 'fuzz_%-18s %5ss  executions %10s  coverage %6s edges  features %6s  findings 0\n' "$t" "$seconds" "$execs" "$cov" "$ft"
+done
