@@ -7,7 +7,7 @@ CMAKE_FLAGS ?=
 # Relative paths in the compiler cache, so that clones at other paths (CI) reuse it.
 export CCACHE_BASEDIR ?= $(CURDIR)
 
-.PHONY: all deps configure build demo test test-stress test-static bench install clean format check-format fuzz
+.PHONY: all deps configure build demo test test-stress test-static bench install clean format check-format fuzz test-sanitize test-tsan
 
 all: build
 
@@ -46,6 +46,24 @@ bench: build
 install: build
 	cmake --install $(BUILD)
 
+# Every test built with AddressSanitizer + UndefinedBehaviorSanitizer (own build folder; the
+# consumer test is built with the same flags). Any report fails the run.
+test-sanitize: deps
+	cmake -S . -B $(BUILD)-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCORRLAP_SANITIZE=ON \
+	  -DCORRLAP_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	cmake --build $(BUILD)-sanitize -j $(JOBS)
+	cd $(BUILD)-sanitize && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure -j $(JOBS) --timeout 3600
+
+# The stress tests under ThreadSanitizer. Debian's TBB is not instrumented: tests/tsan.supp silences
+# the reports whose both sides are inside TBB's scheduler, so what is printed is real.
+test-tsan: deps
+	cmake -S . -B $(BUILD)-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCORRLAP_TSAN=ON \
+	  -DCORRLAP_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	cmake --build $(BUILD)-tsan -j $(JOBS) --target corrlap_stress_tests
+	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/tsan.supp" \
+	  $(BUILD)-tsan/tests/corrlap_stress_tests
+
 # libFuzzer targets of every reader and parser (clang-14), FUZZ_SECONDS each (default 30).
 fuzz: deps
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh $(BUILD)-fuzz
@@ -57,4 +75,4 @@ check-format:
 	bash scripts/check_format.sh
 
 clean:
-	rm -rf $(BUILD) $(BUILD)-static
+	rm -rf $(BUILD) $(BUILD)-static $(BUILD)-sanitize $(BUILD)-tsan $(BUILD)-fuzz

@@ -19,8 +19,10 @@ if(MODE STREQUAL "install")
 else()
   set(package_hint -Dcorrlap_DIR=${BUILD_DIR})
 endif()
+# CONSUMER_FLAGS: the sanitizer flags of a sanitizer build (empty otherwise).
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR}
-  ${package_hint} -DCMAKE_BUILD_TYPE=Release RESULT_VARIABLE rc)
+  ${package_hint} -DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}"
+  "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}" RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "configuring the consumer against the package (${MODE}) failed (${rc})")
 endif()
