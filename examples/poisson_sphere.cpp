@@ -13,5 +13,6 @@ int main() {
   auto solver = make_linear_solver("cholmod");
   const PoissonResult r = solve_poisson(ops, mesh.positions, test_function("x2"), *solver);
   std::printf("%d vertices: error L_inf %.4g, L2 %.4g\n", mesh.num_vertices(), r.errors.linf, r.errors.l2);
-  return r.errors.l2 < 0.02 ? 0 : 1;  // bound: see the report
+  // Measured 0.0152 / 0.00524; trivial normals give 0.136 (L2), uncorrected PolyDEC 0.128, h = 0.2 0.0104.
+  return r.errors.linf < 0.03 && r.errors.l2 < 0.01 ? 0 : 1;
 }
