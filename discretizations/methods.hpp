@@ -14,12 +14,11 @@
 // `options` are the method's parameters (Config::from_key_values({"lambda=0.5"})); unknown keys are
 // InputErrors listing the valid ones (`corrlap operators --help`, docs/discretizations.md).
 #include <Eigen/Core>
-#include <string>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <string>
 
 namespace corrlap {
 

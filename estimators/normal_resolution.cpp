@@ -17,10 +17,14 @@ NormalSource parse_normal_source(const std::string& name) {
 
 const char* to_string(NormalSource source) {
   switch (source) {
-    case NormalSource::Auto: return "auto";
-    case NormalSource::True: return "true";
-    case NormalSource::II: return "ii";
-    case NormalSource::Trivial: return "trivial";
+    case NormalSource::Auto:
+      return "auto";
+    case NormalSource::True:
+      return "true";
+    case NormalSource::II:
+      return "ii";
+    case NormalSource::Trivial:
+      return "trivial";
   }
   return "?";
 }
@@ -54,9 +58,9 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
   const bool have_all = need_vertex ? n.has_vertex() : n.has_face();
   const bool have_files = n.has_face() || n.has_vertex();
   // Auto with a file: the file decides. Without one, true for shapes, II for voxels.
-  const NormalSource source =
-      request.source == NormalSource::Auto && have_files ? NormalSource::Auto
-                                                         : effective_normal_source(request.source, shape, grid);
+  const NormalSource source = request.source == NormalSource::Auto && have_files
+                                  ? NormalSource::Auto
+                                  : effective_normal_source(request.source, shape, grid);
   if (!have_all && !n.has_face() && source != NormalSource::Auto) {
     NormalEstimator estimator = NormalEstimator::Trivial;
     if (source == NormalSource::True) estimator = NormalEstimator::True;
@@ -70,7 +74,8 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
     throw InputError(what + " needs face normals: give --face-normals FILE or --normals true|ii|trivial" +
                      (n.has_vertex() ? " (vertex normals do not give face normals)" : ""));
   if (need_vertex && !n.has_vertex())
-    throw InputError(what + " needs vertex normals: give --vertex-normals FILE, --face-normals FILE or --normals true|ii|trivial");
+    throw InputError(
+        what + " needs vertex normals: give --vertex-normals FILE, --face-normals FILE or --normals true|ii|trivial");
   return n;
 }
 

@@ -4,13 +4,12 @@
 // same field everywhere: "true" vertex normals are the normalized sum of the incident true face
 // normals (the reference's computeVertexNormalsFromFaceNormals, its vertex_normals_true.txt).
 #include <Eigen/Core>
-#include <string>
-
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <string>
 
 namespace corrlap {
 

@@ -1,7 +1,6 @@
 // Poisson problem on the digitized unit sphere: voxels -> surface -> II normals -> corrected FEM ->
 // L g = M b with CHOLMOD (spec §10.4), b = Laplacian of f = x^2 (spec §10.2); prints the errors.
 #include <corrlap/corrlap.hpp>
-
 #include <cstdio>
 
 int main() {

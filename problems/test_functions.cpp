@@ -1,7 +1,6 @@
 #include "test_functions.hpp"
 
 #include <cmath>
-
 #include <corrlap/core/error.hpp>
 
 namespace corrlap {

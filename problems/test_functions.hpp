@@ -1,10 +1,9 @@
 #pragma once
 // Test functions of spec §10.2 on the unit sphere: values u(q) and their exact Laplace-Beltrami
 // Delta_{S^2} u(q) at points q with |q| = 1, looked up by the names the CLI uses (--rhs).
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace corrlap {
 

@@ -33,7 +33,8 @@ void NormalOptions::add_options(CLI::App& cmd) {
                  "the normalized sum of the face normals (spec 1.5)")
       ->check(CLI::IsMember({"auto", "true", "ii", "trivial"}))
       ->capture_default_str();
-  cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")->check(CLI::PositiveNumber);
+  cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
+      ->check(CLI::PositiveNumber);
   cmd.add_option("--ii-alpha", ii.alpha, "II: exponent alpha (default 0.33)");
 }
 
@@ -53,8 +54,8 @@ NormalFields NormalOptions::resolve(const LoadedSurface& s, NormalKind need, con
 
 std::string NormalOptions::describe(const LoadedSurface& s) const {
   if (!face_file.empty() || !vertex_file.empty()) return "file";
-  return to_string(effective_normal_source(parse_normal_source(source), s.shape ? &*s.shape : nullptr,
-                                           s.grid ? &*s.grid : nullptr));
+  return to_string(
+      effective_normal_source(parse_normal_source(source), s.shape ? &*s.shape : nullptr, s.grid ? &*s.grid : nullptr));
 }
 
 }  // namespace corrlap::cli

@@ -3,11 +3,9 @@
 // library function resolve_normals, curvature, normals and demo): --normals auto|true|ii|trivial,
 // --face-normals FILE, --vertex-normals FILE, --ii-radius, --ii-alpha.
 #include <CLI/CLI.hpp>
-
-#include <string>
-
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <string>
 
 #include "surface_source.hpp"
 

@@ -1,9 +1,8 @@
 // The free functions of discretizations/methods.hpp are the registry path, bit for bit.
 #include <doctest/doctest.h>
 
-#include <cstring>
-
 #include <corrlap/corrlap.hpp>
+#include <cstring>
 
 using namespace corrlap;
 using SpMat = Eigen::SparseMatrix<double>;

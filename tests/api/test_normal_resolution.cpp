@@ -67,16 +67,17 @@ TEST_CASE("resolve_normals: sources, files first, need None, errors naming what 
   NormalRequest ff = from(NormalSource::Trivial);
   ff.face_normals_file = kRef + "face_normals_ii.txt";
   const NormalFields from_file = resolve_normals(s.mesh, NormalKind::Vertex, ff);
-  CHECK(from_file.vertex == vertex_normals_from_face_normals(read_normals(ff.face_normals_file), s.mesh.faces,
-                                                             s.mesh.num_vertices()));
+  CHECK(from_file.vertex ==
+        vertex_normals_from_face_normals(read_normals(ff.face_normals_file), s.mesh.faces, s.mesh.num_vertices()));
   NormalRequest vf = from(NormalSource::True);
   vf.vertex_normals_file = kRef + "vertex_normals_true.txt";
   CHECK(resolve_normals(s.mesh, NormalKind::Vertex, vf, &s.shape).vertex == read_normals(vf.vertex_normals_file));
   // Errors.
-  CHECK_THROWS_WITH_AS(resolve_normals(s.mesh, NormalKind::Vertex, {}, nullptr, nullptr, "interpolated"),
-                       doctest::Contains("interpolated needs vertex normals: give --vertex-normals FILE, --face-normals "
-                                         "FILE or --normals true|ii|trivial"),
-                       InputError);
+  CHECK_THROWS_WITH_AS(
+      resolve_normals(s.mesh, NormalKind::Vertex, {}, nullptr, nullptr, "interpolated"),
+      doctest::Contains("interpolated needs vertex normals: give --vertex-normals FILE, --face-normals "
+                        "FILE or --normals true|ii|trivial"),
+      InputError);
   CHECK_THROWS_WITH_AS(resolve_normals(s.mesh, NormalKind::Face, from(NormalSource::True)),
                        doctest::Contains("implicit shape"), InputError);
   SurfelMesh no_surfels = s.mesh;
@@ -85,7 +86,8 @@ TEST_CASE("resolve_normals: sources, files first, need None, errors naming what 
                        doctest::Contains("need voxels"), InputError);
   NormalRequest wrong;
   wrong.vertex_normals_file = kRef + "face_normals_true.txt";
-  CHECK_THROWS_WITH_AS(resolve_normals(s.mesh, NormalKind::Vertex, wrong), doctest::Contains("expected 440"), InputError);
+  CHECK_THROWS_WITH_AS(resolve_normals(s.mesh, NormalKind::Vertex, wrong), doctest::Contains("expected 440"),
+                       InputError);
   NormalRequest vonly;
   vonly.vertex_normals_file = kRef + "vertex_normals_true.txt";
   CHECK_THROWS_WITH_AS(resolve_normals(s.mesh, NormalKind::Face, vonly, nullptr, nullptr, "fem"),

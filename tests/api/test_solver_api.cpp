@@ -2,9 +2,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <tuple>
-
 #include <corrlap/corrlap.hpp>
+#include <tuple>
 
 using namespace corrlap;
 

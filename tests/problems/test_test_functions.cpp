@@ -2,9 +2,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <random>
-
 #include <corrlap/corrlap.hpp>
+#include <random>
 
 using namespace corrlap;
 
