@@ -131,9 +131,9 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
   args->normals.add_options(*cmd);
   cmd->add_option("--param", args->params, "method parameter key=value (repeatable)");
   std::string names;
-  for (const auto& t : test_functions()) names += t.name + ", ";
+  for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
   cmd->add_option("--rhs", args->rhs,
-                  names + "(spec §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
+                  names + " (spec §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
       ->capture_default_str();
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
