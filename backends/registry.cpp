@@ -45,10 +45,23 @@ EigenSolverRegistry& eigen_solver_registry() {
 }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const Config& config, const std::string& fallback) {
-  const std::string name = config.get_string("solver", fallback);
-  auto solver = linear_solver_registry().create(name);
+  auto solver = linear_solver_registry().create(config.get_string("solver", fallback));
   solver->configure(config);  // backends accept (and ignore) the key "solver"
+  return solver;
+}
 
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const Config& options) {
+  auto solver = linear_solver_registry().create(name);
+  const std::string named = options.get_string("solver", name);
+  if (named != name)
+    throw InputError("make_linear_solver: name '" + name + "' but option solver='" + named + "'; give one of them");
+  solver->configure(options);
+  return solver;
+}
+
+std::unique_ptr<EigenSolver> make_eigen_solver(const std::string& name, const Config& options) {
+  auto solver = eigen_solver_registry().create(name);
+  solver->configure(options);
   return solver;
 }
 

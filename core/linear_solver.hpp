@@ -11,6 +11,13 @@
 
 namespace corrlap {
 
+/// The linear solver used when none is named, by the library (make_linear_solver, the shift-invert
+/// eigen solver) and by the CLI alike: CHOLMOD's supernodal Cholesky (bench/bench_solvers.cpp
+/// compares it with the other backends).
+inline constexpr const char* kDefaultLinearSolver = "cholmod";
+/// The eigen solver used when none is named: shift-invert Lanczos (spec §10.5).
+inline constexpr const char* kDefaultEigenSolver = "shift-invert";
+
 enum class SolverStatus {
   Success,
   NotAnalyzed,          ///< factorize/solve called before analyze/factorize

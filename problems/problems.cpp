@@ -1,5 +1,6 @@
 #include "problems.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -82,14 +83,76 @@ Eigen::VectorXd solve_neumann_poisson(const SpMat& L, const SpMat& M, const Eige
   return solve_dirichlet(L, M, compatible, {pin}, Eigen::VectorXd::Constant(1, pin_value), solver);
 }
 
+ErrorNorms error_norms(const SpMat& M, const Eigen::VectorXd& e) {
+  if (M.rows() != e.size() || M.cols() != e.size())
+    throw InputError("error norms: M is " + std::to_string(M.rows()) + "x" + std::to_string(M.cols()) +
+                     ", error has " + std::to_string(e.size()) + " entries");
+  ErrorNorms r;
+  r.linf = e.lpNorm<Eigen::Infinity>();
+  const double area = (M * Eigen::VectorXd::Ones(e.size())).sum();
+  r.l2 = std::sqrt(e.dot(M * e) / area);
+  return r;
+}
+
 PoissonErrors poisson_errors(const SpMat& M, const Eigen::VectorXd& g, const Eigen::VectorXd& f) {
   if (g.size() != f.size()) throw InputError("Poisson errors: solution and reference sizes differ");
   const Eigen::VectorXd e = (g.array() - mass_weighted_mean(M, g)) - (f.array() - mass_weighted_mean(M, f));
-  PoissonErrors r;
-  r.linf = e.lpNorm<Eigen::Infinity>();
-  const double area = (M * Eigen::VectorXd::Ones(f.size())).sum();
-  r.l2 = std::sqrt(e.dot(M * e) / area);
+  return error_norms(M, e);
+}
+
+double neumann_residual(const SpMat& L, const SpMat& M, const Eigen::VectorXd& b, const Eigen::VectorXd& g, int pin) {
+  if (L.rows() != g.size() || L.cols() != g.size() || b.size() != g.size())
+    throw InputError("Neumann residual: L is " + std::to_string(L.rows()) + "x" + std::to_string(L.cols()) + ", b has " +
+                     std::to_string(b.size()) + " and g " + std::to_string(g.size()) + " entries");
+  if (pin < 0 || pin >= g.size()) throw InputError("Neumann residual: pinned vertex " + std::to_string(pin) + " out of range");
+  const Eigen::VectorXd bc = b.array() - mass_weighted_mean(M, b);
+  const Eigen::VectorXd Mb = M * bc;
+  Eigen::VectorXd r = L * g - Mb;
+  r[pin] = 0.0;
+  return r.norm() / std::max(Mb.norm(), 1e-300);
+}
+
+namespace {
+void check_vertex_operators(const Operators& ops, const Eigen::MatrixX3d& positions, const char* what) {
+  if (ops.L.rows() != positions.rows() || ops.M.rows() != positions.rows())
+    throw InputError(std::string(what) + ": operators are " + std::to_string(ops.L.rows()) + "x" +
+                     std::to_string(ops.L.cols()) + " but there are " + std::to_string(positions.rows()) +
+                     " positions" + (ops.domain == Operators::Domain::Faces ? " (the operators live on faces)" : ""));
+}
+}  // namespace
+
+PoissonResult solve_poisson(const Operators& ops, const Eigen::MatrixX3d& positions, const TestFunction& function,
+                            LinearSolver& solver, const Eigen::Vector3d& center) {
+  check_vertex_operators(ops, positions, "Poisson problem");
+  TestFunctionSamples s = sample_on_unit_sphere(function, positions, center);
+  PoissonResult r;
+  r.f = std::move(s.f);
+  r.b = std::move(s.laplacian);
+  r.g = solve_neumann_poisson(ops.L, ops.M, r.b, solver, r.f[0], 0);  // spec §10.4: g_0 = f(q_0)
+  r.residual = neumann_residual(ops.L, ops.M, r.b, r.g, 0);
+  r.errors = poisson_errors(ops.M, r.g, r.f);
   return r;
+}
+
+Eigen::VectorXd forward_laplacian(const SpMat& L, const SpMat& M, const Eigen::VectorXd& u, LinearSolver& solver,
+                                  double dt) {
+  if (!(dt >= 0.0) || !std::isfinite(dt)) throw InputError("forward evaluation: dt must be >= 0, got " + std::to_string(dt));
+  if (L.rows() != u.size() || L.cols() != u.size() || M.rows() != u.size() || M.cols() != u.size())
+    throw InputError("forward evaluation: L is " + std::to_string(L.rows()) + "x" + std::to_string(L.cols()) + ", M " +
+                     std::to_string(M.rows()) + "x" + std::to_string(M.cols()) + ", u has " + std::to_string(u.size()) +
+                     " entries");
+  // spec §10.3: M - dt L is SPD for dt >= 0 because L is negative semi-definite.
+  SpMat A = dt == 0.0 ? SpMat(M) : SpMat(M - dt * L);
+  A.makeCompressed();
+  solver.compute(A);
+  return solver.solve(L * u);
+}
+
+ErrorNorms forward_error(const Operators& ops, const Eigen::MatrixX3d& positions, const TestFunction& function,
+                         LinearSolver& solver, double dt, const Eigen::Vector3d& center) {
+  check_vertex_operators(ops, positions, "forward evaluation");
+  const TestFunctionSamples s = sample_on_unit_sphere(function, positions, center);
+  return error_norms(ops.M, forward_laplacian(ops.L, ops.M, s.f, solver, dt) - s.laplacian);
 }
 
 }  // namespace corrlap

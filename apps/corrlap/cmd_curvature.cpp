@@ -3,20 +3,16 @@
 #include <filesystem>
 #include <iostream>
 
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
-#include <corrlap/estimators/normal_estimation.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 
 #include "command.hpp"
+#include "normal_options.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
-
-ProgressFn stderr_progress(const std::string& what);  // cmd_normals.cpp
 
 namespace {
 
@@ -39,39 +35,29 @@ void write_set(const std::string& dir, const std::string& suffix, const Curvatur
 void run(const CurvatureArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const bool from_mesh = !a.source.mesh.empty();
-  SurfelMesh mesh;
-  VoxelGrid grid;
-  Eigen::MatrixX3d fn, vn;
+  NormalOptions opt;
+  opt.ii.k = a.ii_radius;
+  opt.ii.alpha = a.ii_alpha;
+  NormalKind need = a.constant ? NormalKind::Face : NormalKind::Vertex;
   if (from_mesh) {
     if (a.face_normals.empty() == a.vertex_normals.empty())
       throw InputError("--mesh needs exactly one of --face-normals F or --vertex-normals F");
     if (!a.normals.empty()) throw InputError("--normals applies to --shape/--volume; with --mesh give a normals file");
-    mesh = a.source.surface();
-    if (!a.face_normals.empty()) {
-      fn = read_normals(a.face_normals);
-      validate_normals(fn, mesh.num_faces(), "face normals file '" + a.face_normals + "'");
-    } else {
-      vn = read_normals(a.vertex_normals);
-      validate_normals(vn, mesh.num_vertices(), "vertex normals file '" + a.vertex_normals + "'");
-    }
+    // A face file: constant normals per face; a vertex file: interpolated normals.
+    need = a.face_normals.empty() ? NormalKind::Vertex : NormalKind::Face;
+    opt.face_file = a.face_normals;
+    opt.vertex_file = a.vertex_normals;
   } else {
     if (!a.face_normals.empty() || !a.vertex_normals.empty())
       throw InputError("--face-normals/--vertex-normals go with --mesh; with a shape or volume use --normals true|ii");
-    grid = a.source.voxels();
-    if (grid.count() == 0) throw InputError("the volume is empty: no voxel is inside (" + a.source.describe() + ")");
-    mesh = extract_surface(grid);
-    const auto shape = a.source.implicit_shape();
-    IIParams ii;
-    ii.k = a.ii_radius;
-    ii.alpha = a.ii_alpha;
-    const std::string kind = a.normals.empty() ? (shape ? "true" : "ii") : a.normals;
-    fn = estimate_face_normals(parse_normal_estimator(kind), mesh, &grid, shape ? &*shape : nullptr, ii,
-                               stderr_progress("ii normals"));
-    // spec §1.5: vertex normals = normalized sum of the incident face normals.
-    if (!a.constant) vn = vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices());
+    opt.source = a.normals.empty() ? "auto" : a.normals;  // auto: true for shapes, ii for volumes
   }
+  const LoadedSurface surface = a.source.load();
+  const SurfelMesh& mesh = surface.mesh;
+  // The normals of `corrlap operators` for the same source (spec §1.5, resolve_normals).
+  const NormalFields n = opt.resolve(surface, need, "curvature");
   const CorrectedCurvature cc =
-      vn.rows() > 0 ? CorrectedCurvature::interpolated(mesh, vn) : CorrectedCurvature::constant(mesh, fn);
+      need == NormalKind::Vertex ? CorrectedCurvature::interpolated(mesh, n.vertex) : CorrectedCurvature::constant(mesh, n.face);
   const CurvatureEstimates ef = cc.at_faces(a.radius);
   const CurvatureEstimates ev = cc.at_vertices(a.radius);
   std::filesystem::create_directories(a.out);

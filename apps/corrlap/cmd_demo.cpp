@@ -7,16 +7,17 @@
 
 #include <Eigen/Geometry>
 
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/problems/problems.hpp>
 #include <corrlap/backends/registry.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/normal_fields.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/estimators/normal_estimation.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/problems/problems.hpp>
+#include <corrlap/problems/test_functions.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 #include "command.hpp"
 
@@ -49,7 +50,7 @@ void digitization_table(const ImplicitShape& sphere) {
 }
 
 void normals_and_curvature(const ImplicitShape& sphere) {
-  std::printf("== 2. Normals (spec §7) and corrected curvature (spec §8) on the unit sphere\n");
+  std::printf("== 2. Normals (spec §7) and corrected curvature (spec §8, exact vertex normals) on the unit sphere\n");
   std::printf("%8s %16s %16s %12s %12s %10s\n", "h", "II mean angle", "II max angle", "mean H", "max|H-1|", "time_s");
   for (double h : {0.1, 0.05}) {
     const auto t0 = Clock::now();
@@ -64,7 +65,9 @@ void normals_and_curvature(const ImplicitShape& sphere) {
       worst = std::max(worst, a);
     }
     mean /= mesh.num_faces();
-    const Eigen::MatrixX3d vn = true_vertex_normals(sphere, mesh);
+    // Exact radial vertex normals, as in spec §12.4 (mean H 1.0026, max |H-1| 0.045 at h = 0.1), not
+    // the "true" field of --normals true (normalized sum of face normals: max |H-1| 0.33 here).
+    const Eigen::MatrixX3d vn = exact_vertex_normals(sphere, mesh);
     const CurvatureEstimates c = CorrectedCurvature::interpolated(mesh, vn).at_vertices(0.1);
     std::printf("%8.3f %14.4f deg %14.4f deg %12.6f %12.6f %10.3f\n", h, mean * 180 / M_PI, worst * 180 / M_PI,
                 c.H.mean(), (c.H.array() - 1.0).abs().maxCoeff(), since(t0));
@@ -73,33 +76,24 @@ void normals_and_curvature(const ImplicitShape& sphere) {
 }
 
 void operators_table(const ImplicitShape& sphere) {
-  std::printf("== 3. Operators (true normals) -> backward Poisson f = x^2 (spec §10.4, CHOLMOD) and eigenvalues\n");
+  std::printf("== 3. Operators (true normals) -> backward Poisson f = x^2 (spec §10.4, %s) and eigenvalues\n",
+              kDefaultLinearSolver);
   std::printf("   area = 1^T M 1 (4*pi = %.5f); eigenvalues -lambda should be 0, 2 (x3), 6 (x5)\n", 4 * M_PI);
   std::printf("%18s %7s %10s %12s %12s %10s %10s %10s\n", "method", "h", "area", "Poisson L2", "order", "mu_1",
               "mu_4", "time_s");
-  auto solver_config = Config::from_key_values({"solver=cholmod"});
+  NormalRequest request;
+  request.source = NormalSource::True;
   for (const char* method : {"polydec", "projected-polydec", "fem", "interpolated", "corrected-vrm"}) {
     double previous = 0;
     for (double h : {0.1, 0.05}) {
       const auto t0 = Clock::now();
       const SurfelMesh mesh = extract_surface(digitize(sphere, sphere_params(h)));
-      NormalFields normals;
-      normals.face = true_face_normals(sphere, mesh);
-      normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
-      const Operators ops = make_discretization(method)->assemble(mesh, normals, Config());
-      // f = x^2 at the radial projection, Laplacian 2 - 6x^2 (spec §10.2)
-      Eigen::VectorXd f(mesh.num_vertices()), b(mesh.num_vertices());
-      for (int v = 0; v < mesh.num_vertices(); ++v) {
-        const double x = mesh.positions(v, 0) / mesh.positions.row(v).norm();
-        f[v] = x * x;
-        b[v] = 2 - 6 * x * x;
-      }
-      auto solver = make_linear_solver(solver_config);
-      const Eigen::VectorXd g = solve_neumann_poisson(ops.L, ops.M, b, *solver, f[0]);
-      const PoissonErrors e = poisson_errors(ops.M, g, f);
-      auto eig = eigen_solver_registry().create("shift-invert");
-      eig->configure(solver_config);
-      const EigenResult r = eig->solve(ops.L, ops.M, 5);
+      auto disc = make_discretization(method);
+      const NormalFields normals = resolve_normals(mesh, disc->required_normals(), request, &sphere, nullptr, method);
+      const Operators ops = disc->assemble(mesh, normals, Config());
+      auto solver = make_linear_solver(kDefaultLinearSolver);
+      const PoissonErrors e = solve_poisson(ops, mesh.positions, test_function("x2"), *solver).errors;
+      const EigenResult r = make_eigen_solver(kDefaultEigenSolver)->solve(ops.L, ops.M, 5);
       const double area = Eigen::VectorXd::Ones(mesh.num_vertices()).dot(ops.M * Eigen::VectorXd::Ones(mesh.num_vertices()));
       char order[32] = "";
       if (previous > 0) std::snprintf(order, sizeof order, "%.2f", std::log(previous / e.l2) / std::log(2.0));

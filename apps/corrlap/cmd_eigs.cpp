@@ -33,9 +33,8 @@ void run(const EigsArgs& a) {
   config.merge(Config::from_key_values(a.solver_options));
   if (!a.solver.empty()) config.set("solver", a.solver);
   const bool sparse = config.has("solver") || n > kDenseLimit;
-  if (sparse && !config.has("solver")) config.set("solver", "cholmod");
-  auto eig = eigen_solver_registry().create(sparse ? "shift-invert" : "dense");
-  eig->configure(config);
+  if (sparse && !config.has("solver")) config.set("solver", kDefaultLinearSolver);
+  auto eig = make_eigen_solver(sparse ? kDefaultEigenSolver : "dense", config);
   const auto t0 = std::chrono::steady_clock::now();
   const EigenResult r = eig->solve(ops.L, ops.M, a.k);  // values are -lambda >= 0, ascending
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -56,8 +55,8 @@ RegisterCommand reg(31, "eigs", [](CLI::App& app) {
   cmd->add_option("-k", args->k, "number of eigenvalues (default 49)");
   cmd->add_option("--out", args->out, "write one value per line (ascending, %.17g) instead of printing");
   cmd->add_option("--solver", args->solver,
-                  "linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, eigen-llt, cg); default: dense "
-                  "solver up to 6000 unknowns, cholmod above");
+                  std::string("linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, eigen-llt, cg); default: "
+                              "dense solver up to 6000 unknowns, ") + kDefaultLinearSolver + " above");
   cmd->add_option("--solver-config", args->solver_config_file, "JSON file of eigen/linear solver options");
   cmd->add_option("--solver-option", args->solver_options, "eigen/linear solver option key=value (repeatable)");
   cmd->callback([args] { run(*args); });

@@ -1,39 +1,14 @@
 // corrlap normals: face or vertex normals of a digital surface (trivial, true, integral invariant).
-#include <atomic>
 #include <chrono>
 #include <iostream>
-#include <mutex>
 
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/core/error.hpp>
-#include <corrlap/core/normal_fields.hpp>
-#include <corrlap/estimators/normal_estimation.hpp>
 #include <corrlap/io/text_io.hpp>
 
 #include "command.hpp"
+#include "normal_options.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
-
-/// Progress on stderr in steps of 10 % (II on fine grids runs for seconds to minutes).
-ProgressFn stderr_progress(const std::string& what);
-
-ProgressFn stderr_progress(const std::string& what) {
-  auto last = std::make_shared<std::atomic<int>>(0);
-  auto mutex = std::make_shared<std::mutex>();
-  return [what, last, mutex](std::int64_t done, std::int64_t total) {
-    if (total < 20000) return;  // short runs: stay quiet
-    const int decile = int(10 * done / total);
-    int prev = last->load();
-    while (decile > prev) {
-      if (last->compare_exchange_weak(prev, decile)) {
-        std::lock_guard<std::mutex> lock(*mutex);
-        std::cerr << what << ": " << 10 * decile << "%\n";
-        break;
-      }
-    }
-  };
-}
 
 namespace {
 
@@ -44,25 +19,16 @@ struct NormalsArgs {
 };
 
 void run(const NormalsArgs& a) {
-  const NormalEstimator est = parse_normal_estimator(a.estimator);
+  NormalOptions opt;
+  opt.source = a.estimator;
+  opt.ii.k = a.radius;
+  opt.ii.alpha = a.alpha;
   const auto t0 = std::chrono::steady_clock::now();
-  SurfelMesh mesh;
-  VoxelGrid grid;
-  const bool need_voxels = a.source.mesh.empty();
-  if (need_voxels) {
-    grid = a.source.voxels();
-    if (grid.count() == 0) throw InputError("the volume is empty: no voxel is inside (" + a.source.describe() + ")");
-    mesh = extract_surface(grid);
-  } else {
-    mesh = a.source.surface();
-  }
-  const auto shape = a.source.implicit_shape();
-  IIParams ii;
-  ii.k = a.radius;
-  ii.alpha = a.alpha;
-  Eigen::MatrixX3d n = estimate_face_normals(est, mesh, need_voxels ? &grid : nullptr, shape ? &*shape : nullptr,
-                                             ii, stderr_progress("ii normals"));
-  if (a.at == "vertices") n = vertex_normals_from_face_normals(n, mesh.faces, mesh.num_vertices());
+  const LoadedSurface surface = a.source.load();
+  // Vertices: the normalized sum of the incident face normals (spec §1.5), as every command uses.
+  const bool at_vertices = a.at == "vertices";
+  const NormalFields fields = opt.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
+  const Eigen::MatrixX3d& n = at_vertices ? fields.vertex : fields.face;
   write_normals(a.out, n);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << a.estimator << " normals of " << a.source.describe() << ": " << n.rows() << " " << a.at << " -> "

@@ -7,15 +7,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include <corrlap/problems/problems.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/normal_fields.hpp>
 #include <corrlap/discretizations/registry.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/problems/problems.hpp>
+#include <corrlap/problems/test_functions.hpp>
 
 #include "command.hpp"
+#include "normal_options.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
@@ -24,7 +24,7 @@ namespace {
 struct SolveArgs {
   SurfaceSource source;
   std::string method = "fem";
-  std::string normals = "auto";
+  NormalOptions normals;
   std::vector<std::string> params;
   std::string rhs = "x2";
   std::string solver;
@@ -33,33 +33,6 @@ struct SolveArgs {
   std::string out;
   bool json = false;
 };
-
-/// Test functions of spec §10.2 on the unit sphere: value and Laplace-Beltrami at q (|q| = 1).
-struct TestFunction {
-  double (*f)(const Eigen::Vector3d&);
-  double (*laplacian)(const Eigen::Vector3d&);
-};
-
-std::optional<TestFunction> test_function(const std::string& name) {
-  if (name == "x2")
-    return TestFunction{[](const Eigen::Vector3d& q) { return q.x() * q.x(); },
-                        [](const Eigen::Vector3d& q) { return 2.0 - 6.0 * q.x() * q.x(); }};
-  if (name == "expx")
-    return TestFunction{[](const Eigen::Vector3d& q) { return std::exp(q.x()); },
-                        [](const Eigen::Vector3d& q) { return std::exp(q.x()) * (1.0 - 2.0 * q.x() - q.x() * q.x()); }};
-  if (name == "p6") {
-    // P6(z) = (231 z^6 - 315 z^4 + 105 z^2 - 5) / 16, a degree-6 harmonic: Delta f = -42 f.
-    auto p6 = [](const Eigen::Vector3d& q) {
-      const double z2 = q.z() * q.z();
-      return (((231.0 * z2 - 315.0) * z2 + 105.0) * z2 - 5.0) / 16.0;
-    };
-    return TestFunction{p6, [](const Eigen::Vector3d& q) {
-                          const double z2 = q.z() * q.z();
-                          return -42.0 * (((231.0 * z2 - 315.0) * z2 + 105.0) * z2 - 5.0) / 16.0;
-                        }};
-  }
-  return std::nullopt;
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -71,31 +44,19 @@ void run(const SolveArgs& a) {
   if (!a.config_file.empty()) config = Config::from_json_file(a.config_file);
   config.merge(Config::from_key_values(a.options));
   if (!a.solver.empty()) config.set("solver", a.solver);
-  const std::string solver_name = config.get_string("solver", "cholmod");
-  auto solver = make_linear_solver(config, "cholmod");
+  const std::string solver_name = config.get_string("solver", kDefaultLinearSolver);
+  auto solver = make_linear_solver(config, kDefaultLinearSolver);
 
   auto method = make_discretization(a.method);
   const Config params = Config::from_key_values(a.params);
-  const auto analytic = test_function(a.rhs);
+  const TestFunction* analytic = has_test_function(a.rhs) ? &test_function(a.rhs) : nullptr;
 
   const auto t0 = std::chrono::steady_clock::now();
-  const SurfelMesh mesh = a.source.surface();
-  const auto shape = a.source.implicit_shape();
-
-  // Normal fields (spec §1.5): true normals of the implicit shape, or trivial ones.
-  std::string kind = a.normals;
-  if (kind == "auto") kind = shape ? "true" : "trivial";
-  if (kind == "true" && !shape) throw InputError("--normals true needs an implicit shape (--shape or --polynomial)");
-  NormalFields normals;
-  if (method->required_normals() != NormalKind::None) {
-    if (kind == "true") {
-      normals.face = true_face_normals(*shape, mesh);
-      normals.vertex = true_vertex_normals(*shape, mesh);
-    } else {
-      normals.face = mesh.face_normals_from_positions();
-      normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
-    }
-  }
+  const LoadedSurface surface = a.source.load();
+  const SurfelMesh& mesh = surface.mesh;
+  // The normals of `corrlap operators` for the same options (spec §1.5, resolve_normals).
+  const NormalFields normals = a.normals.resolve(surface, method->required_normals(), a.method);
+  const std::string kind = method->required_normals() == NormalKind::None ? "none" : a.normals.describe(surface);
   const Operators ops = method->assemble(mesh, normals, params);
   for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
   if (ops.domain != Operators::Domain::Vertices)
@@ -105,36 +66,25 @@ void run(const SolveArgs& a) {
 
   // Right-hand side b = Delta f at q_v = (x_v - c) / |x_v - c| (spec §10.1), or from a file.
   const Eigen::Vector3d c(a.source.center[0], a.source.center[1], a.source.center[2]);
-  Eigen::VectorXd b(n), f;
+  Eigen::VectorXd g;
+  double residual = 0.0;
+  std::optional<PoissonErrors> err;
   if (analytic) {
-    f.resize(n);
-    for (Eigen::Index v = 0; v < n; ++v) {
-      const Eigen::Vector3d x = mesh.positions.row(v).transpose() - c;
-      const Eigen::Vector3d q = x / x.norm();
-      f[v] = analytic->f(q);
-      b[v] = analytic->laplacian(q);
-    }
+    const PoissonResult r = solve_poisson(ops, mesh.positions, *analytic, *solver, c);
+    g = r.g;
+    residual = r.residual;
+    // The analytic solution is known on the unit sphere only (spec §10.2).
+    const auto& shape = surface.shape;
+    if (shape && std::abs(shape->sphere_radius() - 1.0) < 1e-12) err = r.errors;
   } else {
-    b = read_scalars(a.rhs);
+    const Eigen::VectorXd b = read_scalars(a.rhs);
     if (b.size() != n)
       throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(b.size()) + " values, the mesh has " +
                        std::to_string(n) + " vertices");
+    g = solve_neumann_poisson(ops.L, ops.M, b, *solver, 0.0, 0);
+    residual = neumann_residual(ops.L, ops.M, b, g, 0);
   }
-  // The analytic solution is known on the unit sphere only (spec §10.2).
-  const bool known = analytic && shape && std::abs(shape->sphere_radius() - 1.0) < 1e-12;
-
-  const double pin_value = analytic ? f[0] : 0.0;  // spec §10.4: g_0 = f(q_0)
-  const Eigen::VectorXd g = solve_neumann_poisson(ops.L, ops.M, b, *solver, pin_value, 0);
   const SolverReport report = solver->info();
-
-  // Residual of the solved system (free rows of L g = M b_compatible), the same for every backend.
-  const Eigen::VectorXd bc = b.array() - mass_weighted_mean(ops.M, b);
-  const Eigen::VectorXd Mb = ops.M * bc;
-  Eigen::VectorXd r = ops.L * g - Mb;
-  r[0] = 0.0;
-  const double residual = r.norm() / std::max(Mb.norm(), 1e-300);
-  std::optional<PoissonErrors> err;
-  if (known) err = poisson_errors(ops.M, g, f);
   if (!a.out.empty()) write_scalars(a.out, g);
 
   if (a.json) {
@@ -178,14 +128,15 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
   auto* cmd = app.add_subcommand("solve", "Poisson problem L g = M b on a closed surface (spec §10.4) with any method and backend");
   args->source.add_options(*cmd);
   cmd->add_option("--method", args->method, "discretization (registry name)")->capture_default_str();
-  cmd->add_option("--normals", args->normals, "normals for corrected methods: true (implicit shapes), trivial, auto")
-      ->check(CLI::IsMember({"auto", "true", "trivial"}))
-      ->capture_default_str();
+  args->normals.add_options(*cmd);
   cmd->add_option("--param", args->params, "method parameter key=value (repeatable)");
+  std::string names;
+  for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
   cmd->add_option("--rhs", args->rhs,
-                  "x2, expx, p6 (spec §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
+                  names + " (spec §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
       ->capture_default_str();
-  cmd->add_option("--solver", args->solver, "linear solver backend (see `corrlap backends`; default cholmod)");
+  cmd->add_option("--solver", args->solver,
+                  std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
   cmd->add_option("--config", args->config_file, "JSON file of backend options, e.g. {\"solver\": \"cg\", \"tolerance\": 1e-10}");
   cmd->add_option("options", args->options, "backend options key=value (override --config)");
   cmd->add_option("--out", args->out, "write the solution g (one value per vertex)");

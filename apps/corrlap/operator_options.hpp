@@ -9,6 +9,7 @@
 
 #include <corrlap/core/discretization.hpp>
 
+#include "normal_options.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
@@ -16,8 +17,7 @@ namespace corrlap::cli {
 struct OperatorOptions {
   SurfaceSource source;
   std::string method;
-  std::string face_normals_file, vertex_normals_file;
-  std::string normals = "auto";  ///< auto | true | trivial
+  NormalOptions normals;
   std::optional<double> lambda, kappa, heat_t, cutoff;
   std::string assembly, mass, orientation, config_file;
   std::vector<std::string> params;  ///< key=value

@@ -87,6 +87,19 @@ SurfelMesh SurfaceSource::surface() const {
   return extract_surface(voxels());
 }
 
+LoadedSurface SurfaceSource::load() const {
+  LoadedSurface s;
+  s.shape = implicit_shape();
+  if (!mesh.empty()) {
+    s.mesh = surface();
+    return s;
+  }
+  s.grid = voxels();
+  if (s.grid->count() == 0) throw InputError("the volume is empty: no voxel is inside (" + describe() + ")");
+  s.mesh = extract_surface(*s.grid);
+  return s;
+}
+
 std::string SurfaceSource::describe() const {
   std::ostringstream os;
   if (!shape.empty()) os << shape << ", h=" << h;

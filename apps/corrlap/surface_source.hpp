@@ -13,6 +13,14 @@
 
 namespace corrlap::cli {
 
+/// A digital surface with what it came from: the voxels (shapes, volumes, mesh files) and the
+/// implicit shape (--shape, --polynomial), needed by the II and true normals.
+struct LoadedSurface {
+  SurfelMesh mesh;
+  std::optional<VoxelGrid> grid;
+  std::optional<ImplicitShape> shape;
+};
+
 struct SurfaceSource {
   std::string shape, polynomial, volume, mesh;
   std::string mesh_file;                ///< closed triangle/polygon mesh voxelized (.obj, .ply, .off)
@@ -37,6 +45,8 @@ struct SurfaceSource {
   VoxelGrid voxels() const;
   /// Builds the surface mesh from whichever source was given.
   SurfelMesh surface() const;
+  /// The surface with its voxels and shape; InputError when the voxels are empty.
+  LoadedSurface load() const;
   /// Short description for logs ("sphere1, h=0.1").
   std::string describe() const;
 };

@@ -1,4 +1,4 @@
-// `corrlap digitize` and `corrlap info` end to end (issue 2 "done means").
+// `corrlap digitize` and `corrlap info` end to end.
 #include <doctest/doctest.h>
 
 #include <nlohmann/json.hpp>

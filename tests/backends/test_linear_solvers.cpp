@@ -1,5 +1,5 @@
 // Linear solver backends behind the LinearSolver contract: accuracy, reuse of the symbolic
-// analysis, and failure statuses (issue 4).
+// analysis, and failure statuses.
 #include <doctest/doctest.h>
 
 #include <cmath>

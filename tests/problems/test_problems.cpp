@@ -73,3 +73,34 @@ TEST_CASE("Neumann Poisson recovers a solution up to a constant and projects inc
   CHECK(poisson_errors(op.M, bumped, gstar).linf > 0.9);
   CHECK(mass_weighted_mean(op.M, Eigen::VectorXd::Constant(n, 2.5)) == doctest::Approx(2.5).epsilon(1e-14));
 }
+
+TEST_CASE("forward_laplacian solves (M - dt L) X = L u; error_norms of a constant are the constant") {
+  const auto& op = sphere();
+  const Eigen::Index n = op.L.rows();
+  const Eigen::VectorXd u = op.mesh.positions.col(0).array().square();
+  auto s = solver("cholmod");
+  for (double dt : {0.0, 0.007}) {
+    CAPTURE(dt);
+    const Eigen::VectorXd X = forward_laplacian(op.L, op.M, u, *s, dt);
+    const Eigen::VectorXd Lu = op.L * u;
+    CHECK((op.M * X - dt * (op.L * X) - Lu).norm() / Lu.norm() < 1e-12);
+  }
+  // Diffusion smooths: the diffused result has a smaller M-norm than the naive one (L <= 0).
+  const ErrorNorms naive = error_norms(op.M, forward_laplacian(op.L, op.M, u, *s, 0.0));
+  const ErrorNorms diffused = error_norms(op.M, forward_laplacian(op.L, op.M, u, *s, 0.007));
+  CHECK(diffused.l2 < naive.l2);
+  const ErrorNorms c = error_norms(op.M, Eigen::VectorXd::Constant(n, -0.25));
+  CHECK(c.linf == 0.25);
+  CHECK(c.l2 == doctest::Approx(0.25).epsilon(1e-14));
+  CHECK_THROWS_AS(forward_laplacian(op.L, op.M, u, *s, -0.1), InputError);
+  CHECK_THROWS_AS(error_norms(op.M, Eigen::VectorXd::Ones(n + 1)), InputError);
+  // neumann_residual of the Neumann solve: its free rows hold.
+  const Eigen::VectorXd b = 2.0 - 6.0 * u.array();
+  const Eigen::VectorXd g = solve_neumann_poisson(op.L, op.M, b, *s);
+  CHECK(neumann_residual(op.L, op.M, b, g) < 1e-12);
+  // g = 0: the residual is M b_c without the pinned row, relative to M b_c.
+  Eigen::VectorXd Mbc = op.M * (b.array() - mass_weighted_mean(op.M, b)).matrix();
+  const double full = Mbc.norm();
+  Mbc[0] = 0.0;
+  CHECK(neumann_residual(op.L, op.M, b, Eigen::VectorXd::Zero(n)) == doctest::Approx(Mbc.norm() / full).epsilon(1e-14));
+}

@@ -1,0 +1,61 @@
+#include "normal_options.hpp"
+
+#include <atomic>
+#include <iostream>
+#include <memory>
+#include <mutex>
+
+namespace corrlap::cli {
+
+ProgressFn stderr_progress(const std::string& what) {
+  auto last = std::make_shared<std::atomic<int>>(0);
+  auto mutex = std::make_shared<std::mutex>();
+  return [what, last, mutex](std::int64_t done, std::int64_t total) {
+    if (total < 20000) return;  // short runs: stay quiet
+    const int decile = int(10 * done / total);
+    int prev = last->load();
+    while (decile > prev) {
+      if (last->compare_exchange_weak(prev, decile)) {
+        std::lock_guard<std::mutex> lock(*mutex);
+        std::cerr << what << ": " << 10 * decile << "%\n";
+        break;
+      }
+    }
+  };
+}
+
+void NormalOptions::add_options(CLI::App& cmd) {
+  cmd.add_option("--face-normals", face_file, "one unit normal per face (text, nx ny nz, file order)");
+  cmd.add_option("--vertex-normals", vertex_file, "one unit normal per vertex (text, nx ny nz, file order)");
+  cmd.add_option("--normals", source,
+                 "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
+                 "spec 7), trivial (surfel normals), auto (true for shapes, ii for volumes); vertex normals are "
+                 "the normalized sum of the face normals (spec 1.5)")
+      ->check(CLI::IsMember({"auto", "true", "ii", "trivial"}))
+      ->capture_default_str();
+  cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
+      ->check(CLI::PositiveNumber);
+  cmd.add_option("--ii-alpha", ii.alpha, "II: exponent alpha (default 0.33)");
+}
+
+NormalRequest NormalOptions::request() const {
+  NormalRequest r;
+  r.source = parse_normal_source(source);
+  r.face_normals_file = face_file;
+  r.vertex_normals_file = vertex_file;
+  r.ii = ii;
+  r.progress = stderr_progress("ii normals");
+  return r;
+}
+
+NormalFields NormalOptions::resolve(const LoadedSurface& s, NormalKind need, const std::string& what) const {
+  return resolve_normals(s.mesh, need, request(), s.shape ? &*s.shape : nullptr, s.grid ? &*s.grid : nullptr, what);
+}
+
+std::string NormalOptions::describe(const LoadedSurface& s) const {
+  if (!face_file.empty() || !vertex_file.empty()) return "file";
+  return to_string(
+      effective_normal_source(parse_normal_source(source), s.shape ? &*s.shape : nullptr, s.grid ? &*s.grid : nullptr));
+}
+
+}  // namespace corrlap::cli
