@@ -146,7 +146,7 @@ ShiftInvertEigenSolver::~ShiftInvertEigenSolver() = default;
 
 std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
   return {
-      {"solver", "cholmod", "linear solver for (K - shift M)^{-1}; its options may be given too"},
+      {"solver", kDefaultLinearSolver, "linear solver for (K - shift M)^{-1}; its options may be given too"},
       {"shift", "-0.001", "shift in units of mu = -lambda; must be < 0 (K - shift M must be positive definite)"},
       {"ncv", "0", "Lanczos basis size (0: max(2m + 1, m + 20) for m = k + guard, at most n)"},
       {"guard", "auto", "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
@@ -163,7 +163,7 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   std::vector<std::string> own;
   for (const auto& o : this->options()) own.push_back(o.name);
   // Keys other than ours belong to the linear solver; check them against it for a clear error.
-  const std::string solver_name = options.get_string("solver", "cholmod");
+  const std::string solver_name = options.get_string("solver", kDefaultLinearSolver);
   auto linear = linear_solver_registry().create(solver_name);
   std::vector<std::string> allowed = own;
   for (const auto& o : linear->options()) allowed.push_back(o.name);
@@ -200,7 +200,7 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   // Spectra needs k < ncv <= n; tiny problems go dense.
   if (n <= s.dense_threshold || k + 2 > n) return dense_solve(L, M, k);
 
-  auto linear = make_linear_solver(s.linear_config, "cholmod");
+  auto linear = make_linear_solver(s.linear_config, kDefaultLinearSolver);
   ShiftInvertOp op(L, M, *linear);
   MassOp bop(M);
   int restarts = 0;
