@@ -8,6 +8,7 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 
+#include "validators.hpp"
 #include "command.hpp"
 #include "normal_options.hpp"
 #include "surface_source.hpp"
@@ -88,8 +89,8 @@ RegisterCommand reg(31, "curvature", [](CLI::App& app) {
   cmd->add_option("--normals", args->normals, "with --shape/--volume: true or ii (default: true for shapes, ii for volumes)")
       ->check(CLI::IsMember({"true", "ii", "trivial"}));
   cmd->add_flag("--constant", args->constant, "with --normals: use the face normals as constant per face");
-  cmd->add_option("--radius", args->radius, "ball radius in world units (default 0.1)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--ii-radius", args->ii_radius, "II r-radius k (default 3)")->check(CLI::PositiveNumber);
+  cmd->add_option("--radius", args->radius, "ball radius in world units (default 0.1)")->check(non_negative_number());
+  cmd->add_option("--ii-radius", args->ii_radius, "II r-radius k (default 3)")->check(positive_number());
   cmd->add_option("--ii-alpha", args->ii_alpha, "II alpha (default 0.33)");
   cmd->add_option("--out", args->out, "output directory (H_faces.txt, G_, k1_, k2_, d1_, d2_ per faces/vertices, curvature.ply)")
       ->required();

@@ -8,6 +8,8 @@
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 
+#include <corrlap/discretizations/registry.hpp>
+
 #include "command.hpp"
 #include "operator_options.hpp"
 
@@ -26,7 +28,10 @@ struct EigsArgs {
 
 void run(const EigsArgs& a) {
   if (a.k <= 0) throw InputError("-k must be positive");
-  const Operators ops = a.options.build();
+  const OperatorOptions::Input in = a.options.prepare();
+  const Operators ops = make_discretization(a.options.method)->assemble(in.mesh, in.normals, in.params);
+  for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
+  if (const std::string note = boundary_condition_note(in.mesh); !note.empty()) std::cerr << "eigs: " << note << "\n";
   const Eigen::Index n = ops.L.rows();
   Config config;
   if (!a.solver_config_file.empty()) config.merge(Config::from_json_file(a.solver_config_file));

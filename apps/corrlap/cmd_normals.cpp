@@ -4,6 +4,7 @@
 
 #include <corrlap/io/text_io.hpp>
 
+#include "validators.hpp"
 #include "command.hpp"
 #include "normal_options.hpp"
 #include "surface_source.hpp"
@@ -42,7 +43,7 @@ RegisterCommand reg(30, "normals", [](CLI::App& app) {
   cmd->add_option("--estimator", args->estimator, "ii (integral invariant, spec 7), true (implicit shapes), trivial")
       ->check(CLI::IsMember({"ii", "true", "trivial"}));
   cmd->add_option("--radius", args->radius, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--alpha", args->alpha, "II: exponent alpha (default 0.33 as the reference; the paper uses 1/3)");
   cmd->add_option("--at", args->at, "faces (default) or vertices (normalized sum of incident face normals)")
       ->check(CLI::IsMember({"faces", "vertices"}));

@@ -1,5 +1,6 @@
 // corrlap solve: pure-Neumann Poisson problem of spec §10.4 with any discretization and any
 // linear solver backend; prints timings, the residual and the error vs the analytic solution.
+#include <filesystem>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -59,6 +60,7 @@ void run(const SolveArgs& a) {
   const std::string kind = method->required_normals() == NormalKind::None ? "none" : a.normals.describe(surface);
   const Operators ops = method->assemble(mesh, normals, params);
   for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
+  if (const std::string note = boundary_condition_note(mesh); !note.empty()) std::cerr << "solve: " << note << "\n";
   if (ops.domain != Operators::Domain::Vertices)
     throw InputError("corrlap solve: method '" + a.method + "' defines operators on faces; the Poisson problem is set on vertices");
   const double assemble_s = seconds_since(t0);
@@ -77,6 +79,11 @@ void run(const SolveArgs& a) {
     const auto& shape = surface.shape;
     if (shape && std::abs(shape->sphere_radius() - 1.0) < 1e-12) err = r.errors;
   } else {
+    if (!std::filesystem::exists(a.rhs)) {
+      std::string names;
+      for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
+      throw InputError("--rhs '" + a.rhs + "': neither a test function (" + names + ") nor an existing file");
+    }
     const Eigen::VectorXd b = read_scalars(a.rhs);
     if (b.size() != n)
       throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(b.size()) + " values, the mesh has " +
@@ -94,6 +101,7 @@ void run(const SolveArgs& a) {
     j["surface"] = a.source.describe();
     j["normals"] = kind;
     j["rhs"] = a.rhs;
+    j["boundary"] = boundary_condition(mesh);
     j["n"] = n;
     j["assemble_s"] = assemble_s;
     j["analyze_s"] = report.analyze_seconds;

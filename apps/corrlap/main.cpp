@@ -6,6 +6,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
 
+#include "validators.hpp"
 #include "command.hpp"
 
 namespace corrlap::cli {
@@ -22,7 +23,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "corrlap 0.1.0");
   int threads = 0;
   app.add_option("--threads", threads, "worker threads for TBB and OpenBLAS (default: all; env CORRLAP_THREADS)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(corrlap::cli::non_negative_number());
   auto& list = cli::commands();
   std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.order < b.order; });
   for (const auto& c : list) c.setup(app);
@@ -37,6 +38,16 @@ int main(int argc, char** argv) {
   });
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RequiredError& e) {
+    // "A subcommand is required" also when the first word is a misspelt command: name it.
+    for (const std::string& word : app.remaining()) {
+      if (word.empty() || word[0] == '-') continue;
+      std::string names;
+      for (const auto& c : list) names += " " + c.name;
+      std::cerr << "corrlap: error: unknown command '" << word << "'; commands:" << names << "\n";
+      return 1;
+    }
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const corrlap::Error& e) {

@@ -1,4 +1,5 @@
 #include "normal_options.hpp"
+#include "validators.hpp"
 
 #include <atomic>
 #include <iostream>
@@ -34,7 +35,7 @@ void NormalOptions::add_options(CLI::App& cmd) {
       ->check(CLI::IsMember({"auto", "true", "ii", "trivial"}))
       ->capture_default_str();
   cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd.add_option("--ii-alpha", ii.alpha, "II: exponent alpha (default 0.33)");
 }
 

@@ -1,10 +1,12 @@
 #include "surface_source.hpp"
+#include "validators.hpp"
 
 #include <iostream>
 #include <sstream>
 
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/surface/mesh_voxelization.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
@@ -25,12 +27,12 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   g->require_option(1);
   (void)s; (void)p; (void)v; (void)m; (void)mf;
   h_option = cmd.add_option("--h", h, "grid step (shapes: world units per voxel; volumes: voxel size; mesh files: "
-                                      "voxel size in mesh units)")->check(CLI::PositiveNumber);
+                                      "voxel size in mesh units)")->check(positive_number());
   cmd.add_option("--resolution", resolution, "mesh files: longest bounding-box side = N voxels")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd.add_option("--center", center, "shape centre X Y Z")->expected(3);
   cmd.add_option("--bbox", bbox, "digitization box MIN MAX (reference default -10 10)")->expected(2);
-  cmd.add_option("--offset", offset, "extra voxels around the box (reference default 5)")->check(CLI::NonNegativeNumber);
+  cmd.add_option("--offset", offset, "extra voxels around the box (reference default 5)")->check(non_negative_number());
   cmd.add_option("--threshold", threshold, "volumes: a voxel is inside when its value > threshold");
   cmd.add_option("--raw-dimensions", raw_dimensions, "raw volumes: NX NY NZ")->expected(3);
 }
@@ -108,6 +110,21 @@ std::string SurfaceSource::describe() const {
   else if (!mesh_file.empty()) os << mesh_file << (resolution > 0 ? ", resolution " + std::to_string(resolution) : ", h=" + std::to_string(h));
   else os << mesh;
   return os.str();
+}
+
+std::string boundary_condition(const SurfelMesh& mesh) {
+  const MeshInfo info = compute_mesh_info(mesh);
+  if (info.closed()) return "closed";
+  return "natural (zero Neumann) on " + std::to_string(info.boundary_edges) + " boundary edges";
+}
+
+std::string boundary_condition_note(const SurfelMesh& mesh) {
+  const MeshInfo info = compute_mesh_info(mesh);
+  if (info.closed()) return {};
+  // Every discretization assembles L without boundary terms, which is the weak form of the zero
+  // Neumann condition; the solvers add nothing else.
+  return "the surface is open (" + std::to_string(info.boundary_edges) +
+         " boundary edges): natural (zero Neumann) boundary conditions are used";
 }
 
 }  // namespace corrlap::cli

@@ -51,4 +51,11 @@ struct SurfaceSource {
   std::string describe() const;
 };
 
+/// Empty for a closed surface; otherwise the boundary condition the solvers' problems then use,
+/// for the user to read: "the surface is open (N boundary edges): natural (zero Neumann) boundary
+/// conditions" (docs/math.md §10.4).
+std::string boundary_condition_note(const SurfelMesh& mesh);
+/// "closed" or "natural (zero Neumann) on N boundary edges", for JSON reports.
+std::string boundary_condition(const SurfelMesh& mesh);
+
 }  // namespace corrlap::cli

@@ -113,4 +113,21 @@ TEST_CASE("corrlap solve: --normals gives the library's fields, the same as corr
   CHECK(run_cli("solve --method fem --shape sphere1 --h 0.2 --rhs x3", &out, &err) == 1);  // neither a name nor a file
   CHECK(err.find("x3") != std::string::npos);
 }
+
+TEST_CASE("corrlap solve and eigs say which boundary condition an open surface gets") {
+  // {z <= 0} in the box [-1, 1]^3: the surface stops at the box, so it has boundary edges.
+  const std::string open = " --method fem --polynomial z --h 0.25 --bbox -1 1 --normals true";
+  std::string out, err;
+  REQUIRE(run_cli("solve" + open + " --rhs x2 --json", &out, &err) == 0);
+  CHECK(err.find("the surface is open (76 boundary edges): natural (zero Neumann) boundary conditions") !=
+        std::string::npos);
+  CHECK(nlohmann::json::parse(out)["boundary"] == "natural (zero Neumann) on 76 boundary edges");
+  REQUIRE(run_cli("eigs" + open + " -k 2", &out, &err) == 0);
+  CHECK(err.find("natural (zero Neumann) boundary conditions") != std::string::npos);
+  // A closed surface: no note, "closed" in the report.
+  REQUIRE(run_cli("solve --method fem --shape sphere1 --h 0.25 --bbox -1.5 1.5 --normals true --rhs x2 --json", &out,
+                  &err) == 0);
+  CHECK(err.find("open") == std::string::npos);
+  CHECK(nlohmann::json::parse(out)["boundary"] == "closed");
+}
 #endif

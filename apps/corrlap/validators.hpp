@@ -1,0 +1,39 @@
+#pragma once
+// Option checks with messages a user can read: CLI11's PositiveNumber / NonNegativeNumber print
+// their range bound, the largest double, as a 309-digit number.
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace corrlap::cli {
+
+namespace detail {
+inline CLI::Validator number_check(const char* description, bool (*accept)(double)) {
+  return CLI::Validator(
+      [description, accept](std::string& text) -> std::string {
+        double value = 0.0;
+        std::size_t used = 0;
+        try {
+          value = std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used != text.size() || used == 0) return "'" + text + "' is not a number";
+        if (!std::isfinite(value) || !accept(value)) return "must be " + std::string(description) + " (got " + text + ")";
+        return {};
+      },
+      description);
+}
+}  // namespace detail
+
+/// A finite number > 0.
+inline CLI::Validator positive_number() {
+  return detail::number_check("a positive number", [](double v) { return v > 0.0; });
+}
+/// A finite number >= 0.
+inline CLI::Validator non_negative_number() {
+  return detail::number_check("a number >= 0", [](double v) { return v >= 0.0; });
+}
+
+}  // namespace corrlap::cli

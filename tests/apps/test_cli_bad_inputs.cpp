@@ -1,0 +1,166 @@
+// The CLI's bad-input catalogue: every subcommand, wrong options, missing and corrupt files, bad
+// normals, bad configs. Each case must fail with a named error (exit 1 for corrlap's errors, CLI11's
+// parse codes for malformed options), never crash, never print "internal error", and the message
+// must contain the expected fragment. Add a case whenever a new way to fail is found.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "test_support.hpp"
+
+#ifdef CORRLAP_CLI
+
+namespace {
+
+using corrlap::test::run_cli;
+using corrlap::test::tmp_path;
+using corrlap::test::write_text;
+
+struct BadCall {
+  std::string args;      // after "corrlap"; {D} is replaced by the scratch folder
+  std::string expected;  // fragment of the message on stderr
+};
+
+std::string expand(std::string s, const std::string& dir) {
+  for (std::size_t p; (p = s.find("{D}")) != std::string::npos;) s.replace(p, 3, dir);
+  return s;
+}
+
+// Scratch folder with the files the cases read: a valid small surfel mesh and its face normals,
+// and a set of broken files.
+std::string make_inputs() {
+  const std::string dir = tmp_path("bad_inputs_cli");
+  std::filesystem::create_directories(dir);
+  REQUIRE(run_cli("digitize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --out " + dir + "/s.obj --face-normals " + dir +
+                  "/fn.txt") == 0);
+  write_text(dir + "/garbage.obj", "garbage\n");
+  write_text(dir + "/empty.obj", "");
+  write_text(dir + "/oob.obj", "v 0 0 0\nf 1 2 3\n");
+  write_text(dir + "/one_normal.txt", "0 0 1\n");
+  write_text(dir + "/nan_normal.txt", "nan 0 1\n");
+  write_text(dir + "/typo.json", R"({"solver": "cholmod", "tolerence": 1})");
+  write_text(dir + "/broken.json", "{bad json");
+  write_text(dir + "/trunc.vol", "X: 2\n");
+  write_text(dir + "/trunc.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n0\n");
+  write_text(dir + "/trunc.off", "OFF\n3 1 0\n0 0 0\n");
+  write_text(dir + "/float.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n");
+  write_text(dir + "/short.raw", std::string(7, '\0'));
+  write_text(dir + "/model.stl", "solid x\n");
+  write_text(dir + "/three_values.txt", "1\n2\n3\n");
+  return dir;
+}
+
+const std::vector<BadCall>& catalogue() {
+  static const std::vector<BadCall> calls = {
+      // No or unknown command.
+      {"", "subcommand is required"},
+      {"nosuchcommand", "nosuchcommand"},
+      {"--threads -3 info {D}/s.obj", "--threads: must be a number >= 0 (got -3)"},
+      {"--threads abc info {D}/s.obj", "'abc' is not a number"},
+      // digitize: sources and parameters.
+      {"digitize --out {D}/x.obj", "Exactly 1 option from [--shape,--polynomial,--volume,--mesh-file] is required"},
+      {"digitize --shape sphere1 --volume {D}/trunc.vol --out {D}/x.obj", "2 were given"},
+      {"digitize --shape nosuch --h 0.1 --out {D}/x.obj", "unknown shape 'nosuch'"},
+      {"digitize --polynomial \"x^2+\" --h 0.1 --out {D}/x.obj", "unexpected end of expression"},
+      {"digitize --polynomial \"x^^2\" --h 0.1 --out {D}/x.obj", "polynomial \"x^^2\""},
+      {"digitize --shape sphere1 --h -1 --out {D}/x.obj", "--h: must be a positive number (got -1)"},
+      {"digitize --shape sphere1 --h 0 --out {D}/x.obj", "--h: must be a positive number (got 0)"},
+      {"digitize --shape sphere1 --h inf --out {D}/x.obj", "--h: must be a positive number (got inf)"},
+      {"digitize --shape sphere1 --h abc --out {D}/x.obj", "--h: 'abc' is not a number"},
+      {"digitize --shape sphere1 --h 1e-6 --bbox -1.5 1.5 --out {D}/x.obj", "too large for h = 1e-06"},
+      {"digitize --shape sphere1 --h 0.1 --bbox 1 -1 --out {D}/x.obj", "bounding box needs finite MIN < MAX"},
+      {"digitize --shape sphere1 --h 0.1 --offset -2 --out {D}/x.obj", "--offset: must be a number >= 0"},
+      {"digitize --shape sphere1 --h 0.1 --center 0 0 --out {D}/x.obj", "--center"},
+      {"digitize --shape sphere1 --h 0.1 --out {D}/x.xyz", "unsupported extension 'xyz' for writing"},
+      // digitize: volumes.
+      {"digitize --volume {D}/missing.vol --threshold 0 --out {D}/x.obj", "missing.vol': cannot open"},
+      {"digitize --volume {D}/trunc.vol --threshold 0 --out {D}/x.obj", "trunc.vol'"},
+      {"digitize --volume {D}/short.raw --threshold 0 --out {D}/x.obj", "--raw-dimensions NX NY NZ"},
+      {"digitize --volume {D}/short.raw --raw-dimensions 2 2 2 --threshold 0 --out {D}/x.obj", "short.raw'"},
+      {"digitize --volume {D}/float.nrrd --threshold 0 --out {D}/x.obj", "unsupported type 'float'"},
+      {"digitize --volume {D}/model.stl --threshold 0 --out {D}/x.obj", "unsupported extension 'stl'"},
+      // digitize: mesh files.
+      {"digitize --mesh-file {D}/s.obj --out {D}/x.obj", "--mesh-file needs --resolution N"},
+      {"digitize --mesh-file {D}/s.obj --resolution 0 --out {D}/x.obj", "--resolution: must be a positive number"},
+      {"digitize --mesh-file {D}/trunc.ply --resolution 16 --out {D}/x.obj", "trunc.ply'"},
+      {"digitize --mesh-file {D}/trunc.off --resolution 16 --out {D}/x.obj", "trunc.off'"},
+      {"digitize --mesh-file {D}/missing.obj --resolution 16 --out {D}/x.obj", "missing.obj': cannot open"},
+      // info.
+      {"info", "file is required"},
+      {"info {D}/missing.obj", "missing.obj': cannot open"},
+      {"info {D}/garbage.obj", "garbage.obj': no vertex"},
+      {"info {D}/empty.obj", "empty.obj': no vertex"},
+      {"info {D}/oob.obj", "face index 2 out of range"},
+      {"info {D}/model.stl", "unsupported extension 'stl'"},
+      // normals.
+      {"normals --shape sphere1 --h 0.2 --estimator nosuch --out {D}/n.txt", "--estimator: nosuch not in"},
+      {"normals --shape sphere1 --h 0.2 --estimator ii --at nowhere --out {D}/n.txt", "--at: nowhere not in"},
+      {"normals --mesh {D}/s.obj --estimator true --out {D}/n.txt", "true normals need an implicit shape"},
+      // curvature.
+      {"curvature --shape sphere1 --h 0.2 --normals true --radius -1 --out {D}/c", "--radius: must be a number >= 0"},
+      {"curvature --mesh {D}/s.obj --normals true --out {D}/c", "--mesh needs exactly one of --face-normals"},
+      // operators: methods, normals, parameters, configs.
+      {"operators --method nosuch --mesh {D}/s.obj --out {D}/o", "unknown discretization 'nosuch'"},
+      {"operators --method fem --mesh {D}/s.obj --out {D}/o", "fem needs face normals"},
+      {"operators --method fem --mesh {D}/s.obj --face-normals {D}/one_normal.txt --out {D}/o", "1 rows, expected"},
+      {"operators --method fem --mesh {D}/s.obj --face-normals {D}/nan_normal.txt --out {D}/o", "non-finite"},
+      {"operators --method fem --mesh {D}/s.obj --face-normals {D}/missing.txt --out {D}/o", "missing.txt': cannot open"},
+      {"operators --method fem --shape sphere1 --h 0.2 --normals bogus --out {D}/o", "--normals: bogus not in"},
+      {"operators --method fem --shape sphere1 --h 0.2 --normals true --param nosuch=1 --out {D}/o",
+       "unknown config key 'nosuch'"},
+      {"operators --method fem --shape sphere1 --h 0.2 --normals true --config {D}/broken.json --out {D}/o",
+       "broken.json': invalid JSON"},
+      {"operators --method fem --shape sphere1 --h 0.2 --normals true --config {D}/missing.json --out {D}/o",
+       "missing.json': cannot open"},
+      {"operators --method fem --shape sphere1 --h 0.2 --normals true --mass nosuch --out {D}/o", "--mass: nosuch"},
+      {"operators --method fem --shape sphere1 --h 0.2 --normals true --param orientation=sideways --out {D}/o",
+       "orientation policy 'sideways'"},
+      {"operators --method interpolated --shape sphere1 --h 0.2 --normals true --lambda -1 --out {D}/o",
+       "lambda must be finite and >= 0"},
+      {"operators --method interpolated --shape sphere1 --h 0.2 --normals true --kappa nan --out {D}/o",
+       "kappa must be finite"},
+      {"operators --method heat-kernel --shape sphere1 --h 0.2 --normals true --t -1 --out {D}/o", "t must be positive"},
+      // solve.
+      {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs nosuch",
+       "--rhs 'nosuch': neither a test function"},
+      {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs {D}/three_values.txt", "3 values"},
+      {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs x2 --solver nosuch",
+       "unknown linear solver 'nosuch'"},
+      {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs x2 --config {D}/typo.json",
+       "unknown config key 'tolerence'"},
+      {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs x2 --param tolerance=1",
+       "unknown config key 'tolerance'"},
+      {"solve --method polydec --shape sphere1 --h 0.2 --rhs x2 --config {D}/broken.json", "invalid JSON"},
+      // eigs.
+      {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 0", "-k must be positive"},
+      {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 100000", "k = 100000 must be in"},
+      {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 5 --solver nosuch", "unknown linear solver 'nosuch'"},
+      {"eigs --method fem --mesh {D}/s.obj --face-normals {D}/fn.txt -k 3 --shift 5", "--shift"},
+      // backends.
+      {"backends --nosuch", "--nosuch"},
+  };
+  return calls;
+}
+
+}  // namespace
+
+TEST_CASE("CLI bad-input catalogue: every case fails with a named error, never a crash or an internal error") {
+  const std::string dir = make_inputs();
+  CHECK(catalogue().size() >= 50);
+  for (const BadCall& call : catalogue()) {
+    const std::string args = expand(call.args, dir);
+    CAPTURE(args);
+    std::string err;
+    const int rc = run_cli(args, nullptr, &err);
+    CAPTURE(err);
+    CHECK(rc != 0);
+    CHECK(rc != 2);  // "internal error"
+    CHECK(rc < 128);  // no signal
+    CHECK(err.find("internal error") == std::string::npos);
+    CHECK(err.find(expand(call.expected, dir)) != std::string::npos);
+  }
+}
+
+#endif
