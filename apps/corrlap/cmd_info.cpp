@@ -39,7 +39,7 @@ void run(const InfoArgs& a) {
     j["area"] = info.area;
     j["bbox_min"] = {info.bbox_min.x(), info.bbox_min.y(), info.bbox_min.z()};
     j["bbox_max"] = {info.bbox_max.x(), info.bbox_max.y(), info.bbox_max.z()};
-    std::cout << j.dump(2) << "\n";
+    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
     return;
   }
   std::cout << "file                  " << a.file << "\n"

@@ -112,7 +112,7 @@ void run(const SolveArgs& a) {
     j["status"] = to_string(report.status);
     j["error_linf"] = err ? nlohmann::json(err->linf) : nlohmann::json(nullptr);
     j["error_l2"] = err ? nlohmann::json(err->l2) : nlohmann::json(nullptr);
-    std::cout << j.dump(2) << "\n";
+    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   } else {
     std::cout << "surface     " << a.source.describe() << " (" << n << " vertices)\n"
               << "method      " << a.method << " (normals " << kind << ")\n"

@@ -163,4 +163,15 @@ TEST_CASE("CLI bad-input catalogue: every case fails with a named error, never a
   }
 }
 
+TEST_CASE("JSON reports survive file names that are not UTF-8") {
+  const std::string dir = make_inputs();
+  const std::string name = dir + "/latin1_\xe9t\xe9.obj";  // "été" in Latin-1: invalid UTF-8
+  std::filesystem::copy_file(dir + "/s.obj", name, std::filesystem::copy_options::overwrite_existing);
+  std::string out, err;
+  REQUIRE(run_cli("info --json '" + name + "'", &out, &err) == 0);
+  CHECK(err.find("internal error") == std::string::npos);
+  CHECK(out.find("\"faces\"") != std::string::npos);
+  CHECK(out.find("latin1_") != std::string::npos);  // the name, its invalid bytes replaced
+}
+
 #endif
