@@ -5,7 +5,6 @@
 #include <tbb/parallel_for.h>
 
 #include <memory>
-#include <mutex>
 
 #include <algorithm>
 #include <atomic>
@@ -15,11 +14,10 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
 
 #include <corrlap/discretizations/detail/interpolated_kernel.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 
 namespace corrlap {
 
@@ -94,270 +92,6 @@ namespace {
 
 using RowMat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
 
-// Elements of the global-projection Laplacian (spec §3.6a): one per edge, on the union of the
-// vertices of the edge's faces (6 for an interior manifold edge), padded to a common size.
-struct EdgeElements {
-  int k = 0;                        // padded element size
-  std::vector<int> ids;             // #E x k vertex ids (padding repeats the first id)
-  std::vector<std::uint8_t> size;   // distinct vertices of each element
-  std::vector<int> start;           // incidences of edge e: [start[e], start[e+1])
-  std::vector<int> inc_face;        // face of the incidence
-  std::vector<std::int8_t> inc_local;  // local edge index i in that face
-  std::vector<std::int8_t> inc_slot;   // 4 slots per incidence: element slot of corner j
-  std::vector<int> corner_edge;        // edge index of local edge (f, i), 4 #F
-  int num_edges = 0;
-};
-
-// Edges found locally from the vertex -> corner incidence (no global sort): the faces sharing
-// local edge i of f are the faces around v_i that have v_{i+1} as a neighbouring corner. An edge
-// is represented by its incidence of smallest face; its index is the rank of that representative.
-EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
-  EdgeElements el;
-  const int F = mesh.num_faces();
-  const int* faces = mesh.faces.data();
-  std::vector<int> key(std::size_t(F) * 4), count(std::size_t(F) * 4);
-  auto for_each_incidence = [&](int f, int i, auto&& visit) {
-    const int a = faces[4 * f + i], b = faces[4 * f + ((i + 1) & 3)];
-    for (int t = vc.start[std::size_t(a)]; t < vc.start[std::size_t(a) + 1]; ++t) {
-      const int c = vc.corner[std::size_t(t)];
-      const int g = c >> 2, j = c & 3;
-      if (faces[4 * g + ((j + 1) & 3)] == b) visit(g, j);
-      else if (faces[4 * g + ((j + 3) & 3)] == b) visit(g, (j + 3) & 3);
-    }
-  };
-  tbb::parallel_for(tbb::blocked_range<int>(0, F, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int f = r.begin(); f != r.end(); ++f)
-      for (int i = 0; i < 4; ++i) {
-        int best = -1, n = 0;
-        for_each_incidence(f, i, [&](int g, int j) {
-          ++n;
-          if (best < 0) best = 4 * g + j;  // corners around a are in ascending face order
-        });
-        key[std::size_t(4 * f + i)] = best;
-        count[std::size_t(4 * f + i)] = n;
-      }
-  });
-  assign_on_huge_pages(el.corner_edge, std::size_t(F) * 4);
-  std::vector<int> rep_of_edge;
-  rep_of_edge.reserve(std::size_t(F) * 2 + 4);
-  el.start.assign(1, 0);
-  for (int c = 0; c < 4 * F; ++c)
-    if (key[std::size_t(c)] == c) {
-      el.corner_edge[std::size_t(c)] = int(rep_of_edge.size());
-      rep_of_edge.push_back(c);
-      el.start.push_back(el.start.back() + count[std::size_t(c)]);
-    }
-  for (int c = 0; c < 4 * F; ++c) el.corner_edge[std::size_t(c)] = el.corner_edge[std::size_t(key[std::size_t(c)])];
-  const int E = int(rep_of_edge.size());
-  int k = 0;
-  for (int e = 0; e < E; ++e) k = std::max(k, 2 + 2 * (el.start[std::size_t(e) + 1] - el.start[std::size_t(e)]));
-  if (k > 127) throw InputError("interpolated: an edge has too many incident faces");
-  el.k = k;
-  el.num_edges = E;
-  const std::size_t total = std::size_t(el.start[std::size_t(E)]);
-  assign_on_huge_pages(el.inc_face, total);
-  assign_on_huge_pages(el.inc_local, total);
-  assign_on_huge_pages(el.inc_slot, total * 4);
-  assign_on_huge_pages(el.ids, std::size_t(E) * std::size_t(k));
-  assign_on_huge_pages(el.size, std::size_t(E));
-  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int e = r.begin(); e != r.end(); ++e) {
-      const int rep = rep_of_edge[std::size_t(e)];
-      int a = el.start[std::size_t(e)];
-      for_each_incidence(rep >> 2, rep & 3, [&](int g, int j) {
-        el.inc_face[std::size_t(a)] = g;
-        el.inc_local[std::size_t(a++)] = std::int8_t(j);
-      });
-      int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
-      int used = 0;
-      for (a = el.start[std::size_t(e)]; a < el.start[std::size_t(e) + 1]; ++a) {
-        const int f = el.inc_face[std::size_t(a)];
-        for (int j = 0; j < 4; ++j) {
-          const int v = faces[4 * f + j];
-          int s = 0;
-          while (s < used && ids[s] != v) ++s;
-          if (s == used) ids[used++] = v;
-          el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
-        }
-      }
-      el.size[std::size_t(e)] = std::uint8_t(used);
-      for (int s = used; s < k; ++s) ids[s] = ids[0];
-    }
-  });
-  return el;
-}
-
-// Connectivity-only part of the global-projection Laplacian (spec §3.6a), everything the value
-// passes need so that they only stream numbers: per edge its incidences (with the factor
-// s_{f,i} / n_e) and their element slots; per column its sorted rows, the positions of the corners
-// of each incident face, and its edges (ascending) with the positions of their element vertices.
-// Cached next to the vertex pattern it was built from (same connectivity <=> same
-// QuadVertexPattern object, which the entry keeps alive).
-struct ProjectionPattern {
-  std::shared_ptr<const detail::QuadVertexPattern> key;
-  int k = 0, num_edges = 0;
-  // Edge rows r_e of P D0 (per edge, k values, the first size[e] used).
-  std::vector<std::uint8_t> size;
-  std::vector<int> inc_start;           // #E + 1
-  std::vector<int> inc_row;             // 4 f + i: row i of P_f D
-  std::vector<double> inc_coef;         // s_{f,i} / n_e (spec §0 sign, flat averaged over n_e faces)
-  std::vector<std::uint8_t> inc_slot;   // 4 per incidence: element slot of corner j
-  // Columns of L.
-  std::vector<int> outer, inner;
-  bool wide = false;                    // column positions stored as int (a column > 255 rows)
-  std::vector<std::uint8_t> face_pos8;  // 4 per vertex incidence (vc order): position of corner j
-  std::vector<int> face_pos32;
-  std::vector<int> ce_start, ce_edge;   // edges of the faces around v, ascending
-  std::vector<std::uint8_t> ce_sv;      // element slot of v in that edge
-  std::vector<std::uint8_t> ce_pos8;    // k per column edge: position of element slot s
-  std::vector<int> ce_pos32;
-};
-
-// Per thread: vertex stamps (ColumnScratch) and edge stamps; the edges of the faces around v are
-// listed in ascending order so the summation order is fixed.
-struct ProjectionScratch {
-  detail::ColumnScratch col;
-  std::vector<int> edge_stamp, edges;
-  ProjectionScratch(int V, int E, std::size_t cap_n, std::size_t cap_e)
-      : col(V, cap_n), edge_stamp(std::size_t(E), -1), edges(cap_e) {}
-};
-
-// Sorted edges of the faces around v into sc.edges; returns their count.
-inline int projection_edges(const EdgeElements& el, const detail::VertexCorners& vc, ProjectionScratch& sc, int v, int mark) {
-  const int* fe = el.corner_edge.data();
-  int ne = 0;
-  for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-    const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
-    for (int i = 0; i < 4; ++i)
-      if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
-  }
-  std::sort(sc.edges.begin(), sc.edges.begin() + ne);
-  return ne;
-}
-
-// Distinct vertices of the elements of the ne edges (unsorted, into sc.col.list); returns the count.
-inline int projection_vertices(const EdgeElements& el, ProjectionScratch& sc, int ne, int mark) {
-  int n = 0;
-  int* stamp = sc.col.stamp.data();
-  int* list = sc.col.list.data();
-  for (int t = 0; t < ne; ++t) {
-    const int* ids = el.ids.data() + std::size_t(sc.edges[std::size_t(t)]) * std::size_t(el.k);
-    for (int s = 0; s < el.k; ++s)
-      if (stamp[ids[s]] != mark) stamp[ids[s]] = mark, list[n++] = ids[s];
-  }
-  return n;
-}
-
-std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
-  auto p = std::make_shared<ProjectionPattern>();
-  const EdgeElements el = build_edge_elements(mesh, vc);
-  const int V = mesh.num_vertices(), E = el.num_edges, k = el.k;
-  const int* faces = mesh.faces.data();
-  p->k = k;
-  p->num_edges = E;
-  assign_on_huge_pages(p->size, el.size.data(), el.size.data() + el.size.size());
-  assign_on_huge_pages(p->inc_start, el.start.data(), el.start.data() + el.start.size());
-  const std::size_t I = el.inc_face.size();
-  // Pattern arrays are streamed by every assembly on this connectivity: huge pages from the start.
-  assign_on_huge_pages(p->inc_row, I);
-  assign_on_huge_pages(p->inc_coef, I);
-  assign_on_huge_pages(p->inc_slot, I * 4);
-  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int e = r.begin(); e != r.end(); ++e) {
-      const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
-      const double inv = 1.0 / double(a1 - a0);
-      for (int a = a0; a < a1; ++a) {
-        const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
-        p->inc_row[std::size_t(a)] = 4 * f + i;
-        // spec §0 edge sign: +1 if v_i < v_{i+1}.
-        p->inc_coef[std::size_t(a)] = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
-        for (int j = 0; j < 4; ++j) p->inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint8_t(el.inc_slot[std::size_t(a) * 4 + std::size_t(j)]);
-      }
-    }
-  });
-  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
-  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, E, cap_n, cap_e); });
-  assign_on_huge_pages(p->outer, std::size_t(V) + 1);
-  assign_on_huge_pages(p->ce_start, std::size_t(V) + 1);
-  // Stamps (edge and vertex arrays): v in pass 1, V + v in pass 2, so nothing is ever reset.
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
-    ProjectionScratch& sc = scratch.local();
-    for (int v = range.begin(); v != range.end(); ++v) {
-      const int ne = projection_edges(el, vc, sc, v, v);
-      p->ce_start[std::size_t(v) + 1] = ne;
-      p->outer[std::size_t(v) + 1] = projection_vertices(el, sc, ne, v);
-    }
-  });
-  int widest = 0;
-  for (int v = 0; v < V; ++v) {
-    widest = std::max(widest, p->outer[std::size_t(v) + 1]);
-    p->outer[std::size_t(v) + 1] += p->outer[std::size_t(v)];
-    p->ce_start[std::size_t(v) + 1] += p->ce_start[std::size_t(v)];
-  }
-  p->wide = widest > 255;
-  const std::size_t CE = std::size_t(p->ce_start[std::size_t(V)]);
-  assign_on_huge_pages(p->inner, std::size_t(p->outer[std::size_t(V)]));
-  assign_on_huge_pages(p->ce_edge, CE);
-  assign_on_huge_pages(p->ce_sv, CE);
-  if (p->wide) {
-    assign_on_huge_pages(p->face_pos32, vc.corner.size() * 4);
-    assign_on_huge_pages(p->ce_pos32, CE * std::size_t(k));
-  } else {
-    assign_on_huge_pages(p->face_pos8, vc.corner.size() * 4);
-    assign_on_huge_pages(p->ce_pos8, CE * std::size_t(k));
-  }
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
-    ProjectionScratch& sc = scratch.local();
-    int* pos = sc.col.pos.data();
-    auto put = [&](std::uint8_t* p8, int* p32, std::size_t idx, int value) {
-      if (p32) p32[idx] = value;
-      else p8[idx] = std::uint8_t(value);
-    };
-    for (int v = range.begin(); v != range.end(); ++v) {
-      const int ne = projection_edges(el, vc, sc, v, V + v);
-      const int n = projection_vertices(el, sc, ne, V + v);
-      std::sort(sc.col.list.begin(), sc.col.list.begin() + n);
-      std::copy_n(sc.col.list.begin(), n, p->inner.begin() + p->outer[std::size_t(v)]);
-      for (int t = 0; t < n; ++t) pos[sc.col.list[std::size_t(t)]] = t;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j)
-          put(p->face_pos8.data(), p->wide ? p->face_pos32.data() : nullptr, std::size_t(a) * 4 + std::size_t(j), pos[f[j]]);
-      }
-      std::size_t c = std::size_t(p->ce_start[std::size_t(v)]);
-      for (int t = 0; t < ne; ++t, ++c) {
-        const int e = sc.edges[std::size_t(t)];
-        const int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
-        int sv = 0;
-        while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
-        p->ce_edge[c] = e;
-        p->ce_sv[c] = std::uint8_t(sv);
-        for (int s = 0; s < k; ++s)
-          put(p->ce_pos8.data(), p->wide ? p->ce_pos32.data() : nullptr, c * std::size_t(k) + std::size_t(s), pos[ids[s]]);
-      }
-    }
-  });
-  return p;
-}
-
-std::mutex projection_cache_mutex;
-std::shared_ptr<const ProjectionPattern> projection_cache;
-
-std::shared_ptr<const ProjectionPattern> projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc,
-                                                            const std::shared_ptr<const detail::QuadVertexPattern>& key) {
-  if (key) {
-    std::lock_guard<std::mutex> lock(projection_cache_mutex);
-    if (projection_cache && projection_cache->key == key) return projection_cache;
-  }
-  auto built = build_projection_pattern(mesh, vc);
-  if (key) {
-    std::const_pointer_cast<ProjectionPattern>(built)->key = key;
-    std::lock_guard<std::mutex> lock(projection_cache_mutex);
-    projection_cache = built;
-  }
-  return built;
-}
-
 // Sized output with the given column structure (values uninitialized; the fill writes them all).
 void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
   detail::size_for_fill(A, V, outer[V]);
@@ -373,7 +107,7 @@ void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
 // When `mpat` is given, M (spec §3.2, M = sum_f M0_f) is filled in the same column pass, with the
 // same summation order as detail::gather_quad_rows.
 template <class Pos>
-void fill_columns(const ProjectionPattern& pp, const detail::VertexCorners& vc, const detail::QuadVertexPattern* mpat,
+void fill_columns(const detail::ProjectionPattern& pp, const detail::VertexCorners& vc, const detail::QuadVertexPattern* mpat,
                   const double* faceterms, const double* r, double lambda, const Pos* face_pos, const Pos* ce_pos,
                   Eigen::SparseMatrix<double>& L, Eigen::SparseMatrix<double>* M) {
   const int V = int(vc.start.size()) - 1, k = pp.k;
@@ -444,7 +178,7 @@ void fill_columns(const ProjectionPattern& pp, const detail::VertexCorners& vc, 
 // The second face of an edge is often far from the first in face order (spec §1.4 sorts by
 // orientation first), so its row is a cache miss: prefetching 16 edges ahead took the pass from
 // 32 to 24 ms at h = 0.005 (one thread).
-void edge_rows(const ProjectionPattern& pp, const double* pd, double* r) {
+void edge_rows(const detail::ProjectionPattern& pp, const double* pd, double* r) {
   const int k = pp.k, E = pp.num_edges;
   const int* inc_start = pp.inc_start.data();
   const int* inc_row = pp.inc_row.data();
@@ -485,7 +219,7 @@ class InterpolatedCorrected final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     Operators ops;
-    assemble_into(mesh, normals, params, ops);
+    assemble_into(mesh, normals, params, nullptr, ops);
     return ops;
   }
 
@@ -493,7 +227,7 @@ class InterpolatedCorrected final : public Discretization {
   // which keeps the allocation): on a VM the page faults of fresh output were ~130 ms of the
   // ~350 ms per call at h = 0.005.
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                     Operators& ops) const override {
+                     const QuadPattern* pattern, Operators& ops) const override {
     params.check_parameters(parameters(), "interpolated parameters");
     const double lambda = params.get_double("lambda", 0.1);
     const double kappa = params.get_double("kappa", 2.0);
@@ -511,15 +245,22 @@ class InterpolatedCorrected final : public Discretization {
         prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
     const Eigen::MatrixX3d& u = prepared.matrix();
     const int F = mesh.num_faces();
-    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
-    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
-    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
-    const auto pp = global ? projection_pattern(mesh, vc, pat) : nullptr;
+    const detail::VertexGather gather(mesh, pattern, "interpolated");
+    const detail::QuadVertexPattern* pat = gather.pattern();
+    const detail::VertexCorners& vc = gather.vc();
+    // The projection structure (spec §3.6a): the pattern's (built on its first use), else built
+    // for this assembly.
+    std::unique_ptr<detail::ProjectionPattern> own_pp;
+    const detail::ProjectionPattern* pp = nullptr;
+    if (global) {
+      if (pattern) pp = &detail::projection_pattern(*pattern);
+      else pp = (own_pp = detail::build_projection_pattern(mesh.faces.data(), F, vc)).get();
+    }
     // One reused buffer (no first-touch page faults in steady state; every read entry is
     // written first): the face records of interpolated_face_terms (local assembly: L_f packed in
     // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
     const std::size_t pd_off = std::size_t(F) * detail::kTermsStride, r_off = pd_off + std::size_t(F) * 16;
-    detail::ReusedScratch data(r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
+    detail::PatternScratch data(pattern, r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
     double* terms = data.data();
     double* pdata = data.data() + pd_off;
     const double* px = mesh.positions.col(0).data();
@@ -566,12 +307,12 @@ class InterpolatedCorrected final : public Discretization {
             {&ops.M});
       Eigen::SparseMatrix<double>* M = pat ? &ops.M : nullptr;
       if (pp->wide)
-        fill_columns<int>(*pp, vc, pat.get(), terms, r, lambda, pp->face_pos32.data(), pp->ce_pos32.data(), ops.L, M);
+        fill_columns<int>(*pp, vc, pat, terms, r, lambda, pp->face_pos32.data(), pp->ce_pos32.data(), ops.L, M);
       else
-        fill_columns<std::uint8_t>(*pp, vc, pat.get(), terms, r, lambda, pp->face_pos8.data(), pp->ce_pos8.data(), ops.L, M);
+        fill_columns<std::uint8_t>(*pp, vc, pat, terms, r, lambda, pp->face_pos8.data(), pp->ce_pos8.data(), ops.L, M);
     } else {
       detail::gather_quad_rows<2>(
-          mesh, pat.get(), vc,
+          mesh, pat, vc,
           [&](int f, int i, double* rows) {
             const double* t = terms + std::size_t(f) * detail::kTermsStride;
             detail::interpolated_mass_row(t, i, rows);

@@ -17,7 +17,7 @@
 
 #include <corrlap/discretizations/detail/normal_policy.hpp>
 #include "quad_assembly.hpp"
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 
 namespace corrlap {
 
@@ -337,13 +337,13 @@ class Vrm final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     Operators ops;
-    assemble_into(mesh, normals, params, ops);
+    assemble_into(mesh, normals, params, nullptr, ops);
     return ops;
   }
 
   // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                     Operators& ops) const override {
+                     const QuadPattern* pattern, Operators& ops) const override {
     params.check_parameters(parameters(), name());
     validate_mesh(mesh, name().c_str());
     reset_for_reuse(ops);
@@ -374,8 +374,7 @@ class Vrm final : public Discretization {
     // kernels dominate here, and a pooled 20-32 doubles per face would stay resident.
     const bool full_mass = corrected_ && !lumped_mass;
     const std::size_t S = full_mass ? 32 : 20;
-    std::unique_ptr<double[]> loc(new double[std::size_t(F) * S]);
-    advise_huge_pages(loc.get(), std::size_t(F) * S * sizeof(double));
+    const std::unique_ptr<double[]> loc = detail::fresh_buffer(std::size_t(F) * S);
     // Rare events (skipped fan triangles, minimizer failures) collected per thread and merged in
     // face order below: no per-face report arrays.
     struct Report {
@@ -420,9 +419,9 @@ class Vrm final : public Discretization {
     // the sum of its face contributions in ascending face order, from +0.0 -- the order of the
     // generic AssemblyPlan this replaces, so the bits are unchanged -- and is written once.
     // Local matrices are not bitwise symmetric (P^T K P), so the kernel hands columns.
-    const auto pat = detail::quad_vertex_pattern(mesh);
-    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
-    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
+    const detail::VertexGather gather(mesh, pattern, name());
+    const detail::QuadVertexPattern* pat = gather.pattern();
+    const detail::VertexCorners& vc = gather.vc();
     const double* lp = loc.get();
     // spec §5.1 step 6: L = -sum K_f (negative semi-definite); negating each finished column gives
     // the bits of negating the finished matrix.
@@ -434,7 +433,7 @@ class Vrm final : public Discretization {
         const double* o = lp + std::size_t(f) * S;
         for (int j = 0; j < 4; ++j) c[j] = o[4 * j + i], c[4 + j] = o[16 + 4 * j + i];
       };
-      detail::gather_quad_rows<2>(mesh, pat.get(), vc, columns, {&ops.L, &ops.M}, negate_L);
+      detail::gather_quad_rows<2>(mesh, pat, vc, columns, {&ops.L, &ops.M}, negate_L);
       // Row sums of the assembled M, bitwise as a sequential scan (the lumped alternative).
       ops.M_lumped = detail::row_sum_diagonal_symmetric(ops.M);
     } else {
@@ -442,7 +441,7 @@ class Vrm final : public Discretization {
         const double* o = lp + std::size_t(f) * S;
         for (int j = 0; j < 4; ++j) c[j] = o[4 * j + i];
       };
-      detail::gather_quad_rows<1>(mesh, pat.get(), vc, columns, {&ops.L}, negate_L);
+      detail::gather_quad_rows<1>(mesh, pat, vc, columns, {&ops.L}, negate_L);
       // Diagonal local masses: the assembled M is diagonal, entry v = sum over the corners at v in
       // ascending face order (what summing the assembled zeros of the off-diagonal gives, bit for bit).
       ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int i) { return lp[std::size_t(f) * S + 16 + std::size_t(i)]; });
