@@ -22,69 +22,104 @@
 namespace corrlap {
 
 Eigen::Matrix4d interpolated_local_mass(double h, const Eigen::Vector4d& uz) {
-  // 144 * int phi_g phi_l phi_k = a_s * a_t with a = 9 if the three share the parameter value
-  // (all 0 or all 1 along that axis), else 3 for... : the 1D integrals of three linear hat
-  // products are 1/4 (m = 0 or 3 factors s) and 1/12 (m = 1 or 2), hence 144 w in {9, 3, 1}.
+  // 144 * int phi_g phi_l phi_k = a_s * a_t with a = 3 when the three hats share the parameter
+  // value along that axis (m = 0 or 3 factors s), else 1: the 1D integrals of three linear hat
+  // products are 1/4 and 1/12, hence 144 w in {9, 3, 1}.
   static const int alpha[4] = {0, 1, 1, 0}, beta[4] = {0, 0, 1, 1};
   auto w1 = [](int m) { return (m == 0 || m == 3) ? 3.0 : 1.0; };  // 12 * 1D integral
+  const double q = h * h / 144.0;
   Eigen::Matrix4d M;
   for (int g = 0; g < 4; ++g)
     for (int l = g; l < 4; ++l) {
       double s = 0.0;
-      for (int k = 0; k < 4; ++k)
-        s += w1(alpha[g] + alpha[l] + alpha[k]) * w1(beta[g] + beta[l] + beta[k]) * uz[k];
-      M(g, l) = M(l, g) = h * h * s / 144.0;
+      for (int k = 0; k < 4; ++k) s += w1(alpha[g] + alpha[l] + alpha[k]) * w1(beta[g] + beta[l] + beta[k]) * uz[k];
+      M(g, l) = M(l, g) = q * s;
     }
   return M;
 }
 
+namespace {
+// a . b and a x b component by component: the order of the fast kernel
+// (interpolated_corrected_fast.cpp), so that both give the same bits.
+double dot3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
+Eigen::Vector3d cross3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return {a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x()};
+}
+}  // namespace
+
 InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u, double lambda, double kappa) {
   InterpolatedLocal r;
-  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/h, n = t1 x t2.
-  const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
-  const double h = e1.norm();
-  const Eigen::Vector3d t1 = e1 / h;
-  const Eigen::Vector3d t2 = (x.row(2) - x.row(1)).transpose().normalized();
-  const Eigen::Vector3d n = t1.cross(t2);
+  // Edge vectors delta_i = x_{i+1} - x_i (spec §3.4).
+  Eigen::Vector3d delta[4];
+  for (int i = 0; i < 4; ++i) delta[i] = (x.row((i + 1) % 4) - x.row(i)).transpose();
+  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/|x2-x1|, n = t1 x t2.
+  const double h = std::sqrt(dot3(delta[0], delta[0]));
+  const double inv_h = 1.0 / h;
+  const Eigen::Vector3d t1 = delta[0] * inv_h;
+  const Eigen::Vector3d t2 = delta[1] * (1.0 / std::sqrt(dot3(delta[1], delta[1])));
+  const Eigen::Vector3d n = cross3(t1, t2);
   Eigen::Matrix3d R;
   R.col(0) = t1;
   R.col(1) = t2;
   R.col(2) = n;
-  // Corner normals in frame components: ul(k, c) = u_k . (t1, t2, n)[c].
-  const Eigen::Matrix<double, 4, 3> ul = u * R;
-  // Edge-midpoint and face averages (spec §3.1).
-  Eigen::Matrix<double, 4, 3> ue;
-  for (int i = 0; i < 4; ++i) ue.row(i) = 0.5 * (ul.row(i) + ul.row((i + 1) % 4));
-  const Eigen::RowVector3d ub = 0.25 * (ul.row(0) + ul.row(1) + ul.row(2) + ul.row(3));
+  // Corner normals in frame components, ul(k, :) = (u_k.t1, u_k.t2, u_k.n), their edge-midpoint
+  // and face averages (spec §3.1).
+  Eigen::Matrix<double, 4, 3> ul, ue;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d uk = u.row(k).transpose();
+    ul.row(k) << dot3(uk, t1), dot3(uk, t2), dot3(uk, n);
+  }
+  Eigen::Vector3d ub;
+  for (int c = 0; c < 3; ++c) {
+    for (int i = 0; i < 4; ++i) ue(i, c) = 0.5 * (ul(i, c) + ul((i + 1) % 4, c));
+    ub[c] = 0.25 * (ul(0, c) + ul(1, c) + ul(2, c) + ul(3, c));
+  }
   const double uz = ub.z();
   r.area = h * h * uz;
   r.ubar_z = uz;
   r.mass = interpolated_local_mass(h, ul.col(2));
-  // spec §3.3 closed form of S.
-  r.S << uz, 0, -uz, 0,  //
-      0, uz, 0, -uz,     //
-      -ub.x(), -ub.y(), ub.x(), ub.y();
-  r.S /= 3.0;
-  Eigen::Matrix<double, 3, 4> S2;
-  S2 << ue(0, 2), 0, -ue(2, 2), 0,  //
-      0, ue(1, 2), 0, -ue(3, 2),     //
-      -ue(0, 0), -ue(1, 1), ue(2, 0), ue(3, 1);
-  r.S += S2 / 6.0;
+  // spec §3.3 closed form S = S1 / 3 + S2 / 6, entry by entry (2 S1 + S2) / 6.
+  constexpr double sixth = 1.0 / 6.0;
+  r.S << (2.0 * uz + ue(0, 2)) * sixth, 0.0, -(2.0 * uz + ue(2, 2)) * sixth, 0.0,  //
+      0.0, (2.0 * uz + ue(1, 2)) * sixth, 0.0, -(2.0 * uz + ue(3, 2)) * sixth,      //
+      -(2.0 * ub.x() + ue(0, 0)) * sixth, -(2.0 * ub.y() + ue(1, 1)) * sixth, (2.0 * ub.x() + ue(2, 0)) * sixth,
+      (2.0 * ub.y() + ue(3, 1)) * sixth;
+  // G = S D (D of spec §0: (S D)(c, j) = S(c, j-1) - S(c, j)).
+  Eigen::Matrix<double, 3, 4> G;
+  for (int c = 0; c < 3; ++c)
+    for (int j = 0; j < 4; ++j) G(c, j) = r.S(c, (j + 3) % 4) - r.S(c, j);
+  // spec §3.5: a_f U^T U = S^T S / ubar^z, so D^T (a_f U^T U) D = G^T G / ubar^z.
+  const double inv_uz = 1.0 / uz;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      r.sharp_stiffness(i, j) = (G(0, i) * G(0, j) + G(1, i) * G(1, j) + G(2, i) * G(2, j)) * inv_uz;
   r.sharp = R * r.S / (h * uz);
-  // spec §3.4 flat with correction factor kappa.
+  // spec §3.4 flat with correction factor kappa: V_i = delta_i^T (I - kappa Q_i) with
+  // Q_i = (2 u_a u_a^T + u_a u_b^T + u_b u_a^T + 2 u_b u_b^T) / 6, i.e.
+  // V_i = delta_i - kappa/6 ((2 d_a + d_b) u_a + (d_a + 2 d_b) u_b), d_a = delta_i . u_a, d_b = delta_i . u_b.
+  // P_f D = D - V U D = D - (V R) G / (h ubar^z) (spec §3.6a).
+  const double w = inv_h * inv_uz, kk = kappa * sixth;
   for (int i = 0; i < 4; ++i) {
-    const int b = (i + 1) % 4;
-    const Eigen::Vector3d ua = u.row(i).transpose(), ubv = u.row(b).transpose();
-    const Eigen::Vector3d d = (x.row(b) - x.row(i)).transpose();
-    const Eigen::Matrix3d Q = (2.0 * ua * ua.transpose() + ua * ubv.transpose() + ubv * ua.transpose() +
-                               2.0 * ubv * ubv.transpose()) / 6.0;
-    r.flat.row(i) = (d.transpose() * (Eigen::Matrix3d::Identity() - kappa * Q));
+    const Eigen::Vector3d ua = u.row(i).transpose(), ub_ = u.row((i + 1) % 4).transpose();
+    const double da = dot3(delta[i], ua), db = dot3(delta[i], ub_);
+    const double ca = kk * (2.0 * da + db), cb = kk * (da + 2.0 * db);
+    const Eigen::Vector3d v(delta[i].x() - ca * ua.x() - cb * ub_.x(), delta[i].y() - ca * ua.y() - cb * ub_.y(),
+                            delta[i].z() - ca * ua.z() - cb * ub_.z());
+    r.flat.row(i) = v.transpose();
+    const double vr0 = dot3(v, t1) * w, vr1 = dot3(v, t2) * w, vr2 = dot3(v, n) * w;
+    for (int j = 0; j < 4; ++j) r.projected_difference(i, j) = -(vr0 * G(0, j) + vr1 * G(1, j) + vr2 * G(2, j));
+    r.projected_difference(i, i) -= 1.0;
+    r.projected_difference(i, (i + 1) % 4) += 1.0;
   }
   r.projection = Eigen::Matrix4d::Identity() - r.flat * r.sharp;
-  // spec §3.5: a_f U^T U = S^T S / ubar^z.
   r.inner_product = r.S.transpose() * r.S / uz + lambda * r.projection.transpose() * r.projection;
-  const Eigen::Matrix4d& D = quad_difference();
-  r.laplacian = -D.transpose() * r.inner_product * D;
+  // L_f = -D^T M_{1,f} D = -(G^T G / ubar^z + lambda (P_f D)^T (P_f D)).
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      double s = 0.0;
+      for (int m = 0; m < 4; ++m) s += r.projected_difference(m, i) * r.projected_difference(m, j);
+      r.laplacian(i, j) = -(r.sharp_stiffness(i, j) + lambda * s);
+    }
   return r;
 }
 
@@ -103,7 +138,7 @@ void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
 // L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex columns: column v
 // sums the face terms of its faces (incidences ascending) and then lambda r_e[v] r_e over the
 // edges of its faces (ascending), so the result is the same for any thread count.
-// `faceterms` holds the per-face records of interpolated_face_terms; `r` the edge rows (k per edge).
+// `faceterms` holds the per-face records of interpolated_face_range; `r` the edge rows (k per edge).
 // When `mpat` is given, M (spec §3.2, M = sum_f M0_f) is filled in the same column pass, with the
 // same summation order as detail::gather_quad_rows.
 template <class Pos>
@@ -257,7 +292,7 @@ class InterpolatedCorrected final : public Discretization {
       else pp = (own_pp = detail::build_projection_pattern(mesh.faces.data(), F, vc)).get();
     }
     // One reused buffer (no first-touch page faults in steady state; every read entry is
-    // written first): the face records of interpolated_face_terms (local assembly: L_f packed in
+    // written first): the face records of interpolated_face_range (local assembly: L_f packed in
     // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
     const std::size_t pd_off = std::size_t(F) * detail::kTermsStride, r_off = pd_off + std::size_t(F) * 16;
     detail::PatternScratch data(pattern, r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));

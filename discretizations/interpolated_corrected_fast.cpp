@@ -1,6 +1,12 @@
-// Vectorized per-face kernel of the interpolated corrected calculus: several faces per SIMD
-// register (one face per lane), bitwise the scalar interpolated_face_terms (spec §3.2-§3.5).
-#include "interpolated_kernel.hpp"
+// Bitwise equal to interpolated_local (mass, sharp_stiffness, projected_difference), checked by TEST_CASE("interpolated fast face terms are bitwise the readable interpolated_local").
+//
+// The per-face kernel of the interpolated corrected calculus (spec §3.2-§3.5) for the assembly hot
+// loop: several faces per SIMD register (one face per lane), each lane doing the readable
+// function's operations in its order (no FMA contraction: -ffp-contract=off), writing only what the
+// assembly reads.
+#include <cmath>
+
+#include <corrlap/discretizations/detail/interpolated_kernel.hpp>
 
 #include <corrlap/discretizations/assembly/detail/avx2_target.inc>
 
@@ -11,6 +17,7 @@ namespace corrlap::detail {
 
 namespace {
 
+typedef double Lanes1 __attribute__((vector_size(8)));   // one face: the tail of a range
 typedef double Lanes2 __attribute__((vector_size(16)));  // an SSE2 register of doubles
 typedef double Lanes4 __attribute__((vector_size(32)));  // an AVX register of doubles
 
@@ -18,11 +25,9 @@ typedef double Lanes4 __attribute__((vector_size(32)));  // an AVX register of d
 // function returning an AVX vector would be compiled for the default target).
 #define CORRLAP_DOT3(a, b) ((a)[0] * (b)[0] + (a)[1] * (b)[1] + (a)[2] * (b)[2])
 
-// interpolated_face_terms for N consecutive faces f0 .. f0 + N - 1 at once, one face per vector
-// lane (GCC vector extensions: compiled as AVX2 or SSE2 by the caller's target). Every lane
-// performs exactly the operations of the scalar function in the same order (square roots and the
-// square test per lane in scalar code), so the results are bitwise the scalar ones as long as
-// nothing is contracted into FMAs (-ffp-contract=off).
+// The records of N consecutive faces f0 .. f0 + N - 1 at once, one face per vector lane (GCC
+// vector extensions: compiled as AVX2, SSE2 or scalar code by the caller's target); square roots
+// and the square test (to 1e-6) per lane in scalar code.
 // Corners come from `faces` (4 per face), positions px/py/pz and normals ux/uy/uz (one array per
 // component). Returns false, having written nothing, when some face is not a square.
 
@@ -132,20 +137,11 @@ __attribute__((always_inline)) inline int face_range_body(const int* faces, int 
     for (; f + N <= e; f += N)
       if (!interpolated_face_terms_batch<Lanes>(faces, f, x[0], x[1], x[2], u[0], u[1], u[2], kappa,
                                                 terms + std::size_t(f) * kTermsStride, pd + std::size_t(f) * 16))
-        break;  // some face of the batch is not a square: the scalar loop finds which
-  for (; f < e; ++f) {
-    double xs[4][3], us[4][3];
-    const double* xp[4];
-    const double* up[4];
-    for (int k = 0; k < 4; ++k) {
-      const int v = faces[4 * f + k];
-      for (int c = 0; c < 3; ++c) xs[k][c] = x[c][v], us[k][c] = u[c][v];
-      xp[k] = xs[k];
-      up[k] = us[k];
-    }
-    if (!interpolated_face_terms(xp, up, kappa, terms + std::size_t(f) * kTermsStride, pd + std::size_t(f) * 16))
+        break;  // some face of the batch is not a square: the one-face loop finds which
+  for (; f < e; ++f)
+    if (!interpolated_face_terms_batch<Lanes1>(faces, f, x[0], x[1], x[2], u[0], u[1], u[2], kappa,
+                                               terms + std::size_t(f) * kTermsStride, pd + std::size_t(f) * 16))
       return f;
-  }
   return -1;
 }
 
@@ -162,7 +158,7 @@ int face_range_sse2(const int* faces, int b, int e, const double* const x[3], co
 
 int face_range_scalar(const int* faces, int b, int e, const double* const x[3], const double* const u[3],
                       double kappa, double* terms, double* pd) {
-  return face_range_body<double>(faces, b, e, x, u, kappa, terms, pd);
+  return face_range_body<Lanes1>(faces, b, e, x, u, kappa, terms, pd);
 }
 
 }  // namespace
