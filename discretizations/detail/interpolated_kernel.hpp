@@ -3,7 +3,10 @@
 // hot loop (interpolated_corrected_fast.cpp), bitwise the matrices of the readable
 // interpolated_local() (mass, sharp_stiffness, projected_difference), computed without Eigen
 // temporaries and only for what the assembly reads. Internal header.
+#include <Eigen/Core>
 #include <cmath>
+
+#include <corrlap/core/discretization.hpp>
 
 #include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
 
@@ -39,5 +42,11 @@ inline void interpolated_mass_row(const double* t, int g, double* row) {
 int interpolated_face_range(const int* faces, int b, int e, const double* const position[3],
                             const double* const normal[3], double kappa, double* terms, double* pd,
                             FaceKernelIsa isa = FaceKernelIsa::Best);
+
+/// ops.L and ops.M of the interpolated corrected calculus for vertex normals u (#V x 3): global
+/// projection (spec §3.6a) or sum of the local L_f (§3.6b), through `pattern` when given. Throws
+/// InputError naming the first face that is not a square.
+void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& u, const QuadPattern* pattern,
+                                double lambda, double kappa, bool global, Operators& ops);
 
 }  // namespace corrlap::detail
