@@ -3,16 +3,15 @@
 // The assembly hot path of the corrected FEM (spec §4.2-§4.4): per face, one SIMD lane per face,
 // the distinct values of K_f and the mass scales (the readable functions' operations in their
 // order, no FMA contraction: -ffp-contract=off), then the fused row kernel + vertex gather.
-#include <cmath>
-#include <cstring>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <cmath>
 #include <corrlap/discretizations/assembly/detail/avx2_target.inc>
 #include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 #include <corrlap/discretizations/detail/fem_kernel.hpp>
 #include <corrlap/discretizations/quad_assembly.hpp>
+#include <cstring>
 
 namespace corrlap::detail {
 
@@ -73,7 +72,8 @@ __attribute__((always_inline)) inline void fem_range_body(const double* P, std::
                                                           const double* U, std::size_t F, int b, int e, double* g) {
   constexpr int N = int(sizeof(vec) / sizeof(double));
   int f = b;
-  for (; f + N <= e; f += N) fem_face_batch<vec>(P, V, faces, U, F, std::size_t(f), g + std::size_t(f) * kFemFaceValues);
+  for (; f + N <= e; f += N)
+    fem_face_batch<vec>(P, V, faces, U, F, std::size_t(f), g + std::size_t(f) * kFemFaceValues);
   for (; f < e; ++f) fem_face_batch<FemLanes1>(P, V, faces, U, F, std::size_t(f), g + std::size_t(f) * kFemFaceValues);
 }
 
@@ -94,10 +94,18 @@ void fem_range_scalar(const double* P, std::size_t V, const int* faces, const do
 inline void fem_face_row(const double* g, int i, double* row) {
   const double self = g[0], o1 = g[1], o2 = g[2], o = g[3], s2 = g[4], oe = g[5];
   switch (i) {
-    case 0: row[0] = -self, row[1] = -o1, row[2] = -o, row[3] = -o2; break;
-    case 1: row[0] = -o1, row[1] = -s2, row[2] = -o2, row[3] = -oe; break;
-    case 2: row[0] = -o, row[1] = -o2, row[2] = -self, row[3] = -o1; break;
-    default: row[0] = -o2, row[1] = -oe, row[2] = -o1, row[3] = -s2; break;
+    case 0:
+      row[0] = -self, row[1] = -o1, row[2] = -o, row[3] = -o2;
+      break;
+    case 1:
+      row[0] = -o1, row[1] = -s2, row[2] = -o2, row[3] = -oe;
+      break;
+    case 2:
+      row[0] = -o, row[1] = -o2, row[2] = -self, row[3] = -o1;
+      break;
+    default:
+      row[0] = -o2, row[1] = -oe, row[2] = -o1, row[3] = -s2;
+      break;
   }
 }
 
@@ -106,9 +114,12 @@ inline void fem_face_row(const double* g, int i, double* row) {
 void fem_face_range(const double* positions, std::size_t num_vertices, const int* faces, const double* normals,
                     std::size_t num_faces, int b, int e, double* g, FaceKernelIsa isa) {
   switch (resolve_face_kernel_isa(isa)) {
-    case FaceKernelIsa::Avx2: return fem_range_avx2(positions, num_vertices, faces, normals, num_faces, b, e, g);
-    case FaceKernelIsa::Sse2: return fem_range_sse2(positions, num_vertices, faces, normals, num_faces, b, e, g);
-    default: return fem_range_scalar(positions, num_vertices, faces, normals, num_faces, b, e, g);
+    case FaceKernelIsa::Avx2:
+      return fem_range_avx2(positions, num_vertices, faces, normals, num_faces, b, e, g);
+    case FaceKernelIsa::Sse2:
+      return fem_range_sse2(positions, num_vertices, faces, normals, num_faces, b, e, g);
+    default:
+      return fem_range_scalar(positions, num_vertices, faces, normals, num_faces, b, e, g);
   }
 }
 
@@ -119,8 +130,8 @@ void corrected_fem_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d&
   constexpr std::size_t G = kFemFaceValues;
   PatternScratch geo(pattern, std::size_t(F) * G);
   tbb::parallel_for(tbb::blocked_range<int>(0, F, 2048), [&](const tbb::blocked_range<int>& r) {
-    fem_face_range(mesh.positions.data(), std::size_t(mesh.num_vertices()), mesh.faces.data(), u.data(),
-                   std::size_t(F), r.begin(), r.end(), geo.data());
+    fem_face_range(mesh.positions.data(), std::size_t(mesh.num_vertices()), mesh.faces.data(), u.data(), std::size_t(F),
+                   r.begin(), r.end(), geo.data());
   });
   // Fused kernel + vertex-row gather: the local matrices depend only on (x, y, z, area), so each
   // row is computed where it is summed and every matrix entry is written once (memory-bound).
@@ -141,12 +152,16 @@ void corrected_fem_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d&
     for (int j = 0; j < 4; ++j) rows[4 + j] = sc * w[(j - i + 4) & 3];
   };
   if (lumped) {
-    if (pat) gather_quad_rows<1>(*pat, stiffness, {&ops.L});
-    else gather_quad_rows<1>(mesh, vc, stiffness, {&ops.L});
+    if (pat)
+      gather_quad_rows<1>(*pat, stiffness, {&ops.L});
+    else
+      gather_quad_rows<1>(mesh, vc, stiffness, {&ops.L});
     ops.M = lumped_mass();
   } else {
-    if (pat) gather_quad_rows<2>(*pat, stiffness_mass, {&ops.L, &ops.M});
-    else gather_quad_rows<2>(mesh, vc, stiffness_mass, {&ops.L, &ops.M});
+    if (pat)
+      gather_quad_rows<2>(*pat, stiffness_mass, {&ops.L, &ops.M});
+    else
+      gather_quad_rows<2>(mesh, vc, stiffness_mass, {&ops.L, &ops.M});
   }
   if (with_lumped) ops.M_lumped = lumped ? ops.M : lumped_mass();
 }

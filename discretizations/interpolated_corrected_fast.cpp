@@ -4,23 +4,19 @@
 // loop: several faces per SIMD register (one face per lane), each lane doing the readable
 // function's operations in its order (no FMA contraction: -ffp-contract=off), writing only what the
 // assembly reads; then the global (spec §3.6a) or local (§3.6b) assembly of L and M.
-#include <cmath>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
-#include <string>
-
+#include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/discretizations/assembly/detail/avx2_target.inc>
 #include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 #include <corrlap/discretizations/detail/interpolated_kernel.hpp>
-
-#include <corrlap/discretizations/assembly/detail/avx2_target.inc>
-
 #include <cstddef>
 #include <cstring>
+#include <string>
 
 namespace corrlap::detail {
 
@@ -44,8 +40,8 @@ template <class vec>
 __attribute__((always_inline)) inline bool interpolated_face_terms_batch(const int* faces, int f0, const double* px,
                                                                          const double* py, const double* pz,
                                                                          const double* ux, const double* uy,
-                                                                         const double* uz_, double kappa,
-                                                                         double* terms, double* pd) {
+                                                                         const double* uz_, double kappa, double* terms,
+                                                                         double* pd) {
   constexpr int N = int(sizeof(vec) / sizeof(double));
   double xl[4][3][N], ulanes[4][3][N];  // gathered lane by lane, then loaded as vectors
   for (int k = 0; k < 4; ++k)
@@ -94,11 +90,10 @@ __attribute__((always_inline)) inline bool interpolated_face_terms_batch(const i
   const vec uz = ub[2];
   constexpr double s6 = 1.0 / 6.0;
   const vec zero = {};  // the literal zeros of the scalar S
-  const vec S[3][4] = {
-      {(2.0 * uz + ue[0][2]) * s6, zero, -(2.0 * uz + ue[2][2]) * s6, zero},
-      {zero, (2.0 * uz + ue[1][2]) * s6, zero, -(2.0 * uz + ue[3][2]) * s6},
-      {-(2.0 * ub[0] + ue[0][0]) * s6, -(2.0 * ub[1] + ue[1][1]) * s6, (2.0 * ub[0] + ue[2][0]) * s6,
-       (2.0 * ub[1] + ue[3][1]) * s6}};
+  const vec S[3][4] = {{(2.0 * uz + ue[0][2]) * s6, zero, -(2.0 * uz + ue[2][2]) * s6, zero},
+                       {zero, (2.0 * uz + ue[1][2]) * s6, zero, -(2.0 * uz + ue[3][2]) * s6},
+                       {-(2.0 * ub[0] + ue[0][0]) * s6, -(2.0 * ub[1] + ue[1][1]) * s6, (2.0 * ub[0] + ue[2][0]) * s6,
+                        (2.0 * ub[1] + ue[3][1]) * s6}};
   vec G[3][4];
   for (int c = 0; c < 3; ++c)
     for (int j = 0; j < 4; ++j) G[c][j] = S[c][(j + 3) & 3] - S[c][j];
@@ -133,7 +128,6 @@ __attribute__((always_inline)) inline bool interpolated_face_terms_batch(const i
   return true;
 }
 
-
 #undef CORRLAP_DOT3
 
 template <class Lanes>
@@ -155,8 +149,7 @@ __attribute__((always_inline)) inline int face_range_body(const int* faces, int 
 }
 
 CORRLAP_AVX2_TARGET int face_range_avx2(const int* faces, int b, int e, const double* const x[3],
-                                                    const double* const u[3], double kappa, double* terms,
-                                                    double* pd) {
+                                        const double* const u[3], double kappa, double* terms, double* pd) {
   return face_range_body<Lanes4>(faces, b, e, x, u, kappa, terms, pd);
 }
 
@@ -165,8 +158,8 @@ int face_range_sse2(const int* faces, int b, int e, const double* const x[3], co
   return face_range_body<Lanes2>(faces, b, e, x, u, kappa, terms, pd);
 }
 
-int face_range_scalar(const int* faces, int b, int e, const double* const x[3], const double* const u[3],
-                      double kappa, double* terms, double* pd) {
+int face_range_scalar(const int* faces, int b, int e, const double* const x[3], const double* const u[3], double kappa,
+                      double* terms, double* pd) {
   return face_range_body<Lanes1>(faces, b, e, x, u, kappa, terms, pd);
 }
 
@@ -175,9 +168,12 @@ int face_range_scalar(const int* faces, int b, int e, const double* const x[3], 
 int interpolated_face_range(const int* faces, int b, int e, const double* const position[3],
                             const double* const normal[3], double kappa, double* terms, double* pd, FaceKernelIsa isa) {
   switch (resolve_face_kernel_isa(isa)) {
-    case FaceKernelIsa::Avx2: return face_range_avx2(faces, b, e, position, normal, kappa, terms, pd);
-    case FaceKernelIsa::Sse2: return face_range_sse2(faces, b, e, position, normal, kappa, terms, pd);
-    default: return face_range_scalar(faces, b, e, position, normal, kappa, terms, pd);
+    case FaceKernelIsa::Avx2:
+      return face_range_avx2(faces, b, e, position, normal, kappa, terms, pd);
+    case FaceKernelIsa::Sse2:
+      return face_range_sse2(faces, b, e, position, normal, kappa, terms, pd);
+    default:
+      return face_range_scalar(faces, b, e, position, normal, kappa, terms, pd);
   }
 }
 
@@ -298,82 +294,85 @@ void edge_rows(const ProjectionPattern& pp, const double* pd, double* r) {
 
 void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& u, const QuadPattern* pattern,
                                 double lambda, double kappa, bool global, Operators& ops) {
-    const int F = mesh.num_faces();
-    const VertexGather gather(mesh, pattern, "interpolated");
-    const QuadVertexPattern* pat = gather.pattern();
-    const VertexCorners& vc = gather.vc();
-    // The projection structure (spec §3.6a): the pattern's (built on its first use), else built
-    // for this assembly.
-    std::unique_ptr<ProjectionPattern> own_pp;
-    const ProjectionPattern* pp = nullptr;
-    if (global) {
-      if (pattern) pp = &projection_pattern(*pattern);
-      else pp = (own_pp = build_projection_pattern(mesh.faces.data(), F, vc)).get();
-    }
-    // One reused buffer (no first-touch page faults in steady state; every read entry is
-    // written first): the face records of interpolated_face_range (local assembly: L_f packed in
-    // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
-    const std::size_t pd_off = std::size_t(F) * kTermsStride, r_off = pd_off + std::size_t(F) * 16;
-    PatternScratch data(pattern, r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
-    double* terms = data.data();
-    double* pdata = data.data() + pd_off;
-    const double* px = mesh.positions.col(0).data();
-    const double* py = mesh.positions.col(1).data();
-    const double* pz = mesh.positions.col(2).data();
-    const int* faces = mesh.faces.data();
-    std::atomic<int> non_square{-1};
-    const double* const xc[3] = {px, py, pz};
-    const double* const uc[3] = {u.col(0).data(), u.col(1).data(), u.col(2).data()};
-    tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
-      // The closed forms of spec §3.2-§3.4 hold on surfels (squares); other quads are rejected.
-      const int bad = interpolated_face_range(faces, r.begin(), r.end(), xc, uc, kappa, terms, pdata);
-      if (bad >= 0) {
-        int cur = non_square.load();
-        while ((cur < 0 || bad < cur) && !non_square.compare_exchange_weak(cur, bad)) {}
-        return;
+  const int F = mesh.num_faces();
+  const VertexGather gather(mesh, pattern, "interpolated");
+  const QuadVertexPattern* pat = gather.pattern();
+  const VertexCorners& vc = gather.vc();
+  // The projection structure (spec §3.6a): the pattern's (built on its first use), else built
+  // for this assembly.
+  std::unique_ptr<ProjectionPattern> own_pp;
+  const ProjectionPattern* pp = nullptr;
+  if (global) {
+    if (pattern)
+      pp = &projection_pattern(*pattern);
+    else
+      pp = (own_pp = build_projection_pattern(mesh.faces.data(), F, vc)).get();
+  }
+  // One reused buffer (no first-touch page faults in steady state; every read entry is
+  // written first): the face records of interpolated_face_range (local assembly: L_f packed in
+  // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
+  const std::size_t pd_off = std::size_t(F) * kTermsStride, r_off = pd_off + std::size_t(F) * 16;
+  PatternScratch data(pattern, r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
+  double* terms = data.data();
+  double* pdata = data.data() + pd_off;
+  const double* px = mesh.positions.col(0).data();
+  const double* py = mesh.positions.col(1).data();
+  const double* pz = mesh.positions.col(2).data();
+  const int* faces = mesh.faces.data();
+  std::atomic<int> non_square{-1};
+  const double* const xc[3] = {px, py, pz};
+  const double* const uc[3] = {u.col(0).data(), u.col(1).data(), u.col(2).data()};
+  tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
+    // The closed forms of spec §3.2-§3.4 hold on surfels (squares); other quads are rejected.
+    const int bad = interpolated_face_range(faces, r.begin(), r.end(), xc, uc, kappa, terms, pdata);
+    if (bad >= 0) {
+      int cur = non_square.load();
+      while ((cur < 0 || bad < cur) && !non_square.compare_exchange_weak(cur, bad)) {
       }
-      if (!global)
-        for (int f = r.begin(); f != r.end(); ++f) {
-          // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
-          double* t = terms + std::size_t(f) * kTermsStride;
-          const double* pd = pdata + std::size_t(f) * 16;
-          for (int i = 0; i < 4; ++i)
-            for (int j = i; j < 4; ++j) {
-              double s = 0.0;
-              for (int m = 0; m < 4; ++m) s += pd[4 * m + i] * pd[4 * m + j];
-              double& k = t[kTermsK1 + kSym[i][j]];
-              k = -(k + lambda * s);
-            }
-        }
-    });
-    if (non_square.load() >= 0)
-      throw InputError("interpolated: face " + std::to_string(non_square.load()) +
-                       " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
-    if (global) {
-      double* r = data.data() + r_off;
-      edge_rows(*pp, pdata, r);
-      allocate_like(ops.L, mesh.num_vertices(), pp->outer.data());
-      if (pat) allocate_like(ops.M, mesh.num_vertices(), pat->outer.data());
-      else
-        gather_quad_rows<1>(
-            mesh, nullptr, vc,
-            [&](int f, int i, double* row) { interpolated_mass_row(terms + std::size_t(f) * kTermsStride, i, row); },
-            {&ops.M});
-      Eigen::SparseMatrix<double>* M = pat ? &ops.M : nullptr;
-      if (pp->wide)
-        fill_columns<int>(*pp, vc, pat, terms, r, lambda, pp->face_pos32.data(), pp->ce_pos32.data(), ops.L, M);
-      else
-        fill_columns<std::uint8_t>(*pp, vc, pat, terms, r, lambda, pp->face_pos8.data(), pp->ce_pos8.data(), ops.L, M);
-    } else {
-      gather_quad_rows<2>(
-          mesh, pat, vc,
-          [&](int f, int i, double* rows) {
-            const double* t = terms + std::size_t(f) * kTermsStride;
-            interpolated_mass_row(t, i, rows);
-            for (int j = 0; j < 4; ++j) rows[4 + j] = t[kTermsK1 + kSym[i][j]];
-          },
-          {&ops.M, &ops.L});
+      return;
     }
+    if (!global)
+      for (int f = r.begin(); f != r.end(); ++f) {
+        // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
+        double* t = terms + std::size_t(f) * kTermsStride;
+        const double* pd = pdata + std::size_t(f) * 16;
+        for (int i = 0; i < 4; ++i)
+          for (int j = i; j < 4; ++j) {
+            double s = 0.0;
+            for (int m = 0; m < 4; ++m) s += pd[4 * m + i] * pd[4 * m + j];
+            double& k = t[kTermsK1 + kSym[i][j]];
+            k = -(k + lambda * s);
+          }
+      }
+  });
+  if (non_square.load() >= 0)
+    throw InputError("interpolated: face " + std::to_string(non_square.load()) +
+                     " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
+  if (global) {
+    double* r = data.data() + r_off;
+    edge_rows(*pp, pdata, r);
+    allocate_like(ops.L, mesh.num_vertices(), pp->outer.data());
+    if (pat)
+      allocate_like(ops.M, mesh.num_vertices(), pat->outer.data());
+    else
+      gather_quad_rows<1>(
+          mesh, nullptr, vc,
+          [&](int f, int i, double* row) { interpolated_mass_row(terms + std::size_t(f) * kTermsStride, i, row); },
+          {&ops.M});
+    Eigen::SparseMatrix<double>* M = pat ? &ops.M : nullptr;
+    if (pp->wide)
+      fill_columns<int>(*pp, vc, pat, terms, r, lambda, pp->face_pos32.data(), pp->ce_pos32.data(), ops.L, M);
+    else
+      fill_columns<std::uint8_t>(*pp, vc, pat, terms, r, lambda, pp->face_pos8.data(), pp->ce_pos8.data(), ops.L, M);
+  } else {
+    gather_quad_rows<2>(mesh, pat, vc,
+                        [&](int f, int i, double* rows) {
+                          const double* t = terms + std::size_t(f) * kTermsStride;
+                          interpolated_mass_row(t, i, rows);
+                          for (int j = 0; j < 4; ++j) rows[4 + j] = t[kTermsK1 + kSym[i][j]];
+                        },
+                        {&ops.M, &ops.L});
+  }
 }
 
 }  // namespace corrlap::detail

@@ -6,10 +6,9 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <cstring>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/quad_assembly.hpp>
+#include <cstring>
 
 #include "detail/quad_pattern_access.hpp"
 
@@ -69,18 +68,20 @@ bool QuadPattern::matches(const SurfelMesh& mesh) const {
          tbb::parallel_reduce(
              tbb::blocked_range<std::size_t>(0, n, 1 << 18), true,
              [&](const tbb::blocked_range<std::size_t>& r, bool same) {
-               return same && std::memcmp(mine + r.begin(), theirs + r.begin(), (r.end() - r.begin()) * sizeof(int)) == 0;
+               return same &&
+                      std::memcmp(mine + r.begin(), theirs + r.begin(), (r.end() - r.begin()) * sizeof(int)) == 0;
              },
              [](bool a, bool b) { return a && b; });
 }
 
 void QuadPattern::check(const SurfelMesh& mesh, const std::string& who) const {
   if (matches(mesh)) return;
-  throw InputError(who + ": the QuadPattern was built for another connectivity (" + std::to_string(num_vertices()) +
-                   " vertices, " + std::to_string(num_faces()) + " faces; this mesh has " +
-                   std::to_string(mesh.num_vertices()) + " vertices, " + std::to_string(mesh.num_faces()) +
-                   " faces" + (mesh.num_faces() == num_faces() && mesh.num_vertices() == num_vertices() ? ", other face ids" : "") +
-                   "): build one with QuadPattern::build(mesh)");
+  throw InputError(
+      who + ": the QuadPattern was built for another connectivity (" + std::to_string(num_vertices()) + " vertices, " +
+      std::to_string(num_faces()) + " faces; this mesh has " + std::to_string(mesh.num_vertices()) + " vertices, " +
+      std::to_string(mesh.num_faces()) + " faces" +
+      (mesh.num_faces() == num_faces() && mesh.num_vertices() == num_vertices() ? ", other face ids" : "") +
+      "): build one with QuadPattern::build(mesh)");
 }
 
 std::size_t QuadPattern::memory_bytes() const {

@@ -12,11 +12,10 @@
 // share one immutable state (the lazily built parts are built once, thread-safely), so one pattern
 // may serve concurrent assemblies. Results through a pattern are bitwise those of the one-shot
 // assemble() without one.
+#include <corrlap/core/surfel_mesh.hpp>
 #include <cstddef>
 #include <memory>
 #include <string>
-
-#include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap {
 

@@ -2,10 +2,9 @@
 // Fast assembly of the corrected FEM (corrected_fem_fast.cpp), bitwise equal to the readable local
 // matrices of corrected_fem.hpp (spec §4.2-§4.4). Internal header.
 #include <Eigen/Core>
-#include <cstddef>
-
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
+#include <cstddef>
 
 namespace corrlap::detail {
 

@@ -5,9 +5,7 @@
 // temporaries and only for what the assembly reads. Internal header.
 #include <Eigen/Core>
 #include <cmath>
-
 #include <corrlap/core/discretization.hpp>
-
 #include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
 
 namespace corrlap::detail {
@@ -25,11 +23,10 @@ inline constexpr int kSym[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3,
 
 /// Row g of M_{0,f} from the record: 144 int phi_g phi_l phi_k is 9, 3 or 1 (spec §3.2 matrix).
 inline void interpolated_mass_row(const double* t, int g, double* row) {
-  static constexpr double W[4][4][4] = {
-      {{9, 3, 1, 3}, {3, 3, 1, 1}, {1, 1, 1, 1}, {3, 1, 1, 3}},
-      {{3, 3, 1, 1}, {3, 9, 3, 1}, {1, 3, 3, 1}, {1, 1, 1, 1}},
-      {{1, 1, 1, 1}, {1, 3, 3, 1}, {1, 3, 9, 3}, {1, 1, 3, 3}},
-      {{3, 1, 1, 3}, {1, 1, 1, 1}, {1, 1, 3, 3}, {3, 1, 3, 9}}};
+  static constexpr double W[4][4][4] = {{{9, 3, 1, 3}, {3, 3, 1, 1}, {1, 1, 1, 1}, {3, 1, 1, 3}},
+                                        {{3, 3, 1, 1}, {3, 9, 3, 1}, {1, 3, 3, 1}, {1, 1, 1, 1}},
+                                        {{1, 1, 1, 1}, {1, 3, 3, 1}, {1, 3, 9, 3}, {1, 1, 3, 3}},
+                                        {{3, 1, 1, 3}, {1, 1, 1, 1}, {1, 1, 3, 3}, {3, 1, 3, 9}}};
   for (int l = 0; l < 4; ++l)
     row[l] = t[4] * (W[g][l][0] * t[0] + W[g][l][1] * t[1] + W[g][l][2] * t[2] + W[g][l][3] * t[3]);
 }

@@ -5,7 +5,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-
 #include <corrlap/core/error.hpp>
 
 namespace corrlap::detail {
@@ -15,11 +14,11 @@ namespace {
 // Elements of the global-projection Laplacian (spec §3.6a): one per edge, on the union of the
 // vertices of the edge's faces (6 for an interior manifold edge), padded to a common size.
 struct EdgeElements {
-  int k = 0;                        // padded element size
-  std::vector<int> ids;             // #E x k vertex ids (padding repeats the first id)
-  std::vector<std::uint8_t> size;   // distinct vertices of each element
-  std::vector<int> start;           // incidences of edge e: [start[e], start[e+1])
-  std::vector<int> inc_face;        // face of the incidence
+  int k = 0;                           // padded element size
+  std::vector<int> ids;                // #E x k vertex ids (padding repeats the first id)
+  std::vector<std::uint8_t> size;      // distinct vertices of each element
+  std::vector<int> start;              // incidences of edge e: [start[e], start[e+1])
+  std::vector<int> inc_face;           // face of the incidence
   std::vector<std::int8_t> inc_local;  // local edge index i in that face
   std::vector<std::int8_t> inc_slot;   // 4 slots per incidence: element slot of corner j
   std::vector<int> corner_edge;        // edge index of local edge (f, i), 4 #F
@@ -37,8 +36,10 @@ EdgeElements build_edge_elements(const int* faces, int F, const VertexCorners& v
     for (int t = vc.start[std::size_t(a)]; t < vc.start[std::size_t(a) + 1]; ++t) {
       const int c = vc.corner[std::size_t(t)];
       const int g = c >> 2, j = c & 3;
-      if (faces[4 * g + ((j + 1) & 3)] == b) visit(g, j);
-      else if (faces[4 * g + ((j + 3) & 3)] == b) visit(g, (j + 3) & 3);
+      if (faces[4 * g + ((j + 1) & 3)] == b)
+        visit(g, j);
+      else if (faces[4 * g + ((j + 3) & 3)] == b)
+        visit(g, (j + 3) & 3);
     }
   };
   tbb::parallel_for(tbb::blocked_range<int>(0, F, 4096), [&](const tbb::blocked_range<int>& r) {
@@ -119,7 +120,8 @@ inline int projection_edges(const EdgeElements& el, const VertexCorners& vc, Pro
   for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
     const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
     for (int i = 0; i < 4; ++i)
-      if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
+      if (sc.edge_stamp[std::size_t(fe4[i])] != mark)
+        sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
   }
   std::sort(sc.edges.begin(), sc.edges.begin() + ne);
   return ne;
@@ -162,7 +164,9 @@ std::unique_ptr<ProjectionPattern> build_projection_pattern(const int* faces, in
         p->inc_row[std::size_t(a)] = 4 * f + i;
         // spec §0 edge sign: +1 if v_i < v_{i+1}.
         p->inc_coef[std::size_t(a)] = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
-        for (int j = 0; j < 4; ++j) p->inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint8_t(el.inc_slot[std::size_t(a) * 4 + std::size_t(j)]);
+        for (int j = 0; j < 4; ++j)
+          p->inc_slot[std::size_t(a) * 4 + std::size_t(j)] =
+              std::uint8_t(el.inc_slot[std::size_t(a) * 4 + std::size_t(j)]);
       }
     }
   });
@@ -201,8 +205,10 @@ std::unique_ptr<ProjectionPattern> build_projection_pattern(const int* faces, in
     ProjectionScratch& sc = scratch.local();
     int* pos = sc.col.pos.data();
     auto put = [&](std::uint8_t* p8, int* p32, std::size_t idx, int value) {
-      if (p32) p32[idx] = value;
-      else p8[idx] = std::uint8_t(value);
+      if (p32)
+        p32[idx] = value;
+      else
+        p8[idx] = std::uint8_t(value);
     };
     for (int v = range.begin(); v != range.end(); ++v) {
       const int ne = projection_edges(el, vc, sc, v, V + v);
@@ -213,7 +219,8 @@ std::unique_ptr<ProjectionPattern> build_projection_pattern(const int* faces, in
       for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
         const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
         for (int j = 0; j < 4; ++j)
-          put(p->face_pos8.data(), p->wide ? p->face_pos32.data() : nullptr, std::size_t(a) * 4 + std::size_t(j), pos[f[j]]);
+          put(p->face_pos8.data(), p->wide ? p->face_pos32.data() : nullptr, std::size_t(a) * 4 + std::size_t(j),
+              pos[f[j]]);
       }
       std::size_t c = std::size_t(p->ce_start[std::size_t(v)]);
       for (int t = 0; t < ne; ++t, ++c) {
@@ -224,7 +231,8 @@ std::unique_ptr<ProjectionPattern> build_projection_pattern(const int* faces, in
         p->ce_edge[c] = e;
         p->ce_sv[c] = std::uint8_t(sv);
         for (int s = 0; s < k; ++s)
-          put(p->ce_pos8.data(), p->wide ? p->ce_pos32.data() : nullptr, c * std::size_t(k) + std::size_t(s), pos[ids[s]]);
+          put(p->ce_pos8.data(), p->wide ? p->ce_pos32.data() : nullptr, c * std::size_t(k) + std::size_t(s),
+              pos[ids[s]]);
       }
     }
   });

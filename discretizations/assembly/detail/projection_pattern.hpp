@@ -19,18 +19,18 @@ struct ProjectionPattern {
   int k = 0, num_edges = 0;
   // Edge rows r_e of P D0 (per edge, k values, the first size[e] used).
   std::vector<std::uint8_t> size;
-  std::vector<int> inc_start;           // #E + 1
-  std::vector<int> inc_row;             // 4 f + i: row i of P_f D
-  std::vector<double> inc_coef;         // s_{f,i} / n_e (spec §0 sign, flat averaged over n_e faces)
-  std::vector<std::uint8_t> inc_slot;   // 4 per incidence: element slot of corner j
+  std::vector<int> inc_start;          // #E + 1
+  std::vector<int> inc_row;            // 4 f + i: row i of P_f D
+  std::vector<double> inc_coef;        // s_{f,i} / n_e (spec §0 sign, flat averaged over n_e faces)
+  std::vector<std::uint8_t> inc_slot;  // 4 per incidence: element slot of corner j
   // Columns of L.
   std::vector<int> outer, inner;
   bool wide = false;                    // column positions stored as int (a column > 255 rows)
   std::vector<std::uint8_t> face_pos8;  // 4 per vertex incidence (vc order): position of corner j
   std::vector<int> face_pos32;
-  std::vector<int> ce_start, ce_edge;   // edges of the faces around v, ascending
-  std::vector<std::uint8_t> ce_sv;      // element slot of v in that edge
-  std::vector<std::uint8_t> ce_pos8;    // k per column edge: position of element slot s
+  std::vector<int> ce_start, ce_edge;  // edges of the faces around v, ascending
+  std::vector<std::uint8_t> ce_sv;     // element slot of v in that edge
+  std::vector<std::uint8_t> ce_pos8;   // k per column edge: position of element slot s
   std::vector<int> ce_pos32;
 };
 

@@ -2,14 +2,13 @@
 // Internals of QuadPattern (quad_pattern.hpp) for the method files: the vertex pattern, the lazily
 // built projection pattern, and per-pattern scratch reuse. Internal header.
 #include <atomic>
+#include <corrlap/discretizations/assembly/quad_pattern.hpp>
 #include <cstddef>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <corrlap/discretizations/assembly/quad_pattern.hpp>
 
 #include "projection_pattern.hpp"
 #include "quad_row_gather.hpp"
