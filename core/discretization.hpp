@@ -46,6 +46,14 @@ inline void reset_for_reuse(Operators& ops) {
 /// What a policy does with normals inconsistent with the surfel orientation (u.n <= 0).
 enum class OrientationPolicy { Error, Warn, Clamp };
 
+/// Symbolic part of the vertex assembly of a quad mesh (discretizations/assembly/quad_pattern.hpp),
+/// built once per connectivity by the caller and passed to assemble / assemble_into. Declared here
+/// so that core does not depend on discretizations.
+class QuadPattern;
+
+/// Virtual interface: name, required_normals, parameters, assemble (one-shot) and
+/// assemble_into(..., const QuadPattern*, out) (the refill with an optional pattern). The other
+/// overloads are conveniences over these two.
 class Discretization {
  public:
   virtual ~Discretization() = default;
@@ -55,17 +63,37 @@ class Discretization {
   virtual NormalKind required_normals() const = 0;
   /// Accepted parameters with their defaults (the reference's).
   virtual std::vector<ParameterInfo> parameters() const = 0;
-  /// Builds the operators. Throws InputError on missing or invalid normals, unknown parameter
-  /// keys, or an invalid mesh.
+  /// Builds the operators (one-shot: no pattern is built, the quad methods gather directly).
+  /// Throws InputError on missing or invalid normals, unknown parameter keys, or an invalid mesh.
   virtual Operators assemble(const SurfelMesh& mesh, const NormalFields& normals,
                              const Config& params) const = 0;
-  /// Same result, bit for bit, written into `out`. Methods that support it (fem, polydec,
-  /// projected-polydec, interpolated, vrm, corrected-vrm) reuse the
-  /// storage of out.L and out.M when it is large enough, so repeated assembly on one mesh (a
-  /// regularization loop, a study) fills memory that is already mapped instead of faulting in
-  /// fresh pages (at h = 0.005 that is most of fem's cost on a VM). Default: assemble() and swap.
+  /// Same result, bit for bit, through a pattern built for this mesh's connectivity (InputError if
+  /// it was built for another one). Methods that do not use a pattern ignore it.
+  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                     const QuadPattern& pattern) const {
+    Operators ops;
+    assemble_into(mesh, normals, params, &pattern, ops);
+    return ops;
+  }
+  /// Same result, bit for bit, written into `out`, without a pattern.
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                     Operators& out) const {
+    assemble_into(mesh, normals, params, nullptr, out);
+  }
+  /// Same result, bit for bit, written into `out` through `pattern`.
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                     const QuadPattern& pattern, Operators& out) const {
+    assemble_into(mesh, normals, params, &pattern, out);
+  }
+  /// Same result, bit for bit, written into `out`; `pattern` (nullptr = none) is used by the quad
+  /// methods that gather by vertex (fem, polydec, projected-polydec, interpolated, vrm,
+  /// corrected-vrm), which also reuse the storage of out.L and out.M when it is large enough, so
+  /// repeated assembly on one mesh (a regularization loop, a study) fills memory that is already
+  /// mapped instead of faulting in fresh pages (at h = 0.005 that is most of fem's cost on a VM).
+  /// Default: assemble() and swap.
   virtual void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                             Operators& out) const {
+                             const QuadPattern* pattern, Operators& out) const {
+    (void)pattern;
     Operators fresh = assemble(mesh, normals, params);
     out.L.swap(fresh.L);  // Eigen 3.4's SparseMatrix has no move assignment: swap, not copy
     out.M.swap(fresh.M);

@@ -10,7 +10,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 
-#include "virtual_refinement.hpp"
+#include "triangle_kernels.hpp"
 
 namespace corrlap {
 

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
+#include <corrlap/discretizations/assembly/detail/storage.hpp>
 #include <corrlap/core/normal_fields.hpp>
 
 #include <corrlap/discretizations/detail/normal_policy.hpp>
@@ -234,7 +234,9 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   }
   Eigen::SparseMatrix<double> A(n, n);
   try {
-    A.resizeNonZeros(Eigen::Index(nnz));
+    // The arrays are first touched in pass 2; with 4 KiB pages their page faults cost as much as
+    // the whole computation on a VM (perf: ~22% at h = 0.02): storage on huge pages.
+    detail::allocate_sparse_storage(A, Eigen::Index(nnz));
   } catch (const std::bad_alloc&) {
     std::ostringstream os;
     os << "heat kernel: " << nnz << " nonzeros (" << double(nnz) * 12.0 / 1e9 << " GB) do not fit in memory";
@@ -243,10 +245,6 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   for (Eigen::Index i = 0; i <= n; ++i) A.outerIndexPtr()[i] = int(outer[std::size_t(i)]);
   int* inner = A.innerIndexPtr();
   double* values = A.valuePtr();
-  // The arrays are first touched in pass 2; with 4 KiB pages their page faults cost as much as
-  // the whole computation on a VM (perf: ~22% at h = 0.02). Huge pages cut the faults by 512.
-  advise_huge_pages(inner, std::size_t(nnz) * sizeof(int));
-  advise_huge_pages(values, std::size_t(nnz) * sizeof(double));
 
   // Pass 2: column j, written once. The neighbour relation is symmetric (bitwise-equal distances),
   // so column j's pattern is j's neighbourhood. Symmetric form: L[i][j] = c mu_i mu_j g(d),

@@ -1,473 +1,128 @@
 #include "interpolated_corrected.hpp"
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <memory>
-#include <mutex>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
 
 #include <corrlap/discretizations/detail/interpolated_kernel.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 
 namespace corrlap {
 
 Eigen::Matrix4d interpolated_local_mass(double h, const Eigen::Vector4d& uz) {
-  // 144 * int phi_g phi_l phi_k = a_s * a_t with a = 9 if the three share the parameter value
-  // (all 0 or all 1 along that axis), else 3 for... : the 1D integrals of three linear hat
-  // products are 1/4 (m = 0 or 3 factors s) and 1/12 (m = 1 or 2), hence 144 w in {9, 3, 1}.
+  // 144 * int phi_g phi_l phi_k = a_s * a_t with a = 3 when the three hats share the parameter
+  // value along that axis (m = 0 or 3 factors s), else 1: the 1D integrals of three linear hat
+  // products are 1/4 and 1/12, hence 144 w in {9, 3, 1}.
   static const int alpha[4] = {0, 1, 1, 0}, beta[4] = {0, 0, 1, 1};
   auto w1 = [](int m) { return (m == 0 || m == 3) ? 3.0 : 1.0; };  // 12 * 1D integral
+  const double q = h * h / 144.0;
   Eigen::Matrix4d M;
   for (int g = 0; g < 4; ++g)
     for (int l = g; l < 4; ++l) {
       double s = 0.0;
-      for (int k = 0; k < 4; ++k)
-        s += w1(alpha[g] + alpha[l] + alpha[k]) * w1(beta[g] + beta[l] + beta[k]) * uz[k];
-      M(g, l) = M(l, g) = h * h * s / 144.0;
+      for (int k = 0; k < 4; ++k) s += w1(alpha[g] + alpha[l] + alpha[k]) * w1(beta[g] + beta[l] + beta[k]) * uz[k];
+      M(g, l) = M(l, g) = q * s;
     }
   return M;
 }
 
+namespace {
+// a . b and a x b component by component: the order of the fast kernel
+// (interpolated_corrected_fast.cpp), so that both give the same bits.
+double dot3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
+Eigen::Vector3d cross3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return {a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x()};
+}
+}  // namespace
+
 InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u, double lambda, double kappa) {
   InterpolatedLocal r;
-  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/h, n = t1 x t2.
-  const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
-  const double h = e1.norm();
-  const Eigen::Vector3d t1 = e1 / h;
-  const Eigen::Vector3d t2 = (x.row(2) - x.row(1)).transpose().normalized();
-  const Eigen::Vector3d n = t1.cross(t2);
+  // Edge vectors delta_i = x_{i+1} - x_i (spec §3.4).
+  Eigen::Vector3d delta[4];
+  for (int i = 0; i < 4; ++i) delta[i] = (x.row((i + 1) % 4) - x.row(i)).transpose();
+  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/|x2-x1|, n = t1 x t2.
+  const double h = std::sqrt(dot3(delta[0], delta[0]));
+  const double inv_h = 1.0 / h;
+  const Eigen::Vector3d t1 = delta[0] * inv_h;
+  const Eigen::Vector3d t2 = delta[1] * (1.0 / std::sqrt(dot3(delta[1], delta[1])));
+  const Eigen::Vector3d n = cross3(t1, t2);
   Eigen::Matrix3d R;
   R.col(0) = t1;
   R.col(1) = t2;
   R.col(2) = n;
-  // Corner normals in frame components: ul(k, c) = u_k . (t1, t2, n)[c].
-  const Eigen::Matrix<double, 4, 3> ul = u * R;
-  // Edge-midpoint and face averages (spec §3.1).
-  Eigen::Matrix<double, 4, 3> ue;
-  for (int i = 0; i < 4; ++i) ue.row(i) = 0.5 * (ul.row(i) + ul.row((i + 1) % 4));
-  const Eigen::RowVector3d ub = 0.25 * (ul.row(0) + ul.row(1) + ul.row(2) + ul.row(3));
+  // Corner normals in frame components, ul(k, :) = (u_k.t1, u_k.t2, u_k.n), their edge-midpoint
+  // and face averages (spec §3.1).
+  Eigen::Matrix<double, 4, 3> ul, ue;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d uk = u.row(k).transpose();
+    ul.row(k) << dot3(uk, t1), dot3(uk, t2), dot3(uk, n);
+  }
+  Eigen::Vector3d ub;
+  for (int c = 0; c < 3; ++c) {
+    for (int i = 0; i < 4; ++i) ue(i, c) = 0.5 * (ul(i, c) + ul((i + 1) % 4, c));
+    ub[c] = 0.25 * (ul(0, c) + ul(1, c) + ul(2, c) + ul(3, c));
+  }
   const double uz = ub.z();
   r.area = h * h * uz;
   r.ubar_z = uz;
   r.mass = interpolated_local_mass(h, ul.col(2));
-  // spec §3.3 closed form of S.
-  r.S << uz, 0, -uz, 0,  //
-      0, uz, 0, -uz,     //
-      -ub.x(), -ub.y(), ub.x(), ub.y();
-  r.S /= 3.0;
-  Eigen::Matrix<double, 3, 4> S2;
-  S2 << ue(0, 2), 0, -ue(2, 2), 0,  //
-      0, ue(1, 2), 0, -ue(3, 2),     //
-      -ue(0, 0), -ue(1, 1), ue(2, 0), ue(3, 1);
-  r.S += S2 / 6.0;
+  // spec §3.3 closed form S = S1 / 3 + S2 / 6, entry by entry (2 S1 + S2) / 6.
+  constexpr double sixth = 1.0 / 6.0;
+  r.S << (2.0 * uz + ue(0, 2)) * sixth, 0.0, -(2.0 * uz + ue(2, 2)) * sixth, 0.0,  //
+      0.0, (2.0 * uz + ue(1, 2)) * sixth, 0.0, -(2.0 * uz + ue(3, 2)) * sixth,      //
+      -(2.0 * ub.x() + ue(0, 0)) * sixth, -(2.0 * ub.y() + ue(1, 1)) * sixth, (2.0 * ub.x() + ue(2, 0)) * sixth,
+      (2.0 * ub.y() + ue(3, 1)) * sixth;
+  // G = S D (D of spec §0: (S D)(c, j) = S(c, j-1) - S(c, j)).
+  Eigen::Matrix<double, 3, 4> G;
+  for (int c = 0; c < 3; ++c)
+    for (int j = 0; j < 4; ++j) G(c, j) = r.S(c, (j + 3) % 4) - r.S(c, j);
+  // spec §3.5: a_f U^T U = S^T S / ubar^z, so D^T (a_f U^T U) D = G^T G / ubar^z.
+  const double inv_uz = 1.0 / uz;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      r.sharp_stiffness(i, j) = (G(0, i) * G(0, j) + G(1, i) * G(1, j) + G(2, i) * G(2, j)) * inv_uz;
   r.sharp = R * r.S / (h * uz);
-  // spec §3.4 flat with correction factor kappa.
+  // spec §3.4 flat with correction factor kappa: V_i = delta_i^T (I - kappa Q_i) with
+  // Q_i = (2 u_a u_a^T + u_a u_b^T + u_b u_a^T + 2 u_b u_b^T) / 6, i.e.
+  // V_i = delta_i - kappa/6 ((2 d_a + d_b) u_a + (d_a + 2 d_b) u_b), d_a = delta_i . u_a, d_b = delta_i . u_b.
+  // P_f D = D - V U D = D - (V R) G / (h ubar^z) (spec §3.6a).
+  const double w = inv_h * inv_uz, kk = kappa * sixth;
   for (int i = 0; i < 4; ++i) {
-    const int b = (i + 1) % 4;
-    const Eigen::Vector3d ua = u.row(i).transpose(), ubv = u.row(b).transpose();
-    const Eigen::Vector3d d = (x.row(b) - x.row(i)).transpose();
-    const Eigen::Matrix3d Q = (2.0 * ua * ua.transpose() + ua * ubv.transpose() + ubv * ua.transpose() +
-                               2.0 * ubv * ubv.transpose()) / 6.0;
-    r.flat.row(i) = (d.transpose() * (Eigen::Matrix3d::Identity() - kappa * Q));
+    const Eigen::Vector3d ua = u.row(i).transpose(), ub_ = u.row((i + 1) % 4).transpose();
+    const double da = dot3(delta[i], ua), db = dot3(delta[i], ub_);
+    const double ca = kk * (2.0 * da + db), cb = kk * (da + 2.0 * db);
+    const Eigen::Vector3d v(delta[i].x() - ca * ua.x() - cb * ub_.x(), delta[i].y() - ca * ua.y() - cb * ub_.y(),
+                            delta[i].z() - ca * ua.z() - cb * ub_.z());
+    r.flat.row(i) = v.transpose();
+    const double vr0 = dot3(v, t1) * w, vr1 = dot3(v, t2) * w, vr2 = dot3(v, n) * w;
+    for (int j = 0; j < 4; ++j) r.projected_difference(i, j) = -(vr0 * G(0, j) + vr1 * G(1, j) + vr2 * G(2, j));
+    r.projected_difference(i, i) -= 1.0;
+    r.projected_difference(i, (i + 1) % 4) += 1.0;
   }
   r.projection = Eigen::Matrix4d::Identity() - r.flat * r.sharp;
-  // spec §3.5: a_f U^T U = S^T S / ubar^z.
   r.inner_product = r.S.transpose() * r.S / uz + lambda * r.projection.transpose() * r.projection;
-  const Eigen::Matrix4d& D = quad_difference();
-  r.laplacian = -D.transpose() * r.inner_product * D;
+  // L_f = -D^T M_{1,f} D = -(G^T G / ubar^z + lambda (P_f D)^T (P_f D)).
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      double s = 0.0;
+      for (int m = 0; m < 4; ++m) s += r.projected_difference(m, i) * r.projected_difference(m, j);
+      r.laplacian(i, j) = -(r.sharp_stiffness(i, j) + lambda * s);
+    }
   return r;
 }
 
 namespace {
 
 using RowMat4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
-
-// Elements of the global-projection Laplacian (spec §3.6a): one per edge, on the union of the
-// vertices of the edge's faces (6 for an interior manifold edge), padded to a common size.
-struct EdgeElements {
-  int k = 0;                        // padded element size
-  std::vector<int> ids;             // #E x k vertex ids (padding repeats the first id)
-  std::vector<std::uint8_t> size;   // distinct vertices of each element
-  std::vector<int> start;           // incidences of edge e: [start[e], start[e+1])
-  std::vector<int> inc_face;        // face of the incidence
-  std::vector<std::int8_t> inc_local;  // local edge index i in that face
-  std::vector<std::int8_t> inc_slot;   // 4 slots per incidence: element slot of corner j
-  std::vector<int> corner_edge;        // edge index of local edge (f, i), 4 #F
-  int num_edges = 0;
-};
-
-// Edges found locally from the vertex -> corner incidence (no global sort): the faces sharing
-// local edge i of f are the faces around v_i that have v_{i+1} as a neighbouring corner. An edge
-// is represented by its incidence of smallest face; its index is the rank of that representative.
-EdgeElements build_edge_elements(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
-  EdgeElements el;
-  const int F = mesh.num_faces();
-  const int* faces = mesh.faces.data();
-  std::vector<int> key(std::size_t(F) * 4), count(std::size_t(F) * 4);
-  auto for_each_incidence = [&](int f, int i, auto&& visit) {
-    const int a = faces[4 * f + i], b = faces[4 * f + ((i + 1) & 3)];
-    for (int t = vc.start[std::size_t(a)]; t < vc.start[std::size_t(a) + 1]; ++t) {
-      const int c = vc.corner[std::size_t(t)];
-      const int g = c >> 2, j = c & 3;
-      if (faces[4 * g + ((j + 1) & 3)] == b) visit(g, j);
-      else if (faces[4 * g + ((j + 3) & 3)] == b) visit(g, (j + 3) & 3);
-    }
-  };
-  tbb::parallel_for(tbb::blocked_range<int>(0, F, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int f = r.begin(); f != r.end(); ++f)
-      for (int i = 0; i < 4; ++i) {
-        int best = -1, n = 0;
-        for_each_incidence(f, i, [&](int g, int j) {
-          ++n;
-          if (best < 0) best = 4 * g + j;  // corners around a are in ascending face order
-        });
-        key[std::size_t(4 * f + i)] = best;
-        count[std::size_t(4 * f + i)] = n;
-      }
-  });
-  assign_on_huge_pages(el.corner_edge, std::size_t(F) * 4);
-  std::vector<int> rep_of_edge;
-  rep_of_edge.reserve(std::size_t(F) * 2 + 4);
-  el.start.assign(1, 0);
-  for (int c = 0; c < 4 * F; ++c)
-    if (key[std::size_t(c)] == c) {
-      el.corner_edge[std::size_t(c)] = int(rep_of_edge.size());
-      rep_of_edge.push_back(c);
-      el.start.push_back(el.start.back() + count[std::size_t(c)]);
-    }
-  for (int c = 0; c < 4 * F; ++c) el.corner_edge[std::size_t(c)] = el.corner_edge[std::size_t(key[std::size_t(c)])];
-  const int E = int(rep_of_edge.size());
-  int k = 0;
-  for (int e = 0; e < E; ++e) k = std::max(k, 2 + 2 * (el.start[std::size_t(e) + 1] - el.start[std::size_t(e)]));
-  if (k > 127) throw InputError("interpolated: an edge has too many incident faces");
-  el.k = k;
-  el.num_edges = E;
-  const std::size_t total = std::size_t(el.start[std::size_t(E)]);
-  assign_on_huge_pages(el.inc_face, total);
-  assign_on_huge_pages(el.inc_local, total);
-  assign_on_huge_pages(el.inc_slot, total * 4);
-  assign_on_huge_pages(el.ids, std::size_t(E) * std::size_t(k));
-  assign_on_huge_pages(el.size, std::size_t(E));
-  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int e = r.begin(); e != r.end(); ++e) {
-      const int rep = rep_of_edge[std::size_t(e)];
-      int a = el.start[std::size_t(e)];
-      for_each_incidence(rep >> 2, rep & 3, [&](int g, int j) {
-        el.inc_face[std::size_t(a)] = g;
-        el.inc_local[std::size_t(a++)] = std::int8_t(j);
-      });
-      int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
-      int used = 0;
-      for (a = el.start[std::size_t(e)]; a < el.start[std::size_t(e) + 1]; ++a) {
-        const int f = el.inc_face[std::size_t(a)];
-        for (int j = 0; j < 4; ++j) {
-          const int v = faces[4 * f + j];
-          int s = 0;
-          while (s < used && ids[s] != v) ++s;
-          if (s == used) ids[used++] = v;
-          el.inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::int8_t(s);
-        }
-      }
-      el.size[std::size_t(e)] = std::uint8_t(used);
-      for (int s = used; s < k; ++s) ids[s] = ids[0];
-    }
-  });
-  return el;
-}
-
-// Connectivity-only part of the global-projection Laplacian (spec §3.6a), everything the value
-// passes need so that they only stream numbers: per edge its incidences (with the factor
-// s_{f,i} / n_e) and their element slots; per column its sorted rows, the positions of the corners
-// of each incident face, and its edges (ascending) with the positions of their element vertices.
-// Cached next to the vertex pattern it was built from (same connectivity <=> same
-// QuadVertexPattern object, which the entry keeps alive).
-struct ProjectionPattern {
-  std::shared_ptr<const detail::QuadVertexPattern> key;
-  int k = 0, num_edges = 0;
-  // Edge rows r_e of P D0 (per edge, k values, the first size[e] used).
-  std::vector<std::uint8_t> size;
-  std::vector<int> inc_start;           // #E + 1
-  std::vector<int> inc_row;             // 4 f + i: row i of P_f D
-  std::vector<double> inc_coef;         // s_{f,i} / n_e (spec §0 sign, flat averaged over n_e faces)
-  std::vector<std::uint8_t> inc_slot;   // 4 per incidence: element slot of corner j
-  // Columns of L.
-  std::vector<int> outer, inner;
-  bool wide = false;                    // column positions stored as int (a column > 255 rows)
-  std::vector<std::uint8_t> face_pos8;  // 4 per vertex incidence (vc order): position of corner j
-  std::vector<int> face_pos32;
-  std::vector<int> ce_start, ce_edge;   // edges of the faces around v, ascending
-  std::vector<std::uint8_t> ce_sv;      // element slot of v in that edge
-  std::vector<std::uint8_t> ce_pos8;    // k per column edge: position of element slot s
-  std::vector<int> ce_pos32;
-};
-
-// Per thread: vertex stamps (ColumnScratch) and edge stamps; the edges of the faces around v are
-// listed in ascending order so the summation order is fixed.
-struct ProjectionScratch {
-  detail::ColumnScratch col;
-  std::vector<int> edge_stamp, edges;
-  ProjectionScratch(int V, int E, std::size_t cap_n, std::size_t cap_e)
-      : col(V, cap_n), edge_stamp(std::size_t(E), -1), edges(cap_e) {}
-};
-
-// Sorted edges of the faces around v into sc.edges; returns their count.
-inline int projection_edges(const EdgeElements& el, const detail::VertexCorners& vc, ProjectionScratch& sc, int v, int mark) {
-  const int* fe = el.corner_edge.data();
-  int ne = 0;
-  for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-    const int* fe4 = fe + (vc.corner[std::size_t(a)] & ~3);
-    for (int i = 0; i < 4; ++i)
-      if (sc.edge_stamp[std::size_t(fe4[i])] != mark) sc.edge_stamp[std::size_t(fe4[i])] = mark, sc.edges[std::size_t(ne++)] = fe4[i];
-  }
-  std::sort(sc.edges.begin(), sc.edges.begin() + ne);
-  return ne;
-}
-
-// Distinct vertices of the elements of the ne edges (unsorted, into sc.col.list); returns the count.
-inline int projection_vertices(const EdgeElements& el, ProjectionScratch& sc, int ne, int mark) {
-  int n = 0;
-  int* stamp = sc.col.stamp.data();
-  int* list = sc.col.list.data();
-  for (int t = 0; t < ne; ++t) {
-    const int* ids = el.ids.data() + std::size_t(sc.edges[std::size_t(t)]) * std::size_t(el.k);
-    for (int s = 0; s < el.k; ++s)
-      if (stamp[ids[s]] != mark) stamp[ids[s]] = mark, list[n++] = ids[s];
-  }
-  return n;
-}
-
-std::shared_ptr<const ProjectionPattern> build_projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc) {
-  auto p = std::make_shared<ProjectionPattern>();
-  const EdgeElements el = build_edge_elements(mesh, vc);
-  const int V = mesh.num_vertices(), E = el.num_edges, k = el.k;
-  const int* faces = mesh.faces.data();
-  p->k = k;
-  p->num_edges = E;
-  assign_on_huge_pages(p->size, el.size.data(), el.size.data() + el.size.size());
-  assign_on_huge_pages(p->inc_start, el.start.data(), el.start.data() + el.start.size());
-  const std::size_t I = el.inc_face.size();
-  // Pattern arrays are streamed by every assembly on this connectivity: huge pages from the start.
-  assign_on_huge_pages(p->inc_row, I);
-  assign_on_huge_pages(p->inc_coef, I);
-  assign_on_huge_pages(p->inc_slot, I * 4);
-  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int e = r.begin(); e != r.end(); ++e) {
-      const int a0 = el.start[std::size_t(e)], a1 = el.start[std::size_t(e) + 1];
-      const double inv = 1.0 / double(a1 - a0);
-      for (int a = a0; a < a1; ++a) {
-        const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
-        p->inc_row[std::size_t(a)] = 4 * f + i;
-        // spec §0 edge sign: +1 if v_i < v_{i+1}.
-        p->inc_coef[std::size_t(a)] = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
-        for (int j = 0; j < 4; ++j) p->inc_slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint8_t(el.inc_slot[std::size_t(a) * 4 + std::size_t(j)]);
-      }
-    }
-  });
-  const std::size_t cap_e = std::size_t(4 * vc.max_degree + 1), cap_n = cap_e * std::size_t(k) + 1;
-  tbb::enumerable_thread_specific<ProjectionScratch> scratch([&] { return ProjectionScratch(V, E, cap_n, cap_e); });
-  assign_on_huge_pages(p->outer, std::size_t(V) + 1);
-  assign_on_huge_pages(p->ce_start, std::size_t(V) + 1);
-  // Stamps (edge and vertex arrays): v in pass 1, V + v in pass 2, so nothing is ever reset.
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
-    ProjectionScratch& sc = scratch.local();
-    for (int v = range.begin(); v != range.end(); ++v) {
-      const int ne = projection_edges(el, vc, sc, v, v);
-      p->ce_start[std::size_t(v) + 1] = ne;
-      p->outer[std::size_t(v) + 1] = projection_vertices(el, sc, ne, v);
-    }
-  });
-  int widest = 0;
-  for (int v = 0; v < V; ++v) {
-    widest = std::max(widest, p->outer[std::size_t(v) + 1]);
-    p->outer[std::size_t(v) + 1] += p->outer[std::size_t(v)];
-    p->ce_start[std::size_t(v) + 1] += p->ce_start[std::size_t(v)];
-  }
-  p->wide = widest > 255;
-  const std::size_t CE = std::size_t(p->ce_start[std::size_t(V)]);
-  assign_on_huge_pages(p->inner, std::size_t(p->outer[std::size_t(V)]));
-  assign_on_huge_pages(p->ce_edge, CE);
-  assign_on_huge_pages(p->ce_sv, CE);
-  if (p->wide) {
-    assign_on_huge_pages(p->face_pos32, vc.corner.size() * 4);
-    assign_on_huge_pages(p->ce_pos32, CE * std::size_t(k));
-  } else {
-    assign_on_huge_pages(p->face_pos8, vc.corner.size() * 4);
-    assign_on_huge_pages(p->ce_pos8, CE * std::size_t(k));
-  }
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& range) {
-    ProjectionScratch& sc = scratch.local();
-    int* pos = sc.col.pos.data();
-    auto put = [&](std::uint8_t* p8, int* p32, std::size_t idx, int value) {
-      if (p32) p32[idx] = value;
-      else p8[idx] = std::uint8_t(value);
-    };
-    for (int v = range.begin(); v != range.end(); ++v) {
-      const int ne = projection_edges(el, vc, sc, v, V + v);
-      const int n = projection_vertices(el, sc, ne, V + v);
-      std::sort(sc.col.list.begin(), sc.col.list.begin() + n);
-      std::copy_n(sc.col.list.begin(), n, p->inner.begin() + p->outer[std::size_t(v)]);
-      for (int t = 0; t < n; ++t) pos[sc.col.list[std::size_t(t)]] = t;
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j)
-          put(p->face_pos8.data(), p->wide ? p->face_pos32.data() : nullptr, std::size_t(a) * 4 + std::size_t(j), pos[f[j]]);
-      }
-      std::size_t c = std::size_t(p->ce_start[std::size_t(v)]);
-      for (int t = 0; t < ne; ++t, ++c) {
-        const int e = sc.edges[std::size_t(t)];
-        const int* ids = el.ids.data() + std::size_t(e) * std::size_t(k);
-        int sv = 0;
-        while (ids[sv] != v) ++sv;  // v is in the element of every edge of its faces
-        p->ce_edge[c] = e;
-        p->ce_sv[c] = std::uint8_t(sv);
-        for (int s = 0; s < k; ++s)
-          put(p->ce_pos8.data(), p->wide ? p->ce_pos32.data() : nullptr, c * std::size_t(k) + std::size_t(s), pos[ids[s]]);
-      }
-    }
-  });
-  return p;
-}
-
-std::mutex projection_cache_mutex;
-std::shared_ptr<const ProjectionPattern> projection_cache;
-
-std::shared_ptr<const ProjectionPattern> projection_pattern(const SurfelMesh& mesh, const detail::VertexCorners& vc,
-                                                            const std::shared_ptr<const detail::QuadVertexPattern>& key) {
-  if (key) {
-    std::lock_guard<std::mutex> lock(projection_cache_mutex);
-    if (projection_cache && projection_cache->key == key) return projection_cache;
-  }
-  auto built = build_projection_pattern(mesh, vc);
-  if (key) {
-    std::const_pointer_cast<ProjectionPattern>(built)->key = key;
-    std::lock_guard<std::mutex> lock(projection_cache_mutex);
-    projection_cache = built;
-  }
-  return built;
-}
-
-// Sized output with the given column structure (values uninitialized; the fill writes them all).
-void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
-  detail::size_for_fill(A, V, outer[V]);
-  std::copy(outer, outer + V + 1, A.outerIndexPtr());
-}
-
-// spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
-// r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
-// L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex columns: column v
-// sums the face terms of its faces (incidences ascending) and then lambda r_e[v] r_e over the
-// edges of its faces (ascending), so the result is the same for any thread count.
-// `faceterms` holds the per-face records of interpolated_face_terms; `r` the edge rows (k per edge).
-// When `mpat` is given, M (spec §3.2, M = sum_f M0_f) is filled in the same column pass, with the
-// same summation order as detail::gather_quad_rows.
-template <class Pos>
-void fill_columns(const ProjectionPattern& pp, const detail::VertexCorners& vc, const detail::QuadVertexPattern* mpat,
-                  const double* faceterms, const double* r, double lambda, const Pos* face_pos, const Pos* ce_pos,
-                  Eigen::SparseMatrix<double>& L, Eigen::SparseMatrix<double>* M) {
-  const int V = int(vc.start.size()) - 1, k = pp.k;
-  const int* outer = pp.outer.data();
-  const int* pin = pp.inner.data();
-  int* inner = L.innerIndexPtr();
-  double* val = L.valuePtr();
-  const int* vstart = vc.start.data();
-  const int* vcorner = vc.corner.data();
-  const int* ce_start = pp.ce_start.data();
-  const int* ce_edge = pp.ce_edge.data();
-  const std::uint8_t* ce_sv = pp.ce_sv.data();
-  const std::uint8_t* esize = pp.size.data();
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 1024), [&](const tbb::blocked_range<int>& range) {
-    // Rows and zeroed values of the whole block first (sequential streams), then accumulation.
-    const std::size_t b = std::size_t(outer[range.begin()]), e = std::size_t(outer[range.end()]);
-    std::copy(pin + b, pin + e, inner + b);
-    std::fill(val + b, val + e, 0.0);
-    const int* mouter = nullptr;
-    double* mval = nullptr;
-    const std::uint16_t* mslot = nullptr;
-    if (M) {
-      mouter = mpat->outer.data();
-      mval = M->valuePtr();
-      mslot = mpat->slot.data();
-      const std::size_t mb = std::size_t(mouter[range.begin()]), me = std::size_t(mouter[range.end()]);
-      std::copy(mpat->inner.data() + mb, mpat->inner.data() + me, M->innerIndexPtr() + mb);
-      std::fill(mval + mb, mval + me, 0.0);
-    }
-    constexpr int ahead = 2;  // columns: the edge rows and face records are scattered in memory
-    for (int v = range.begin(); v != range.end(); ++v) {
-      if (v + ahead < V) {
-        for (int q = ce_start[v + ahead]; q < ce_start[v + ahead + 1]; ++q)
-          __builtin_prefetch(r + std::size_t(ce_edge[q]) * std::size_t(k));
-        for (int a = vstart[v + ahead]; a < vstart[v + ahead + 1]; ++a)
-          __builtin_prefetch(faceterms + std::size_t(vcorner[a] >> 2) * detail::kTermsStride);
-      }
-      double* col = val + outer[v];
-      double* mcol = M ? mval + mouter[v] : nullptr;
-      for (int a = vstart[v]; a < vstart[v + 1]; ++a) {
-        const int c = vcorner[a];
-        const double* t = faceterms + std::size_t(c >> 2) * detail::kTermsStride;
-        const int i = c & 3;
-        const Pos* fp = face_pos + 4 * std::size_t(a);
-        for (int j = 0; j < 4; ++j) col[fp[j]] -= t[detail::kTermsK1 + detail::kSym[i][j]];
-        if (mcol) {
-          double row[4];
-          detail::interpolated_mass_row(t, i, row);
-          const std::uint16_t* ms = mslot + 4 * std::size_t(a);
-          for (int j = 0; j < 4; ++j) mcol[ms[j]] += row[j];
-        }
-      }
-      for (int q = ce_start[v]; q < ce_start[v + 1]; ++q) {
-        const std::size_t ed = std::size_t(ce_edge[q]);
-        const double* re = r + ed * std::size_t(k);
-        const double a = lambda * re[ce_sv[q]];
-        if (a == 0.0) continue;
-        const Pos* cp = ce_pos + std::size_t(q) * std::size_t(k);
-        const int n = esize[ed];
-        for (int s = 0; s < n; ++s) col[cp[s]] -= a * re[s];
-      }
-    }
-  });
-}
-
-// Rows r_e of P D0 (spec §3.6a), one per edge, on the element slots: sum over the incidences in
-// face order of s_{f,i} / n_e (P_f D)[i, :]. `pd` holds P_f D per face (row-major 4x4).
-// The second face of an edge is often far from the first in face order (spec §1.4 sorts by
-// orientation first), so its row is a cache miss: prefetching 16 edges ahead took the pass from
-// 32 to 24 ms at h = 0.005 (one thread).
-void edge_rows(const ProjectionPattern& pp, const double* pd, double* r) {
-  const int k = pp.k, E = pp.num_edges;
-  const int* inc_start = pp.inc_start.data();
-  const int* inc_row = pp.inc_row.data();
-  const double* inc_coef = pp.inc_coef.data();
-  const std::uint8_t* inc_slot = pp.inc_slot.data();
-  const std::uint8_t* size = pp.size.data();
-  tbb::parallel_for(tbb::blocked_range<int>(0, E, 4096), [&](const tbb::blocked_range<int>& range) {
-    constexpr int ahead = 16;
-    for (int e = range.begin(); e != range.end(); ++e) {
-      if (e + ahead < E)
-        for (int a = inc_start[e + ahead]; a < inc_start[e + ahead + 1]; ++a)
-          __builtin_prefetch(pd + 4 * std::size_t(inc_row[a]));
-      double* re = r + std::size_t(e) * std::size_t(k);
-      for (int s = 0; s < size[e]; ++s) re[s] = 0.0;
-      for (int a = inc_start[e]; a < inc_start[e + 1]; ++a) {
-        const double* row = pd + 4 * std::size_t(inc_row[a]);
-        const std::uint8_t* slot = inc_slot + 4 * std::size_t(a);
-        const double coef = inc_coef[a];
-        for (int j = 0; j < 4; ++j) re[slot[j]] += coef * row[j];
-      }
-    }
-  });
-}
 
 class InterpolatedCorrected final : public Discretization {
  public:
@@ -485,7 +140,7 @@ class InterpolatedCorrected final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     Operators ops;
-    assemble_into(mesh, normals, params, ops);
+    assemble_into(mesh, normals, params, nullptr, ops);
     return ops;
   }
 
@@ -493,7 +148,7 @@ class InterpolatedCorrected final : public Discretization {
   // which keeps the allocation): on a VM the page faults of fresh output were ~130 ms of the
   // ~350 ms per call at h = 0.005.
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                     Operators& ops) const override {
+                     const QuadPattern* pattern, Operators& ops) const override {
     params.check_parameters(parameters(), "interpolated parameters");
     const double lambda = params.get_double("lambda", 0.1);
     const double kappa = params.get_double("kappa", 2.0);
@@ -510,75 +165,7 @@ class InterpolatedCorrected final : public Discretization {
     const PreparedNormals prepared =
         prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
     const Eigen::MatrixX3d& u = prepared.matrix();
-    const int F = mesh.num_faces();
-    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
-    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
-    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
-    const auto pp = global ? projection_pattern(mesh, vc, pat) : nullptr;
-    // One reused buffer (no first-touch page faults in steady state; every read entry is
-    // written first): the face records of interpolated_face_terms (local assembly: L_f packed in
-    // place of K1), P_f D per face, then the edge rows r_e (k per edge, global).
-    const std::size_t pd_off = std::size_t(F) * detail::kTermsStride, r_off = pd_off + std::size_t(F) * 16;
-    detail::ReusedScratch data(r_off + (global ? std::size_t(pp->num_edges) * std::size_t(pp->k) : 0));
-    double* terms = data.data();
-    double* pdata = data.data() + pd_off;
-    const double* px = mesh.positions.col(0).data();
-    const double* py = mesh.positions.col(1).data();
-    const double* pz = mesh.positions.col(2).data();
-    const int* faces = mesh.faces.data();
-    std::atomic<int> non_square{-1};
-    const double* const xc[3] = {px, py, pz};
-    const double* const uc[3] = {u.col(0).data(), u.col(1).data(), u.col(2).data()};
-    tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
-      // The closed forms of spec §3.2-§3.4 hold on surfels (squares); other quads are rejected.
-      const int bad = detail::interpolated_face_range(faces, r.begin(), r.end(), xc, uc, kappa, terms, pdata);
-      if (bad >= 0) {
-        int cur = non_square.load();
-        while ((cur < 0 || bad < cur) && !non_square.compare_exchange_weak(cur, bad)) {}
-        return;
-      }
-      if (!global)
-        for (int f = r.begin(); f != r.end(); ++f) {
-          // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
-          double* t = terms + std::size_t(f) * detail::kTermsStride;
-          const double* pd = pdata + std::size_t(f) * 16;
-          for (int i = 0; i < 4; ++i)
-            for (int j = i; j < 4; ++j) {
-              double s = 0.0;
-              for (int m = 0; m < 4; ++m) s += pd[4 * m + i] * pd[4 * m + j];
-              double& k = t[detail::kTermsK1 + detail::kSym[i][j]];
-              k = -(k + lambda * s);
-            }
-        }
-    });
-    if (non_square.load() >= 0)
-      throw InputError("interpolated: face " + std::to_string(non_square.load()) +
-                       " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
-    if (global) {
-      double* r = data.data() + r_off;
-      edge_rows(*pp, pdata, r);
-      allocate_like(ops.L, mesh.num_vertices(), pp->outer.data());
-      if (pat) allocate_like(ops.M, mesh.num_vertices(), pat->outer.data());
-      else
-        detail::gather_quad_rows<1>(
-            mesh, nullptr, vc,
-            [&](int f, int i, double* row) { detail::interpolated_mass_row(terms + std::size_t(f) * detail::kTermsStride, i, row); },
-            {&ops.M});
-      Eigen::SparseMatrix<double>* M = pat ? &ops.M : nullptr;
-      if (pp->wide)
-        fill_columns<int>(*pp, vc, pat.get(), terms, r, lambda, pp->face_pos32.data(), pp->ce_pos32.data(), ops.L, M);
-      else
-        fill_columns<std::uint8_t>(*pp, vc, pat.get(), terms, r, lambda, pp->face_pos8.data(), pp->ce_pos8.data(), ops.L, M);
-    } else {
-      detail::gather_quad_rows<2>(
-          mesh, pat.get(), vc,
-          [&](int f, int i, double* rows) {
-            const double* t = terms + std::size_t(f) * detail::kTermsStride;
-            detail::interpolated_mass_row(t, i, rows);
-            for (int j = 0; j < 4; ++j) rows[4 + j] = t[detail::kTermsK1 + detail::kSym[i][j]];
-          },
-          {&ops.M, &ops.L});
-    }
+    detail::interpolated_fast_assembly(mesh, u, pattern, lambda, kappa, global, ops);
     if (extras) add_extras(mesh, u, lambda, kappa, global, ops);
   }
 

@@ -20,13 +20,15 @@ struct InterpolatedLocal {
   QuadSharp sharp;                ///< U_f = R S / (h ubar^z)
   QuadFlat flat;                  ///< V_f[i,:] = delta_i^T (I - kappa Q_i) (spec §3.4)
   Eigen::Matrix4d projection;     ///< P_f = I - V_f U_f
+  Eigen::Matrix4d projected_difference;  ///< P_f D, rows of the global P D0 (spec §3.6a)
+  Eigen::Matrix4d sharp_stiffness;       ///< D^T (S^T S / ubar^z) D = (S D)^T (S D) / ubar^z (spec §3.5)
   Eigen::Matrix4d inner_product;  ///< M_{1,f} = S^T S / ubar^z + lambda P_f^T P_f (spec §3.5)
-  Eigen::Matrix4d laplacian;      ///< L_f = -D^T M_{1,f} D
+  Eigen::Matrix4d laplacian;      ///< L_f = -D^T M_{1,f} D = -(sharp_stiffness + lambda (P_f D)^T (P_f D))
 };
 InterpolatedLocal interpolated_local(const QuadCorners& corners, const QuadCorners& normals, double lambda,
                                      double kappa = 2.0);
 
-/// Corrected bilinear mass M_{0,f} of spec §3.2 (surfel form): h^2/144 sum_k w_{glk} u_k^z.
+/// Corrected bilinear mass M_{0,f} of spec §3.2 (surfel form): (h^2/144) sum_k w_{glk} u_k^z.
 Eigen::Matrix4d interpolated_local_mass(double h, const Eigen::Vector4d& uz);
 
 /// The "interpolated" discretization. Parameters: lambda (0.1), kappa (2), assembly = global

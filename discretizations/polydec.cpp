@@ -8,7 +8,7 @@
 #include <corrlap/core/error.hpp>
 
 #include <corrlap/discretizations/detail/normal_policy.hpp>
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 
 namespace corrlap {
 
@@ -68,13 +68,13 @@ class PolyDec final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     Operators ops;
-    assemble_into(mesh, normals, params, ops);
+    assemble_into(mesh, normals, params, nullptr, ops);
     return ops;
   }
 
   // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                     Operators& ops) const override {
+                     const QuadPattern* pattern, Operators& ops) const override {
     const std::string who = name();
     params.check_parameters(parameters(), who + " parameters");
     const double lambda = params.get_double("lambda", 1.0);
@@ -88,7 +88,7 @@ class PolyDec final : public Discretization {
     const int F = mesh.num_faces();
     // Per face: L_f (16), |a_f| (1); with extras also U_f (12, column-major), V_f (12), M1_f (16).
     const std::size_t stride = extras ? 57 : 17;
-    detail::ReusedScratch data(std::size_t(F) * stride);  // reused: no page faults (every read entry is written)
+    detail::PatternScratch data(pattern, std::size_t(F) * stride);  // pooled in the pattern: no page faults
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
       for (int f = r.begin(); f != r.end(); ++f) {
         QuadCorners X = quad_corners(mesh, f);
@@ -104,11 +104,10 @@ class PolyDec final : public Discretization {
         }
       }
     });
-    const auto pat = detail::quad_vertex_pattern(mesh);  // cached per connectivity
-    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
-    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
+    const detail::VertexGather gather(mesh, pattern, who);
+    const detail::VertexCorners& vc = gather.vc();
     detail::gather_quad_rows<1>(
-        mesh, pat.get(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+        mesh, gather.pattern(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
         {&ops.L});
     // spec §2.3: lumped mass M_vv = sum_f |a_f| / 4 (DGtal M0()).
     ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int) { return data[std::size_t(f) * stride + 16] / 4.0; });

@@ -1,14 +1,11 @@
 #include "quad_assembly.hpp"
 
 #include <algorithm>
-#include <cstring>
-#include <mutex>
 #include <vector>
 
 #include <corrlap/core/error.hpp>
 
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
-
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
 namespace corrlap {
@@ -98,107 +95,6 @@ Eigen::SparseMatrix<double> row_sum_lumped(const Eigen::SparseMatrix<double>& A)
   D.makeCompressed();
   return D;
 }
-
-namespace detail {
-
-namespace {
-std::shared_ptr<const QuadVertexPattern> build_quad_vertex_pattern(const SurfelMesh& mesh) {
-  auto p = std::make_shared<QuadVertexPattern>();
-  const int V = mesh.num_vertices(), F = mesh.num_faces();
-  const int* faces = mesh.faces.data();
-  p->num_vertices = V;
-  // Read by every assembly on this connectivity: huge pages from the start.
-  assign_on_huge_pages(p->faces, faces, faces + std::size_t(F) * 4);
-  p->vc = vertex_corners(mesh);
-  const VertexCorners& vc = p->vc;
-  const std::size_t cap = std::size_t(4 * vc.max_degree + 1);
-  if (cap > 65535) return nullptr;
-  tbb::enumerable_thread_specific<ColumnScratch> scratch([&] { return ColumnScratch(V, cap); });
-  assign_on_huge_pages(p->outer, std::size_t(V) + 1);
-  int* outer = p->outer.data();
-  count_column_rows(faces, vc, V, scratch, outer);  // pass 1: distinct rows per column
-  assign_on_huge_pages(p->inner, std::size_t(outer[V]));
-  assign_on_huge_pages(p->slot, std::size_t(F) * 16);  // 4 incidences per face, 4 slots each
-  // Pass 2: sorted rows and the slot of every (incidence, corner).
-  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
-    ColumnScratch& sc = scratch.local();
-    const int* pos = sc.pos.data();
-    for (int v = r.begin(); v != r.end(); ++v) {
-      const int n = column_rows(faces, vc, V, v, sc);
-      std::copy_n(sc.list.data(), n, p->inner.data() + outer[v]);
-      for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
-        const int* f = faces + (vc.corner[std::size_t(a)] & ~3);
-        for (int j = 0; j < 4; ++j) p->slot[std::size_t(a) * 4 + std::size_t(j)] = std::uint16_t(pos[f[j]]);
-      }
-    }
-  });
-  return p;
-}
-
-std::mutex scratch_mutex;
-std::vector<std::pair<std::unique_ptr<double[]>, std::size_t>> scratch_pool;
-
-std::mutex cache_mutex;
-std::shared_ptr<const QuadVertexPattern> cached_pattern;
-}  // namespace
-
-std::shared_ptr<const QuadVertexPattern> quad_vertex_pattern(const SurfelMesh& mesh) {
-  const std::size_t n = std::size_t(mesh.num_faces()) * 4;
-  std::shared_ptr<const QuadVertexPattern> c;
-  {
-    std::lock_guard<std::mutex> lock(cache_mutex);
-    c = cached_pattern;
-  }
-  // Exact comparison of the connectivity (a few ms at most, far cheaper than rebuilding), by
-  // chunks in parallel.
-  if (c && c->num_vertices == mesh.num_vertices() && c->faces.size() == n &&
-      tbb::parallel_reduce(
-          tbb::blocked_range<std::size_t>(0, n, 1 << 18), true,
-          [&](const tbb::blocked_range<std::size_t>& r, bool same) {
-            return same && std::memcmp(c->faces.data() + r.begin(), mesh.faces.data() + r.begin(),
-                                       (r.end() - r.begin()) * sizeof(int)) == 0;
-          },
-          [](bool a, bool b) { return a && b; }))
-    return c;
-  c = build_quad_vertex_pattern(mesh);
-  if (c) {
-    std::lock_guard<std::mutex> lock(cache_mutex);
-    cached_pattern = c;
-  }
-  return c;
-}
-
-ReusedScratch::ReusedScratch(std::size_t n) {
-  {
-    std::lock_guard<std::mutex> lock(scratch_mutex);
-    if (!scratch_pool.empty()) {
-      buf_ = std::move(scratch_pool.back().first);
-      capacity_ = scratch_pool.back().second;
-      scratch_pool.pop_back();
-    }
-  }
-  if (capacity_ < n) {
-    buf_.reset(new double[n]);
-    capacity_ = n;
-    advise_huge_pages(buf_.get(), n * sizeof(double));
-  }
-}
-
-ReusedScratch::~ReusedScratch() {
-  std::lock_guard<std::mutex> lock(scratch_mutex);
-  if (scratch_pool.size() < 2) scratch_pool.emplace_back(std::move(buf_), capacity_);
-}
-
-void clear_quad_vertex_pattern_cache() {
-  {
-    std::lock_guard<std::mutex> lock(scratch_mutex);
-    scratch_pool.clear();
-  }
-  std::lock_guard<std::mutex> lock(cache_mutex);
-  cached_pattern.reset();
-}
-
-}  // namespace detail
 
 void validate_mesh(const SurfelMesh& mesh, const char* what) {
   // The checks of SurfelMesh::validate as a parallel scan; only a mesh that fails one goes

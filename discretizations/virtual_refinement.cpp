@@ -17,61 +17,9 @@
 
 #include <corrlap/discretizations/detail/normal_policy.hpp>
 #include "quad_assembly.hpp"
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 
 namespace corrlap {
-
-// ------------------------------------------------------------------------ triangle kernels
-
-double heron_area(double l0, double l1, double l2) {
-  // Kahan's ordering a >= b >= c avoids the cancellation of the textbook formula for needles.
-  double a = l0, b = l1, c = l2;
-  if (a < b) std::swap(a, b);
-  if (b < c) std::swap(b, c);
-  if (a < b) std::swap(a, b);
-  const double p = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c));
-  return p > 0.0 ? 0.25 * std::sqrt(p) : 0.0;
-}
-
-bool cotan_triangle_stiffness(double l0, double l1, double l2, Eigen::Matrix3d& K) {
-  K.setZero();
-  const double A = heron_area(l0, l1, l2);
-  if (!(A > DBL_MIN)) return false;  // spec §5.1 step 3: pmp skips the triangle
-  const double s0 = l0 * l0, s1 = l1 * l1, s2 = l2 * l2;
-  // gamma_k = (l_i^2 + l_j^2 - l_k^2) / (8A) = cot(theta_k) / 2
-  const double g0 = (s1 + s2 - s0) / (8.0 * A), g1 = (s0 + s2 - s1) / (8.0 * A), g2 = (s0 + s1 - s2) / (8.0 * A);
-  K(0, 1) = K(1, 0) = -g2;
-  K(0, 2) = K(2, 0) = -g1;
-  K(1, 2) = K(2, 1) = -g0;
-  K(0, 0) = g1 + g2;
-  K(1, 1) = g0 + g2;
-  K(2, 2) = g0 + g1;
-  return true;
-}
-
-Eigen::Vector3d mixed_voronoi_triangle_mass(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
-                                            const Eigen::Vector3d& x2) {
-  // spec §5.1 step 4 (pmp): e_i = x_{i+1} - x_i, delta_i = -e_i . e_{i+2} (corner i's dot product).
-  const Eigen::Vector3d x[3] = {x0, x1, x2};
-  Eigen::Vector3d e[3];
-  for (int i = 0; i < 3; ++i) e[i] = x[(i + 1) % 3] - x[i];
-  const double area2 = e[0].cross(e[1]).norm();
-  Eigen::Vector3d m = Eigen::Vector3d::Zero();
-  if (!(area2 > DBL_MIN)) return m;
-  double delta[3];
-  for (int i = 0; i < 3; ++i) delta[i] = -e[i].dot(e[(i + 2) % 3]);
-  const bool any_obtuse = delta[0] < 0.0 || delta[1] < 0.0 || delta[2] < 0.0;
-  for (int i = 0; i < 3; ++i) {
-    if (delta[i] < 0.0)
-      m[i] = 0.25 * area2;
-    else if (any_obtuse)
-      m[i] = 0.125 * area2;
-    else
-      m[i] = 0.125 * (e[i].squaredNorm() * delta[(i + 2) % 3] / area2 +
-                      e[(i + 2) % 3].squaredNorm() * delta[(i + 1) % 3] / area2);
-  }
-  return m;
-}
 
 namespace {
 
@@ -337,13 +285,13 @@ class Vrm final : public Discretization {
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
     Operators ops;
-    assemble_into(mesh, normals, params, ops);
+    assemble_into(mesh, normals, params, nullptr, ops);
     return ops;
   }
 
   // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                     Operators& ops) const override {
+                     const QuadPattern* pattern, Operators& ops) const override {
     params.check_parameters(parameters(), name());
     validate_mesh(mesh, name().c_str());
     reset_for_reuse(ops);
@@ -374,8 +322,7 @@ class Vrm final : public Discretization {
     // kernels dominate here, and a pooled 20-32 doubles per face would stay resident.
     const bool full_mass = corrected_ && !lumped_mass;
     const std::size_t S = full_mass ? 32 : 20;
-    std::unique_ptr<double[]> loc(new double[std::size_t(F) * S]);
-    advise_huge_pages(loc.get(), std::size_t(F) * S * sizeof(double));
+    const std::unique_ptr<double[]> loc = detail::fresh_buffer(std::size_t(F) * S);
     // Rare events (skipped fan triangles, minimizer failures) collected per thread and merged in
     // face order below: no per-face report arrays.
     struct Report {
@@ -420,9 +367,9 @@ class Vrm final : public Discretization {
     // the sum of its face contributions in ascending face order, from +0.0 -- the order of the
     // generic AssemblyPlan this replaces, so the bits are unchanged -- and is written once.
     // Local matrices are not bitwise symmetric (P^T K P), so the kernel hands columns.
-    const auto pat = detail::quad_vertex_pattern(mesh);
-    const detail::VertexCorners vc_direct = pat ? detail::VertexCorners{} : detail::vertex_corners(mesh);
-    const detail::VertexCorners& vc = pat ? pat->vc : vc_direct;
+    const detail::VertexGather gather(mesh, pattern, name());
+    const detail::QuadVertexPattern* pat = gather.pattern();
+    const detail::VertexCorners& vc = gather.vc();
     const double* lp = loc.get();
     // spec §5.1 step 6: L = -sum K_f (negative semi-definite); negating each finished column gives
     // the bits of negating the finished matrix.
@@ -434,7 +381,7 @@ class Vrm final : public Discretization {
         const double* o = lp + std::size_t(f) * S;
         for (int j = 0; j < 4; ++j) c[j] = o[4 * j + i], c[4 + j] = o[16 + 4 * j + i];
       };
-      detail::gather_quad_rows<2>(mesh, pat.get(), vc, columns, {&ops.L, &ops.M}, negate_L);
+      detail::gather_quad_rows<2>(mesh, pat, vc, columns, {&ops.L, &ops.M}, negate_L);
       // Row sums of the assembled M, bitwise as a sequential scan (the lumped alternative).
       ops.M_lumped = detail::row_sum_diagonal_symmetric(ops.M);
     } else {
@@ -442,7 +389,7 @@ class Vrm final : public Discretization {
         const double* o = lp + std::size_t(f) * S;
         for (int j = 0; j < 4; ++j) c[j] = o[4 * j + i];
       };
-      detail::gather_quad_rows<1>(mesh, pat.get(), vc, columns, {&ops.L}, negate_L);
+      detail::gather_quad_rows<1>(mesh, pat, vc, columns, {&ops.L}, negate_L);
       // Diagonal local masses: the assembled M is diagonal, entry v = sum over the corners at v in
       // ascending face order (what summing the assembled zeros of the off-diagonal gives, bit for bit).
       ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int i) { return lp[std::size_t(f) * S + 16 + std::size_t(i)]; });

@@ -97,6 +97,36 @@ inline SphereCase sphere_case(double h, const Eigen::Vector3d& center = Eigen::V
   return s;
 }
 
+/// Rows of `n` tilted by deterministic noise of relative size `amount` and renormalized: normals like
+/// an estimator's (integral invariants), off the true ones by a few degrees and not smooth.
+inline Eigen::MatrixX3d perturbed_normals(const Eigen::MatrixX3d& n, double amount, unsigned seed) {
+  Eigen::MatrixX3d p = n;
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    for (int c = 0; c < 3; ++c) p(i, c) += amount * std::sin(1.7 * double(i) + 2.3 * c + 0.61 * seed);
+    p.row(i).normalize();
+  }
+  return p;
+}
+
+/// A digitized shape ("sphere1" in [-2, 2]^3, "torus" (R = 6, r = 2) in [-9, 9]^3) with its true
+/// normals, or II-like perturbed ones (perturbed_normals, 0.15).
+inline SphereCase shape_case(const std::string& shape_name, double h, bool perturbed) {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = shape_name == "torus" ? -9.0 : -2.0;
+  p.max_aabb = -p.min_aabb;
+  const ImplicitShape shape = make_implicit_shape(shape_name);
+  SphereCase s;
+  s.mesh = extract_surface(digitize(shape, p));
+  s.normals.face = true_face_normals(shape, s.mesh);
+  s.normals.vertex = true_vertex_normals(shape, s.mesh);
+  if (perturbed) {
+    s.normals.face = perturbed_normals(s.normals.face, 0.15, 1);
+    s.normals.vertex = perturbed_normals(s.normals.vertex, 0.15, 2);
+  }
+  return s;
+}
+
 /// Flat square grid in the plane z = 0 with n x n quads of side h, counter-clockwise seen from +z
 /// (no surfel data), and u = e_z everywhere.
 inline SphereCase flat_grid(int n, double h) {

@@ -64,7 +64,7 @@ bool bitwise_equal(const Eigen::SparseMatrix<double>& A, const Eigen::SparseMatr
 
 }  // namespace
 
-TEST_CASE("the registry holds the quad methods of issue 3") {
+TEST_CASE("the registry holds the quad methods") {
   for (const std::string name : {"fem", "polydec", "projected-polydec", "interpolated"}) {
     CHECK(discretization_registry().contains(name));
     const auto d = make_discretization(name);

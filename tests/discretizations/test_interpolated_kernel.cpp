@@ -1,6 +1,6 @@
-// The assembly kernel of the interpolated corrected calculus (interpolated_kernel.hpp, scalar
-// closed forms) computes the same M_{0,f}, D^T (S^T S / ubar^z) D and P_f D as the readable
-// reference interpolated_local() (spec §3.2-§3.5), for squares of any orientation and size.
+// The fast face kernel of the interpolated corrected calculus (interpolated_corrected_fast.cpp)
+// computes M_{0,f}, D^T (S^T S / ubar^z) D and P_f D bit for bit as the readable interpolated_local()
+// (spec §3.2-§3.5), for squares of any orientation and size and on surfel meshes, for every ISA.
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
@@ -8,8 +8,12 @@
 #include <random>
 #include <vector>
 
+#include <corrlap/core/config.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 #include <corrlap/discretizations/interpolated_corrected.hpp>
 #include <corrlap/discretizations/detail/interpolated_kernel.hpp>
+
+#include "reference_support.hpp"
 
 using namespace corrlap;
 
@@ -50,9 +54,36 @@ KernelCase random_case(std::mt19937& rng, bool axis_aligned) {
 
 double max_abs(const Eigen::Matrix4d& a) { return a.cwiseAbs().maxCoeff(); }
 
+// The fast record of one quad (corners x, corner normals u) through interpolated_face_range.
+bool face_terms(const QuadCorners& x, const QuadCorners& u, double kappa, double* terms, double* pd,
+                detail::FaceKernelIsa isa = detail::FaceKernelIsa::Scalar) {
+  const int faces[4] = {0, 1, 2, 3};
+  double xs[3][4], us[3][4];
+  for (int k = 0; k < 4; ++k)
+    for (int c = 0; c < 3; ++c) xs[c][k] = x(k, c), us[c][k] = u(k, c);
+  const double* xp[3] = {xs[0], xs[1], xs[2]};
+  const double* up[3] = {us[0], us[1], us[2]};
+  return detail::interpolated_face_range(faces, 0, 1, xp, up, kappa, terms, pd, isa) < 0;
+}
+
+// The readable matrices of the record: M_{0,f}, K1 (sharp_stiffness), P_f D.
+void unpack(const double* terms, const double* pd, Eigen::Matrix4d& M, Eigen::Matrix4d& K1, Eigen::Matrix4d& PD) {
+  for (int i = 0; i < 4; ++i) {
+    double row[4];
+    detail::interpolated_mass_row(terms, i, row);
+    for (int j = 0; j < 4; ++j) {
+      M(i, j) = row[j];
+      K1(i, j) = terms[detail::kTermsK1 + detail::kSym[i][j]];
+      PD(i, j) = pd[4 * i + j];
+    }
+  }
+}
+
+bool same_bits(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 16) == 0; }
+
 }  // namespace
 
-TEST_CASE("interpolated assembly kernel equals interpolated_local (M0, K1, P D) to round-off") {
+TEST_CASE("interpolated assembly kernel on random squares: bitwise interpolated_local, which is spec §3.5") {
   std::mt19937 rng(11);
   const Eigen::Matrix4d& D = quad_difference();
   for (int trial = 0; trial < 400; ++trial) {
@@ -60,40 +91,77 @@ TEST_CASE("interpolated assembly kernel equals interpolated_local (M0, K1, P D) 
     const KernelCase c = random_case(rng, axis);
     const double kappa = trial % 3 == 0 ? 1.0 : 2.0;
     const InterpolatedLocal ref = interpolated_local(c.x, c.u, 0.1, kappa);
-    const double* xp[4] = {&c.x(0, 0), &c.x(1, 0), &c.x(2, 0), &c.x(3, 0)};  // row-major rows
-    const double* up[4] = {&c.u(0, 0), &c.u(1, 0), &c.u(2, 0), &c.u(3, 0)};
     double terms[detail::kTermsStride], pd[16];
-    REQUIRE(detail::interpolated_face_terms(xp, up, kappa, terms, pd));
+    REQUIRE(face_terms(c.x, c.u, kappa, terms, pd));
     Eigen::Matrix4d M, K1, PD;
-    for (int i = 0; i < 4; ++i) {
-      double row[4];
-      detail::interpolated_mass_row(terms, i, row);
-      for (int j = 0; j < 4; ++j) {
-        M(i, j) = row[j];
-        K1(i, j) = terms[detail::kTermsK1 + detail::kSym[i][j]];
-        PD(i, j) = pd[4 * i + j];
-      }
-    }
-    const Eigen::Matrix4d K1_ref = D.transpose() * (ref.S.transpose() * ref.S / ref.ubar_z) * D;
-    const Eigen::Matrix4d PD_ref = ref.projection * D;
+    unpack(terms, pd, M, K1, PD);
     INFO("trial " << trial << (axis ? " (axis-aligned)" : " (rotated)"));
-    CHECK(max_abs(M - ref.mass) <= 1e-14 * max_abs(ref.mass));
-    CHECK(max_abs(K1 - K1_ref) <= 1e-13 * max_abs(K1_ref));
-    CHECK(max_abs(PD - PD_ref) <= 1e-13 * max_abs(PD_ref));
-    // And the local Laplacian of spec §3.5: L_f = -(K1 + lambda (P D)^T (P D)).
-    const Eigen::Matrix4d Lf = -(K1 + 0.1 * PD.transpose() * PD);
-    CHECK(max_abs(Lf - ref.laplacian) <= 1e-13 * max_abs(ref.laplacian));
+    CHECK(same_bits(M, ref.mass));
+    CHECK(same_bits(K1, ref.sharp_stiffness));
+    CHECK(same_bits(PD, ref.projected_difference));
+    // The readable quantities are those of spec §3.5 written with D: D^T (S^T S / ubar^z) D, P_f D
+    // and L_f = -D^T M_{1,f} D, to round-off.
+    const Eigen::Matrix4d K1_spec = D.transpose() * (ref.S.transpose() * ref.S / ref.ubar_z) * D;
+    CHECK(max_abs(K1 - K1_spec) <= 1e-13 * max_abs(K1_spec));
+    CHECK(max_abs(PD - ref.projection * D) <= 1e-13 * max_abs(PD));
+    const Eigen::Matrix4d L_spec = -D.transpose() * ref.inner_product * D;
+    CHECK(max_abs(ref.laplacian - L_spec) <= 1e-13 * max_abs(L_spec));
   }
+}
+
+TEST_CASE("interpolated fast face terms are bitwise the readable interpolated_local") {
+  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Scalar, detail::FaceKernelIsa::Sse2,
+                                             detail::FaceKernelIsa::Best};
+  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
+  for (const char* shape : {"sphere1", "torus"})
+    for (bool perturbed : {false, true}) {
+      const test::SphereCase s = test::shape_case(shape, shape == std::string("torus") ? 0.5 : 0.125, perturbed);
+      INFO(shape << (perturbed ? ", perturbed normals" : ", true normals"));
+      const int F = s.mesh.num_faces();
+      REQUIRE(F > 500);
+      const Eigen::MatrixX3d& U = s.normals.vertex;
+      const double* x[3] = {s.mesh.positions.col(0).data(), s.mesh.positions.col(1).data(), s.mesh.positions.col(2).data()};
+      const double* u[3] = {U.col(0).data(), U.col(1).data(), U.col(2).data()};
+      for (const double kappa : {2.0, 1.0})
+        for (const auto isa : isas) {
+          INFO("kappa " << kappa << ", isa " << int(isa));
+          std::vector<double> t(std::size_t(F) * detail::kTermsStride), p(std::size_t(F) * 16);
+          REQUIRE(detail::interpolated_face_range(s.mesh.faces.data(), 0, F, x, u, kappa, t.data(), p.data(), isa) == -1);
+          int mismatches = 0;
+          for (int f = 0; f < F; ++f) {
+            const InterpolatedLocal ref = interpolated_local(quad_corners(s.mesh, f), quad_corner_rows(s.mesh, U, f), 0.1, kappa);
+            Eigen::Matrix4d M, K1, PD;
+            unpack(t.data() + std::size_t(f) * detail::kTermsStride, p.data() + std::size_t(f) * 16, M, K1, PD);
+            if (!same_bits(M, ref.mass) || !same_bits(K1, ref.sharp_stiffness) || !same_bits(PD, ref.projected_difference))
+              ++mismatches;
+          }
+          CHECK(mismatches == 0);
+        }
+      // Local assembly (spec §3.6b) from the readable L_f == the method's L, bit for bit.
+      const detail::VertexCorners vc = detail::vertex_corners(s.mesh);
+      Eigen::SparseMatrix<double> L, M;
+      detail::gather_quad_rows<2>(
+          s.mesh, vc,
+          [&](int f, int i, double* rows) {
+            const InterpolatedLocal ref = interpolated_local(quad_corners(s.mesh, f), quad_corner_rows(s.mesh, U, f), 0.1, 2.0);
+            for (int j = 0; j < 4; ++j) rows[j] = ref.mass(i, j), rows[4 + j] = ref.laplacian(i, j);
+          },
+          {&M, &L});
+      const Operators ops = make_interpolated_corrected()->assemble(s.mesh, s.normals, Config::from_key_values({"assembly=local"}));
+      CHECK(std::memcmp(ops.L.valuePtr(), L.valuePtr(), sizeof(double) * std::size_t(L.nonZeros())) == 0);
+      CHECK(std::memcmp(ops.M.valuePtr(), M.valuePtr(), sizeof(double) * std::size_t(M.nonZeros())) == 0);
+      CHECK(ops.L.nonZeros() == L.nonZeros());
+    }
 }
 
 TEST_CASE("interpolated assembly kernel rejects a non-square quad") {
   QuadCorners x, u;
   x << 0, 0, 0, 1, 0, 0, 1, 1.01, 0, 0, 1, 0;  // x2 off the square by 1%
   for (int k = 0; k < 4; ++k) u.row(k) << 0, 0, 1;
-  const double* xp[4] = {&x(0, 0), &x(1, 0), &x(2, 0), &x(3, 0)};
-  const double* up[4] = {&u(0, 0), &u(1, 0), &u(2, 0), &u(3, 0)};
   double terms[detail::kTermsStride], pd[16];
-  CHECK_FALSE(detail::interpolated_face_terms(xp, up, 2.0, terms, pd));
+  CHECK_FALSE(face_terms(x, u, 2.0, terms, pd));
+  x(2, 1) = 1.0;
+  CHECK(face_terms(x, u, 2.0, terms, pd));
 }
 
 TEST_CASE("vectorized face kernel (SSE2, AVX2) gives the scalar kernel's bits and finds non-squares") {

@@ -1,4 +1,4 @@
-// Acceptance (issue 3): fem, interpolated, polydec and projected-polydec equal the reference
+// Acceptance: fem, interpolated, polydec and projected-polydec equal the reference
 // implementation's matrices on sphere1, h = 0.2, entry by entry to 1e-12 relative, same sparsity.
 #include <doctest/doctest.h>
 

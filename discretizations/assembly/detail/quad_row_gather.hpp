@@ -18,6 +18,7 @@
 
 #include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include "huge_pages.hpp"
+#include "storage.hpp"
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::detail {
@@ -25,36 +26,6 @@ namespace corrlap::detail {
 /// Two doubles in one SSE2 / NEON register (GCC and Clang vector extension): the stiffness and mass
 /// sums of one column entry (gather_quad_row_pairs).
 typedef double PairLanes __attribute__((vector_size(16)));
-
-/// Smallest capacity >= n whose value (8 bytes per entry) and row-index (4 bytes per entry)
-/// arrays, each with glibc's 16-byte header and rounded up to 4 KiB pages, are whole multiples of
-/// 2 MiB (4 c + 2048 is a multiple of 2 MiB). Linux maps anonymous regions of such lengths at
-/// 2 MiB-aligned addresses, so when malloc serves them with their own mapping, both end blocks lie
-/// inside it and advise_huge_pages can make the whole array huge pages.
-inline Eigen::Index mapping_friendly_capacity(Eigen::Index n) {
-  constexpr Eigen::Index step = (Eigen::Index(2) << 20) / 4;  // entries per 2 MiB of indices
-  return ((n + 512 + step - 1) / step) * step - 512;
-}
-
-/// Sizes A as a V x V matrix with nnz stored entries whose values and row indices the caller will
-/// write (contents left uninitialized), keeping A's storage when it is large enough (assemble_into).
-/// New storage gets at least 2 MiB of spare capacity past the last entry (a mapping-friendly
-/// capacity, above) and advise_huge_pages over all of it: one fresh 2 MiB block then costs one
-/// fault instead of up to 512. Fresh fem output at h = 0.005: 2 778 -> 1 521 faults per call on one
-/// thread (the rest is Eigen's outer index), 645 -> 52 on two.
-inline void size_for_fill(Eigen::SparseMatrix<double>& A, int V, Eigen::Index nnz) {
-  constexpr Eigen::Index kSpare = (Eigen::Index(2) << 20) / Eigen::Index(sizeof(int));  // 2 MiB of indices
-  A.resize(V, V);  // keeps the allocation of the values and indices
-  if (A.data().allocatedSize() < nnz) {
-    A.data().reserve(mapping_friendly_capacity(nnz + kSpare));
-    // Only new storage: reused storage (assemble_into) was advised when it was allocated, and the
-    // collapse calls cost up to ~0.3 ms each even on blocks that are already huge pages.
-    const std::size_t capacity = std::size_t(A.data().allocatedSize());
-    advise_huge_pages(A.valuePtr(), capacity * sizeof(double));
-    advise_huge_pages(A.innerIndexPtr(), capacity * sizeof(int));
-  }
-  A.resizeNonZeros(nnz);
-}
 
 /// Face corners (4 f + i) incident to each vertex, ascending.
 struct VertexCorners {
@@ -212,45 +183,19 @@ void gather_quad_rows(const SurfelMesh& mesh, const VertexCorners& vc, RowKernel
   gather_quad_rows<Count>(mesh, vc, kernel, out, NoColumnFinish{});
 }
 
-/// Per-face scratch (double values) reused across assemblies: a fresh multi-MiB buffer costs more
-/// in first-touch page faults than the kernel that fills it. Takes a pooled buffer if one is free
-/// (at most two are kept, so concurrent assemblies simply allocate). Contents are uninitialized.
-class ReusedScratch {
- public:
-  explicit ReusedScratch(std::size_t n);
-  ~ReusedScratch();
-  ReusedScratch(const ReusedScratch&) = delete;
-  ReusedScratch& operator=(const ReusedScratch&) = delete;
-  double* data() { return buf_.get(); }
-  const double* data() const { return buf_.get(); }
-  double& operator[](std::size_t i) { return buf_[i]; }
-  const double& operator[](std::size_t i) const { return buf_[i]; }
-
- private:
-  std::unique_ptr<double[]> buf_;
-  std::size_t capacity_ = 0;
-};
-
-/// Cached vertex pattern of a quad mesh: incidence (vertex -> corners, ascending), the CSR
-/// column structure (sorted distinct rows of each column) and, for every incidence a (in vc
-/// order), the positions slot[4a + j] of corner j of its face inside the column. Computed once
-/// per mesh connectivity: assembling again on the same faces (other normals, other parameters)
-/// only writes values, each entry once. Column sizes are bounded by 65535 (uint16 slots).
+/// Vertex pattern of a quad mesh (held by QuadPattern, quad_pattern.hpp): incidence (vertex ->
+/// corners, ascending), the CSC column structure (sorted distinct rows of each column) and, for
+/// every incidence a (in vc order), the positions slot[4a + j] of corner j of its face inside the
+/// column. Assembling through it only writes values, each entry once. Column sizes are bounded by
+/// 65535 (uint16 slots): beyond that has_slots is false and only vc is set (direct gather).
 struct QuadVertexPattern {
   int num_vertices = 0;
-  std::vector<int> faces;  // copy of the connectivity: the cache key
+  bool has_slots = false;
   VertexCorners vc;
-  std::vector<int> outer;   // #V + 1
-  std::vector<int> inner;   // nnz, sorted within each column
+  std::vector<int> outer;           // #V + 1
+  std::vector<int> inner;           // nnz, sorted within each column
   std::vector<std::uint16_t> slot;  // 4 per incidence
 };
-
-/// The pattern of `mesh` (built in parallel on first use, then cached for the most recent
-/// connectivity; the cache compares the whole face array, never a hash). Returns nullptr when a
-/// column would exceed the slot range (callers then use the direct gather above).
-std::shared_ptr<const QuadVertexPattern> quad_vertex_pattern(const SurfelMesh& mesh);
-/// Drops the cached pattern (frees its memory).
-void clear_quad_vertex_pattern_cache();
 
 /// Columns of at most this many entries are summed on the stack by gather_quad_row_pairs.
 inline constexpr int kPairColumnMax = 64;
@@ -380,7 +325,7 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
   gather_quad_rows<Count>(p, kernel, out, NoColumnFinish{});
 }
 
-/// Vertex gather through the cached pattern when there is one, else the direct gather (same bits).
+/// Vertex gather through the pattern when there is one, else the direct gather (same bits).
 template <int Count, class RowKernel>
 void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out) {

@@ -1,7 +1,7 @@
-// The fast assembly paths give the same bits as the straightforward ones: the cached vertex
-// pattern gather (quad_row_gather.hpp) equals the direct per-column gather, the parallel
-// AssemblyPlan construction equals a sequential ordered sum, and the pattern cache notices a
-// change of connectivity.
+// The assembly seam (discretizations/assembly/): the gather through a QuadPattern equals the direct
+// per-column gather bit for bit, a pattern refuses another connectivity, every quad method gives the
+// same bits with and without a pattern, the storage helpers (size_for_fill, huge pages) keep
+// contents, and the parallel AssemblyPlan construction equals a sequential ordered sum.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -20,7 +20,8 @@
 #include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/quad_assembly.hpp>
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
+#include <corrlap/discretizations/assembly/quad_pattern.hpp>
 #include <corrlap/discretizations/registry.hpp>
 
 #include "reference_support.hpp"
@@ -29,6 +30,9 @@ using namespace corrlap;
 using namespace corrlap::test;
 
 namespace {
+
+// The gather pattern of a QuadPattern (the internals the methods use).
+const detail::QuadVertexPattern& vertex_pattern(const QuadPattern& p) { return detail::QuadPatternAccess::impl(p).vertex; }
 
 bool same_bits(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() && a.nonZeros() == b.nonZeros() &&
@@ -49,7 +53,7 @@ void test_kernel(int f, int i, double* rows) {
 
 }  // namespace
 
-TEST_CASE("cached-pattern vertex gather is bitwise the direct gather on several meshes and thread counts") {
+TEST_CASE("QuadPattern vertex gather is bitwise the direct gather on several meshes and thread counts") {
   for (double h : {0.3, 0.17, 0.09}) {
     INFO("h = " << h);
     const SphereCase s = sphere_case(h, Eigen::Vector3d(0.03, -0.011, 0.02));
@@ -60,11 +64,12 @@ TEST_CASE("cached-pattern vertex gather is bitwise the direct gather on several 
     REQUIRE(A0.nonZeros() > 0);
     for (int t : {1, 2, 8}) {
       set_thread_count(t);
-      const auto pat = detail::quad_vertex_pattern(s.mesh);
-      REQUIRE(pat);
+      const QuadPattern qp = QuadPattern::build(s.mesh);
+      const detail::QuadVertexPattern& pat = vertex_pattern(qp);
+      REQUIRE(pat.has_slots);
       Eigen::SparseMatrix<double> A, B;
       // two matrices, no finisher: the paired path (gather_quad_row_pairs)
-      detail::gather_quad_rows<2>(*pat, test_kernel, {&A, &B});
+      detail::gather_quad_rows<2>(pat, test_kernel, {&A, &B});
       INFO(t << " threads");
       CHECK(same_bits(A, A0));
       CHECK(same_bits(B, B0));
@@ -93,10 +98,10 @@ TEST_CASE("two-matrix gather through the pattern falls back to the generic path 
   REQUIRE(1 + 2 * n > detail::kPairColumnMax);
   Eigen::SparseMatrix<double> A0, B0;
   detail::gather_quad_rows<2>(fan, vc, test_kernel, {&A0, &B0});
-  const auto pat = detail::quad_vertex_pattern(fan);
-  REQUIRE(pat);
+  const QuadPattern qp = QuadPattern::build(fan);
+  REQUIRE(vertex_pattern(qp).has_slots);
   Eigen::SparseMatrix<double> A, B;
-  detail::gather_quad_rows<2>(*pat, test_kernel, {&A, &B});
+  detail::gather_quad_rows<2>(vertex_pattern(qp), test_kernel, {&A, &B});
   CHECK(A0.col(0).nonZeros() == 1 + 2 * n);
   CHECK(same_bits(A, A0));
   CHECK(same_bits(B, B0));
@@ -169,34 +174,66 @@ TEST_CASE("assign_on_huge_pages gives the same vector as assign") {
   CHECK(small.empty());
 }
 
-TEST_CASE("the vertex pattern cache is rebuilt when the connectivity changes") {
+TEST_CASE("a QuadPattern refuses a mesh of another connectivity") {
   const SphereCase a = sphere_case(0.25), b = sphere_case(0.2);
-  const auto pa = detail::quad_vertex_pattern(a.mesh);
-  CHECK(detail::quad_vertex_pattern(a.mesh).get() == pa.get());  // same faces: cached
-  const auto pb = detail::quad_vertex_pattern(b.mesh);
-  CHECK(pb->num_vertices == b.mesh.num_vertices());
-  CHECK(pb->outer.size() == std::size_t(b.mesh.num_vertices()) + 1);
-  // Same sizes, one face rotated: must not be mistaken for the cached mesh.
+  const QuadPattern pb = QuadPattern::build(b.mesh);
+  CHECK(pb.num_vertices() == b.mesh.num_vertices());
+  CHECK(pb.num_faces() == b.mesh.num_faces());
+  CHECK(vertex_pattern(pb).outer.size() == std::size_t(b.mesh.num_vertices()) + 1);
+  CHECK(pb.matches(b.mesh));
+  CHECK_FALSE(pb.matches(a.mesh));
+  // Same sizes, one face rotated: another connectivity.
   SurfelMesh c = b.mesh;
-  const Eigen::RowVector4i f0 = c.faces.row(0);
-  c.faces.row(0) << f0[1], f0[2], f0[3], f0[0];
-  const auto pc = detail::quad_vertex_pattern(c);
-  CHECK(pc.get() != pb.get());
-  CHECK(pc->faces[0] == f0[1]);
-  // Methods through the caches after switching meshes equal a cold cache (interpolated also
-  // caches its projection pattern, keyed on the vertex pattern).
-  for (const char* name : {"fem", "interpolated", "polydec"}) {
+  const Eigen::RowVector4i f0 = c.faces.row(c.num_faces() - 1);
+  c.faces.row(c.num_faces() - 1) << f0[1], f0[2], f0[3], f0[0];
+  CHECK_FALSE(pb.matches(c));
+  SurfelMesh moved = b.mesh;  // positions are not part of the connectivity
+  moved.positions *= 1.5;
+  CHECK(pb.matches(moved));
+  for (const char* name : {"fem", "interpolated", "polydec", "projected-polydec", "vrm", "corrected-vrm"}) {
     INFO(name);
     const auto d = make_discretization(name);
-    (void)d->assemble(b.mesh, b.normals, Config{});
-    const Operators warm_b = d->assemble(b.mesh, b.normals, Config{});
-    const Operators warm = d->assemble(a.mesh, a.normals, Config{});
-    detail::clear_quad_vertex_pattern_cache();
-    const Operators cold = d->assemble(a.mesh, a.normals, Config{});
-    CHECK(same_bits(warm.L, cold.L));
-    CHECK(same_bits(warm.M, cold.M));
-    CHECK(warm_b.L.rows() == b.mesh.num_vertices());
+    CHECK_THROWS_WITH_AS(d->assemble(a.mesh, a.normals, Config{}, pb),
+                         doctest::Contains("the QuadPattern was built for another connectivity"), InputError);
+    CHECK_THROWS_WITH_AS(d->assemble(c, b.normals, Config{}, pb), doctest::Contains("other face ids"), InputError);
+    Operators out;
+    CHECK_THROWS_AS(d->assemble_into(a.mesh, a.normals, Config{}, pb, out), InputError);
   }
+  CHECK_THROWS_AS(QuadPattern::build(SurfelMesh{}), InputError);
+}
+
+TEST_CASE("every quad method gives the same bits with and without a QuadPattern") {
+  const SphereCase a = sphere_case(0.17, Eigen::Vector3d(0.013, -0.02, 0.007));
+  const SphereCase b = sphere_case(0.23);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"fem", ""},     {"fem", "mass=lumped"}, {"interpolated", ""},           {"interpolated", "assembly=local"},
+      {"polydec", ""}, {"projected-polydec", ""}, {"vrm", ""},                {"corrected-vrm", ""},
+      {"corrected-vrm", "mass=lumped"}, {"cotan", ""}, {"heat-kernel", ""}};
+  for (int t : {1, 2}) {
+    set_thread_count(t);
+    const QuadPattern pa = QuadPattern::build(a.mesh), pb = QuadPattern::build(b.mesh);
+    const QuadPattern pa_copy = pa;  // copies share the state
+    for (const auto& [name, kv] : cases) {
+      INFO(name << " " << kv << ", " << t << " threads");
+      const auto d = make_discretization(name);
+      const Config params = kv.empty() ? Config{} : Config::from_key_values({kv});
+      const Operators one_shot = d->assemble(a.mesh, a.normals, params);
+      const Operators with = d->assemble(a.mesh, a.normals, params, pa);
+      CHECK(same_bits(with.L, one_shot.L));
+      CHECK(same_bits(with.M, one_shot.M));
+      // Refill through the pattern after an assembly on another mesh into the same output.
+      Operators reused;
+      d->assemble_into(b.mesh, b.normals, params, pb, reused);
+      d->assemble_into(a.mesh, a.normals, params, pa_copy, reused);
+      CHECK(same_bits(reused.L, one_shot.L));
+      CHECK(same_bits(reused.M, one_shot.M));
+      d->assemble_into(a.mesh, a.normals, params, reused);  // no pattern
+      CHECK(same_bits(reused.L, one_shot.L));
+      CHECK(same_bits(reused.M, one_shot.M));
+    }
+    CHECK(pa.memory_bytes() > vertex_pattern(pa).slot.size() * sizeof(std::uint16_t));
+  }
+  set_thread_count(0);
 }
 
 TEST_CASE("AssemblyPlan gather is bitwise the sequential ordered sum, with and without edge signs") {
@@ -274,9 +311,9 @@ TEST_CASE("the column finish hook sees every finished column once, on both gathe
   };
   Eigen::SparseMatrix<double> A1, B1, A2, B2;
   detail::gather_quad_rows<2>(s.mesh, vc, test_kernel, {&A1, &B1}, negate_first);
-  const auto pat = detail::quad_vertex_pattern(s.mesh);
-  REQUIRE(pat);
-  detail::gather_quad_rows<2>(*pat, test_kernel, {&A2, &B2}, negate_first);
+  const QuadPattern qp = QuadPattern::build(s.mesh);
+  REQUIRE(vertex_pattern(qp).has_slots);
+  detail::gather_quad_rows<2>(vertex_pattern(qp), test_kernel, {&A2, &B2}, negate_first);
   Eigen::SparseMatrix<double> negA0 = A0;
   negA0 *= -1.0;
   CHECK(same_bits(A1, negA0));
