@@ -48,6 +48,6 @@
 // Linear and eigen solvers.
 #include <corrlap/backends/registry.hpp>
 
-// Problems: test functions of spec §10.2, Poisson (backward) and forward evaluation.
+// Problems: test functions of docs/math.md §10.2, Poisson (backward) and forward evaluation.
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/problems/test_functions.hpp>

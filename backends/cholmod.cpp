@@ -1,16 +1,15 @@
 #include "cholmod.hpp"
 
+#include <cholmod.h>
+#include <omp.h>
+
 #include <atomic>
+#include <corrlap/backends/detail/solver_support.hpp>
 #include <mutex>
 #include <new>
 #include <sstream>
 #include <string_view>
 #include <type_traits>
-
-#include <cholmod.h>
-#include <omp.h>
-
-#include <corrlap/backends/detail/solver_support.hpp>
 
 extern "C" void openblas_set_num_threads(int) __attribute__((weak));
 
@@ -122,13 +121,20 @@ class ConcurrencyScope {
 
 const char* ordering_name(int ordering) {
   switch (ordering) {
-    case CHOLMOD_NATURAL: return "natural";
-    case CHOLMOD_GIVEN: return "given";
-    case CHOLMOD_AMD: return "amd";
-    case CHOLMOD_METIS: return "metis";
-    case CHOLMOD_NESDIS: return "nesdis";
-    case CHOLMOD_COLAMD: return "colamd";
-    case CHOLMOD_POSTORDERED: return "postordered";
+    case CHOLMOD_NATURAL:
+      return "natural";
+    case CHOLMOD_GIVEN:
+      return "given";
+    case CHOLMOD_AMD:
+      return "amd";
+    case CHOLMOD_METIS:
+      return "metis";
+    case CHOLMOD_NESDIS:
+      return "nesdis";
+    case CHOLMOD_COLAMD:
+      return "colamd";
+    case CHOLMOD_POSTORDERED:
+      return "postordered";
   }
   return "?";
 }
@@ -199,8 +205,8 @@ struct CholmodSolver::Impl {
       common.nmethods = 0;  // CHOLMOD's default: AMD, then METIS if AMD's fill is high
     } else {
       common.nmethods = 1;
-      common.method[0].ordering = ordering == "metis"    ? CHOLMOD_METIS
-                                  : ordering == "nesdis" ? CHOLMOD_NESDIS
+      common.method[0].ordering = ordering == "metis"     ? CHOLMOD_METIS
+                                  : ordering == "nesdis"  ? CHOLMOD_NESDIS
                                   : ordering == "natural" ? CHOLMOD_NATURAL
                                                           : CHOLMOD_AMD;
     }
@@ -245,8 +251,8 @@ struct CholmodSolver::Impl {
     std::string detail = last_cholmod_message.empty() ? "" : ": " + last_cholmod_message;
     last_cholmod_message.clear();
     if (st == CHOLMOD_OUT_OF_MEMORY || st == CHOLMOD_TOO_LARGE)
-      fail(SolverStatus::OutOfMemory, std::string(phase) + " ran out of memory (CHOLMOD status " +
-                                          std::to_string(st) + ")" + detail);
+      fail(SolverStatus::OutOfMemory,
+           std::string(phase) + " ran out of memory (CHOLMOD status " + std::to_string(st) + ")" + detail);
     if (st == CHOLMOD_NOT_POSDEF) {
       // L->minor is the failing step in the permuted order; report the original column.
       std::ostringstream os;
@@ -351,10 +357,11 @@ void CholmodSolver::configure(const Config& options) {
     throw InputError("linear solver 'cholmod': config key 'supernodal' must be supernodal, simplicial or auto, got '" +
                      supernodal + "'");
   const std::string ordering = options.get_string("ordering", s.ordering);
-  if (ordering != "amd" && ordering != "metis" && ordering != "nesdis" && ordering != "natural" &&
-      ordering != "auto" && ordering != "best")
-    throw InputError("linear solver 'cholmod': config key 'ordering' must be amd, metis, nesdis, natural, auto or best, got '" +
-                     ordering + "'");
+  if (ordering != "amd" && ordering != "metis" && ordering != "nesdis" && ordering != "natural" && ordering != "auto" &&
+      ordering != "best")
+    throw InputError(
+        "linear solver 'cholmod': config key 'ordering' must be amd, metis, nesdis, natural, auto or best, got '" +
+        ordering + "'");
   const int threads = options.get_int("openmp_threads", s.openmp_threads);
   if (threads < 0) throw InputError("linear solver 'cholmod': config key 'openmp_threads' must be >= 0");
   const int blas = options.get_int("blas_threads", s.blas_threads);
@@ -435,7 +442,8 @@ void CholmodSolver::factorize(const SpMat& A) {
 
 Eigen::MatrixXd CholmodSolver::solve(const Eigen::MatrixXd& B) {
   auto& s = *impl_;
-  if (!s.factored) throw SolverError(SolverStatus::NotAnalyzed, "cholmod: solve() called before a successful factorize()");
+  if (!s.factored)
+    throw SolverError(SolverStatus::NotAnalyzed, "cholmod: solve() called before a successful factorize()");
   detail::check_rhs(B, s.n, "cholmod");
   detail::Stopwatch watch;
   Eigen::MatrixXd X = s.long_index ? s.do_solve<SuiteSparse_long>(B) : s.do_solve<int>(B);
@@ -448,8 +456,6 @@ Eigen::MatrixXd CholmodSolver::solve(const Eigen::MatrixXd& B) {
 const SolverReport& CholmodSolver::info() const { return impl_->report; }
 int CholmodSolver::analysis_count() const { return impl_->analyses; }
 bool CholmodSolver::is_supernodal() const { return impl_->factor && impl_->factor->is_super; }
-std::string CholmodSolver::ordering_used() const {
-  return impl_->factor ? ordering_name(impl_->factor->ordering) : "";
-}
+std::string CholmodSolver::ordering_used() const { return impl_->factor ? ordering_name(impl_->factor->ordering) : ""; }
 
 }  // namespace corrlap

@@ -3,9 +3,8 @@
 // One cholmod_common per instance (instances may be used from different threads at once);
 // the symbolic analysis is kept and reused by every factorize() on the same pattern.
 // No SuiteSparse header leaks from here (pimpl).
-#include <memory>
-
 #include <corrlap/core/linear_solver.hpp>
+#include <memory>
 
 namespace corrlap {
 

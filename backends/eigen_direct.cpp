@@ -1,12 +1,10 @@
 #include "eigen_direct.hpp"
 
+#include <Eigen/SparseCholesky>
+#include <corrlap/backends/detail/solver_support.hpp>
 #include <new>
 #include <sstream>
 #include <variant>
-
-#include <Eigen/SparseCholesky>
-
-#include <corrlap/backends/detail/solver_support.hpp>
 
 namespace corrlap {
 
@@ -112,7 +110,8 @@ void EigenDirectSolver::factorize(const SpMat& A) {
 
 Eigen::MatrixXd EigenDirectSolver::solve(const Eigen::MatrixXd& B) {
   auto& s = *impl_;
-  if (!s.factored) throw SolverError(SolverStatus::NotAnalyzed, s.name() + ": solve() called before a successful factorize()");
+  if (!s.factored)
+    throw SolverError(SolverStatus::NotAnalyzed, s.name() + ": solve() called before a successful factorize()");
   detail::check_rhs(B, s.n, s.name());
   detail::Stopwatch watch;
   Eigen::MatrixXd X = std::visit([&](auto& solver) -> Eigen::MatrixXd { return solver.solve(B); }, s.solver);

@@ -1,9 +1,8 @@
 #pragma once
 // Eigen's simplicial Cholesky factorizations behind the LinearSolver contract:
 // "eigen-ldlt" (SimplicialLDLT) and "eigen-llt" (SimplicialLLT). AMD ordering.
-#include <memory>
-
 #include <corrlap/core/linear_solver.hpp>
+#include <memory>
 
 namespace corrlap {
 

@@ -1,14 +1,12 @@
 #include "iterative.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
+#include <corrlap/backends/detail/solver_support.hpp>
 #include <new>
 #include <sstream>
 #include <variant>
-
-#include <Eigen/IterativeLinearSolvers>
-
-#include <corrlap/backends/detail/solver_support.hpp>
 
 namespace corrlap {
 
@@ -19,7 +17,8 @@ namespace {
 constexpr int kUpLo = Eigen::Lower | Eigen::Upper;
 using CgNone = Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::IdentityPreconditioner>;
 using CgJacobi = Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::DiagonalPreconditioner<double>>;
-using CgIchol = Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>;
+using CgIchol =
+    Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>;
 }  // namespace
 
 struct ConjugateGradientSolver::Impl {
@@ -65,7 +64,8 @@ void ConjugateGradientSolver::configure(const Config& options) {
   auto& s = *impl_;
   const std::string pre = options.get_string("preconditioner", s.preconditioner);
   if (pre != "none" && pre != "jacobi" && pre != "ichol")
-    throw InputError("linear solver 'cg': config key 'preconditioner' must be none, jacobi or ichol, got '" + pre + "'");
+    throw InputError("linear solver 'cg': config key 'preconditioner' must be none, jacobi or ichol, got '" + pre +
+                     "'");
   const double tol = options.get_double("tolerance", s.tolerance);
   if (!(tol > 0.0 && tol < 1.0)) throw InputError("linear solver 'cg': config key 'tolerance' must be in (0, 1)");
   const int maxit = options.get_int("max_iterations", s.max_iterations);
@@ -111,7 +111,8 @@ void ConjugateGradientSolver::factorize(const SpMat& A) {
   }
   if (std::visit([](auto& cg) { return cg.info(); }, s.cg) != Eigen::Success) {
     s.report.status = SolverStatus::NotPositiveDefinite;
-    s.report.message = "cg: the " + s.preconditioner + " preconditioner could not be built (matrix not positive definite?)";
+    s.report.message =
+        "cg: the " + s.preconditioner + " preconditioner could not be built (matrix not positive definite?)";
     throw SolverError(SolverStatus::NotPositiveDefinite, s.report.message);
   }
   // A non-positive diagonal entry makes A indefinite (and breaks the Jacobi preconditioner).
@@ -165,9 +166,9 @@ Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
   // Eigen stops on its recurrence residual; allow a small slack for the true one.
   if (!eigen_converged || !std::isfinite(worst) || worst > 10.0 * s.tolerance) {
     std::ostringstream os;
-    os << "cg: no convergence: relative residual " << worst << " > tolerance " << s.tolerance << " after "
-       << iterations << " iterations (column " << worst_column << ", limit " << maxit << ", preconditioner "
-       << s.preconditioner << ")";
+    os << "cg: no convergence: relative residual " << worst << " > tolerance " << s.tolerance << " after " << iterations
+       << " iterations (column " << worst_column << ", limit " << maxit << ", preconditioner " << s.preconditioner
+       << ")";
     s.report.status = SolverStatus::NoConvergence;
     s.report.message = os.str();
     if (!s.warn || !X.allFinite()) throw SolverError(SolverStatus::NoConvergence, os.str());

@@ -4,9 +4,8 @@
 // analyze() records the pattern, factorize() builds the preconditioner, solve() iterates.
 // Non-convergence throws SolverError(NoConvergence) unless on_no_convergence = "warn", in which
 // case info().status is NoConvergence and info().message explains it.
-#include <memory>
-
 #include <corrlap/core/linear_solver.hpp>
+#include <memory>
 
 namespace corrlap {
 

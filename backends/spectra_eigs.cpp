@@ -1,15 +1,15 @@
 #include "spectra_eigs.hpp"
 
+#include <Spectra/SymGEigsShiftSolver.h>
+
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <corrlap/backends/detail/solver_support.hpp>
 #include <new>
 #include <random>
 #include <sstream>
 
-#include <Eigen/Eigenvalues>
-#include <Spectra/SymGEigsShiftSolver.h>
-
 #include "registry.hpp"
-#include <corrlap/backends/detail/solver_support.hpp>
 
 namespace corrlap {
 
@@ -45,7 +45,7 @@ class ShiftInvertOp {
   Eigen::Index cols() const { return L_.rows(); }
   void set_shift(double sigma) {
     if (factorized_ && sigma == sigma_) return;  // deflation runs reuse the factorization
-    SpMat A = -L_ - sigma * M_;  // K - sigma M, SPD for sigma < 0
+    SpMat A = -L_ - sigma * M_;                  // K - sigma M, SPD for sigma < 0
     A.makeCompressed();
     solver_.compute(A);
     factorized_ = true;
@@ -122,8 +122,8 @@ void DenseEigenSolver::configure(const Config& options) {
 EigenResult DenseEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   check_problem(L, M, k, "dense eigen solver");
   if (L.rows() > max_n_)
-    throw InputError("dense eigen solver: n = " + std::to_string(L.rows()) + " exceeds max_n = " +
-                     std::to_string(max_n_) + "; use the shift-invert solver");
+    throw InputError("dense eigen solver: n = " + std::to_string(L.rows()) +
+                     " exceeds max_n = " + std::to_string(max_n_) + "; use the shift-invert solver");
   return dense_solve(L, M, k);
 }
 
@@ -149,8 +149,9 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
       {"solver", kDefaultLinearSolver, "linear solver for (K - shift M)^{-1}; its options may be given too"},
       {"shift", "-0.001", "shift in units of mu = -lambda; must be < 0 (K - shift M must be positive definite)"},
       {"ncv", "0", "Lanczos basis size (0: max(2m + 1, m + 20) for m = k + guard, at most n)"},
-      {"guard", "auto", "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
-                        "gets all its copies (auto: max(6, k/4))"},
+      {"guard", "auto",
+       "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
+       "gets all its copies (auto: max(6, k/4))"},
       {"verify", "true", "deflate the pairs found and search the rest of the spectrum for missed copies"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
@@ -173,7 +174,8 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   linear->configure(linear_config);
 
   const double shift = options.get_double("shift", s.shift);
-  if (!(shift < 0.0)) throw InputError("eigen solver 'shift-invert': config key 'shift' must be < 0 (mu = -lambda >= 0)");
+  if (!(shift < 0.0))
+    throw InputError("eigen solver 'shift-invert': config key 'shift' must be < 0 (mu = -lambda >= 0)");
   const int ncv = options.get_int("ncv", s.ncv);
   const std::string guard_text = options.get_string("guard", "auto");
   const int guard = guard_text == "auto" ? -1 : options.get_int("guard", 0);
@@ -206,8 +208,10 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   int restarts = 0;
   // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
   const auto run = [&](int nev, const Eigen::VectorXd* start, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
-    const int ncv = int(std::min<Eigen::Index>(n, s.ncv > 0 ? std::max(s.ncv, nev + 2) : std::max(2 * nev + 1, nev + 20)));
-    Spectra::SymGEigsShiftSolver<ShiftInvertOp, MassOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, nev, ncv, s.shift);
+    const int ncv =
+        int(std::min<Eigen::Index>(n, s.ncv > 0 ? std::max(s.ncv, nev + 2) : std::max(2 * nev + 1, nev + 20)));
+    Spectra::SymGEigsShiftSolver<ShiftInvertOp, MassOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, nev, ncv,
+                                                                                              s.shift);
     if (start)
       eigs.init(start->data());
     else
@@ -261,7 +265,8 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
     all_vectors << vectors, more_vectors;
     std::vector<Eigen::Index> order(std::size_t(p + q));
     for (Eigen::Index i = 0; i < p + q; ++i) order[std::size_t(i)] = i;
-    std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return all_values[a] < all_values[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](Eigen::Index a, Eigen::Index b) { return all_values[a] < all_values[b]; });
     values.resize(p + q);
     vectors.resize(n, p + q);
     for (Eigen::Index i = 0; i < p + q; ++i) {

@@ -1,7 +1,7 @@
 #pragma once
-// Eigen solvers for the generalized symmetric problem L u = lambda M u (spec §10.5), k smallest
-// |lambda|. L is negative semi-definite (spec §0); results are reported as mu = -lambda >= 0,
-// ascending (the spec §12.3 convention), with M-orthonormal eigenvectors.
+// Eigen solvers for the generalized symmetric problem L u = lambda M u (docs/math.md §10.5), k smallest
+// |lambda|. L is negative semi-definite (docs/math.md §0); results are reported as mu = -lambda >= 0,
+// ascending (the docs/math.md §12.3 convention), with M-orthonormal eigenvectors.
 //
 // "shift-invert": Spectra's SymGEigsShiftSolver (shift-invert Lanczos on K = -L, B = M) whose
 //   operator (K - sigma M)^{-1} is applied by ANY registered LinearSolver (config key "solver",
@@ -10,9 +10,8 @@
 //   since every mu >= 0 > sigma, the eigenvalues nearest sigma are exactly the smallest ones.
 //   Problems with n <= dense_threshold use the dense solver instead.
 // "dense": Eigen's GeneralizedSelfAdjointEigenSolver on dense copies (small n only).
-#include <memory>
-
 #include <corrlap/core/linear_solver.hpp>
+#include <memory>
 
 namespace corrlap {
 

@@ -14,6 +14,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/threads.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/quad_pattern.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <exception>
 #include <map>
 #include <memory>
@@ -21,15 +29,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/core/config.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
-#include <corrlap/discretizations/assembly/quad_pattern.hpp>
-#include <corrlap/core/threads.hpp>
-#include <corrlap/discretizations/registry.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
 
 #include "support.hpp"
 
@@ -101,8 +100,7 @@ void run(benchmark::State& state, const std::string& method, double h, int threa
   const double F = double(in.mesh.num_faces());
   state.counters["surfels"] = F;
   state.counters["threads"] = threads;
-  state.counters["Msurfels_per_s"] =
-      benchmark::Counter(F * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["Msurfels_per_s"] = benchmark::Counter(F * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["pattern_ms"] = in.pattern_ms;
   state.counters["cold_ms"] = cold_ms;
   state.counters["peak_rss_MiB"] = bench::peak_rss_mib();

@@ -1,5 +1,5 @@
 // Digitization + surface extraction throughput (surfels/s) on sphere1, box -1.5..1.5.
-// Goal (issue 2): h = 0.0025 (~3M surfels) under 2 s on 2 cores.
+// Goal: h = 0.0025 (~3M surfels) under 2 s on 2 cores.
 //
 //   ./build/bench/bench_digitization                       # all benchmarks
 //   ./build/bench/bench_digitization --benchmark_filter=BM_digitize_and_extract
@@ -12,19 +12,18 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
+#include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/surfel_mesh.hpp>
 
 #include "support.hpp"
 
@@ -154,7 +153,8 @@ static int print_phases(int reps) {
 
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "--phases") == 0) return print_phases(i + 1 < argc ? std::max(1, std::atoi(argv[i + 1])) : 3);
+    if (std::strcmp(argv[i], "--phases") == 0)
+      return print_phases(i + 1 < argc ? std::max(1, std::atoi(argv[i + 1])) : 3);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

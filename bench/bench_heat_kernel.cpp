@@ -1,4 +1,4 @@
-// Heat-kernel Laplacian (spec §6) and corrected VRM (spec §5.2) assembly on sphere1.
+// Heat-kernel Laplacian (docs/math.md §6) and corrected VRM (docs/math.md §5.2) assembly on sphere1.
 //  - heat kernel at h = 0.05, 0.02, 0.01 (args: 1/h, threads): time, nnz, peak memory. The h = 0.01
 //    operator alone has ~7e8 nonzeros (~9 GB in double CSR); the run is skipped when the machine
 //    does not have that much memory available. BM_heat_kernel_upper: the same L stored as its
@@ -8,19 +8,18 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <corrlap/core/threads.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
+#include <corrlap/discretizations/heat_kernel.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <fstream>
-#include <vector>
 #include <map>
 #include <memory>
 #include <string>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/core/threads.hpp>
-#include <corrlap/discretizations/heat_kernel.hpp>
-#include <corrlap/discretizations/detail/normal_policy.hpp>
-#include <corrlap/discretizations/registry.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
+#include <vector>
 
 #include "support.hpp"
 
@@ -132,10 +131,35 @@ double min_of(const std::vector<double>& v) { return *std::min_element(v.begin()
 
 }  // namespace
 
-BENCHMARK(BM_heat_kernel)->Args({20, 1})->Args({20, 2})->Args({50, 1})->Args({50, 2})->Repetitions(3)->ComputeStatistics("min", min_of)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_heat_kernel)
+    ->Args({20, 1})
+    ->Args({20, 2})
+    ->Args({50, 1})
+    ->Args({50, 2})
+    ->Repetitions(3)
+    ->ComputeStatistics("min", min_of)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_heat_kernel)->Args({100, 1})->Args({100, 2})->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_heat_kernel_upper)->Args({50, 1})->Args({50, 2})->Repetitions(3)->ComputeStatistics("min", min_of)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_heat_kernel_upper)->Args({100, 1})->Args({100, 2})->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_corrected_vrm)->Args({100, 1})->Args({100, 2})->Args({200, 1})->Args({200, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_heat_kernel_upper)
+    ->Args({50, 1})
+    ->Args({50, 2})
+    ->Repetitions(3)
+    ->ComputeStatistics("min", min_of)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_heat_kernel_upper)
+    ->Args({100, 1})
+    ->Args({100, 2})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_corrected_vrm)
+    ->Args({100, 1})
+    ->Args({100, 2})
+    ->Args({200, 1})
+    ->Args({200, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 BENCHMARK_MAIN();

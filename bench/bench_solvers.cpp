@@ -1,6 +1,6 @@
-// Linear solver backends on sphere1 operators (issue 4): analyze / factorize / solve per backend,
+// Linear solver backends on sphere1 operators: analyze / factorize / solve per backend,
 // refactorization (analysis reused) vs full factorization, CG iterations, and the 49 smallest
-// eigenpairs by shift-invert. System: M - dt L with dt = 0.035 h (spec §10.3, SPD).
+// eigenpairs by shift-invert. System: M - dt L with dt = 0.035 h (docs/math.md §10.3, SPD).
 // Operators: corrected FEM (9-point stencil) and interpolated corrected calculus (21-point stencil),
 // true normals. Goals: CHOLMOD >= 3x faster than eigen-ldlt in factorization at the largest size;
 // refactorization >= 1.5x faster than analyze + factorize; our CHOLMOD wrapper within 10% of
@@ -10,20 +10,18 @@
 #include <benchmark/benchmark.h>
 #include <cholmod.h>
 
-#include <cstdlib>
-
-#include <map>
-#include <memory>
-#include <mutex>
-
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/backends/spectra_eigs.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <mutex>
 
 #include "support.hpp"
 
@@ -188,17 +186,25 @@ int main(int argc, char** argv) {
       const std::string htag = "h=" + std::to_string(h).substr(0, 6);
       for (std::size_t b = 0; b < kBackends.size(); ++b) {
         const std::string& name = kBackends[b].first;
-        const bool slow = name == "eigen-llt" || name == "cholmod-simplicial" || name == "cholmod-serial-omp" ||
-                          name == "cg-jacobi";
+        const bool slow =
+            name == "eigen-llt" || name == "cholmod-simplicial" || name == "cholmod-serial-omp" || name == "cg-jacobi";
         if (h < 0.009 && slow) continue;  // keep the run short: one Eigen and the main CHOLMOD variants
         const std::string tag = method + "/" + name + "/" + htag;
         const bool iterative = name.rfind("cg", 0) == 0;
         if (!iterative) {
-          benchmark::RegisterBenchmark(("analyze/" + tag).c_str(), analyze, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
-          benchmark::RegisterBenchmark(("compute/" + tag).c_str(), compute, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
-          benchmark::RegisterBenchmark(("refactorize/" + tag).c_str(), refactorize, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+          benchmark::RegisterBenchmark(("analyze/" + tag).c_str(), analyze, b, method, h)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
+          benchmark::RegisterBenchmark(("compute/" + tag).c_str(), compute, b, method, h)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
+          benchmark::RegisterBenchmark(("refactorize/" + tag).c_str(), refactorize, b, method, h)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
         }
-        benchmark::RegisterBenchmark(("solve/" + tag).c_str(), solve, b, method, h)->Unit(benchmark::kMillisecond)->UseRealTime();
+        benchmark::RegisterBenchmark(("solve/" + tag).c_str(), solve, b, method, h)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
       }
       benchmark::RegisterBenchmark(("compute/" + method + "/cholmod-direct/" + htag).c_str(), cholmod_direct, method, h)
           ->Unit(benchmark::kMillisecond)
@@ -207,8 +213,8 @@ int main(int argc, char** argv) {
   if (!finest)
     for (const std::string method : {"fem", "interpolated"})
       for (double h : {0.02, 0.01})
-        benchmark::RegisterBenchmark(("eigs49/" + method + "/cholmod/h=" + std::to_string(h).substr(0, 6)).c_str(), eigs49,
-                                     std::string("cholmod"), method, h)
+        benchmark::RegisterBenchmark(("eigs49/" + method + "/cholmod/h=" + std::to_string(h).substr(0, 6)).c_str(),
+                                     eigs49, std::string("cholmod"), method, h)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime()
             ->Iterations(1);

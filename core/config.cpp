@@ -1,10 +1,9 @@
 #include "config.hpp"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "error.hpp"
@@ -22,9 +21,12 @@ Config Config::from_json_string(std::string_view text, std::string_view origin) 
   Config c;
   for (auto it = j.begin(); it != j.end(); ++it) {
     const auto& v = it.value();
-    if (v.is_boolean()) c.values_[it.key()] = v.get<bool>();
-    else if (v.is_number()) c.values_[it.key()] = v.get<double>();
-    else if (v.is_string()) c.values_[it.key()] = v.get<std::string>();
+    if (v.is_boolean())
+      c.values_[it.key()] = v.get<bool>();
+    else if (v.is_number())
+      c.values_[it.key()] = v.get<double>();
+    else if (v.is_string())
+      c.values_[it.key()] = v.get<std::string>();
     else
       throw InputError(std::string(origin) + ": value of key '" + it.key() +
                        "' must be a string, a number or a boolean");
@@ -46,8 +48,7 @@ Config Config::from_key_values(const std::vector<std::string>& items) {
   Config c;
   for (const auto& item : items) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError("config item '" + item + "': expected key=value");
+    if (eq == std::string::npos || eq == 0) throw InputError("config item '" + item + "': expected key=value");
     const std::string key = item.substr(0, eq), text = item.substr(eq + 1);
     if (text == "true" || text == "false") {
       c.values_[key] = (text == "true");
@@ -55,8 +56,10 @@ Config Config::from_key_values(const std::vector<std::string>& items) {
     }
     char* end = nullptr;
     const double d = std::strtod(text.c_str(), &end);
-    if (!text.empty() && end == text.c_str() + text.size()) c.values_[key] = d;
-    else c.values_[key] = text;
+    if (!text.empty() && end == text.c_str() + text.size())
+      c.values_[key] = d;
+    else
+      c.values_[key] = text;
   }
   return c;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // The Discretization contract: surface mesh + normal fields + parameters -> sparse operators.
 //
-// Sign convention (spec §0), the same everywhere in corrlap:
+// Sign convention (docs/math.md §0), the same everywhere in corrlap:
 //   L is NEGATIVE semi-definite: L 1 = 0, u^T L u <= 0, M^{-1} L approximates the Laplace-Beltrami
 //   operator (sum of second derivatives), and the generalized eigenvalues of L u = lambda M u are
 //   <= 0 (-lambda ~ l(l+1) on the unit sphere).
@@ -21,8 +21,8 @@ namespace corrlap {
 struct Operators {
   enum class Domain { Vertices, Faces };
 
-  Eigen::SparseMatrix<double> L;  ///< stiffness, negative semi-definite (spec §0)
-  Eigen::SparseMatrix<double> M;  ///< mass, symmetric positive definite for consistent normals
+  Eigen::SparseMatrix<double> L;                        ///< stiffness, negative semi-definite (docs/math.md §0)
+  Eigen::SparseMatrix<double> M;                        ///< mass, symmetric positive definite for consistent normals
   std::optional<Eigen::SparseMatrix<double>> M_lumped;  ///< diagonal mass
   std::optional<Eigen::SparseMatrix<double>> D0;        ///< #E x #V exterior derivative
   std::optional<Eigen::SparseMatrix<double>> sharp;     ///< 3#F x #E, rows 3f+c
@@ -65,8 +65,7 @@ class Discretization {
   virtual std::vector<ParameterInfo> parameters() const = 0;
   /// Builds the operators (one-shot: no pattern is built, the quad methods gather directly).
   /// Throws InputError on missing or invalid normals, unknown parameter keys, or an invalid mesh.
-  virtual Operators assemble(const SurfelMesh& mesh, const NormalFields& normals,
-                             const Config& params) const = 0;
+  virtual Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const = 0;
   /// Same result, bit for bit, through a pattern built for this mesh's connectivity (InputError if
   /// it was built for another one). Methods that do not use a pattern ignore it.
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
@@ -76,8 +75,7 @@ class Discretization {
     return ops;
   }
   /// Same result, bit for bit, written into `out`, without a pattern.
-  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                     Operators& out) const {
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params, Operators& out) const {
     assemble_into(mesh, normals, params, nullptr, out);
   }
   /// Same result, bit for bit, written into `out` through `pattern`.

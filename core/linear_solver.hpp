@@ -15,7 +15,7 @@ namespace corrlap {
 /// eigen solver) and by the CLI alike: CHOLMOD's supernodal Cholesky (bench/bench_solvers.cpp
 /// compares it with the other backends).
 inline constexpr const char* kDefaultLinearSolver = "cholmod";
-/// The eigen solver used when none is named: shift-invert Lanczos (spec §10.5).
+/// The eigen solver used when none is named: shift-invert Lanczos (docs/math.md §10.5).
 inline constexpr const char* kDefaultEigenSolver = "shift-invert";
 
 enum class SolverStatus {
@@ -33,8 +33,8 @@ const char* to_string(SolverStatus status);
 struct SolverReport {
   SolverStatus status = SolverStatus::NotAnalyzed;
   std::string message;
-  int iterations = 0;      ///< iterative solvers
-  double residual = 0.0;   ///< relative residual |Ax-b|/|b| of the last solve
+  int iterations = 0;     ///< iterative solvers
+  double residual = 0.0;  ///< relative residual |Ax-b|/|b| of the last solve
   double analyze_seconds = 0.0, factorize_seconds = 0.0, solve_seconds = 0.0;
 };
 

@@ -12,7 +12,7 @@
 namespace corrlap {
 
 EdgeTopology build_edges(const SurfelMesh& mesh) {
-  // spec §0: undirected edges (min, max) numbered by lexicographic rank. Instead of sorting the 4F
+  // docs/math.md §0: undirected edges (min, max) numbered by lexicographic rank. Instead of sorting the 4F
   // half-edges, bucket them by their smaller vertex (counting sort, stable in half-edge order),
   // sort each short bucket by the larger vertex, and number edges by a prefix sum over buckets.
   const std::size_t F = std::size_t(mesh.num_faces());

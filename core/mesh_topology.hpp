@@ -1,5 +1,5 @@
 #pragma once
-// Edges of a quad mesh with the reference's numbering and sign convention (spec §0), and
+// Edges of a quad mesh with the reference's numbering and sign convention (docs/math.md §0), and
 // topological summaries (Euler characteristic, components, boundary, non-manifold elements).
 #include <Eigen/Core>
 #include <cstdint>
@@ -9,7 +9,7 @@
 
 namespace corrlap {
 
-/// Undirected edges {a, b} stored once as (min, max), numbered by lexicographic rank (spec §0).
+/// Undirected edges {a, b} stored once as (min, max), numbered by lexicographic rank (docs/math.md §0).
 struct EdgeTopology {
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> edges;       ///< #E x 2, (min, max)
   Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> face_edges;  ///< edge id of local edge i (corner i -> i+1)
@@ -19,19 +19,19 @@ struct EdgeTopology {
   int num_edges() const { return int(edges.rows()); }
 };
 
-/// Builds the edge numbering of spec §0 for the quads of `mesh`.
+/// Builds the edge numbering of docs/math.md §0 for the quads of `mesh`.
 EdgeTopology build_edges(const SurfelMesh& mesh);
 
 /// Counts reported by `corrlap info`.
 struct MeshInfo {
   int vertices = 0, edges = 0, faces = 0;
-  int euler = 0;            ///< V - E + F
-  int components = 0;       ///< connected components (faces joined by shared vertices)
-  int boundary_edges = 0;   ///< edges with exactly one face
+  int euler = 0;                 ///< V - E + F
+  int components = 0;            ///< connected components (faces joined by shared vertices)
+  int boundary_edges = 0;        ///< edges with exactly one face
   int nonmanifold_edges = 0;     ///< edges with more than two faces
   int nonmanifold_vertices = 0;  ///< vertices whose incident faces form more than one fan
   int isolated_vertices = 0;     ///< vertices used by no face
-  double area = 0.0;        ///< digital (uncorrected) area: sum of quad areas
+  double area = 0.0;             ///< digital (uncorrected) area: sum of quad areas
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero(), bbox_max = Eigen::Vector3d::Zero();
   /// Genus from chi = 2C - 2g when the surface is closed and manifold, else -1.
   int genus() const;

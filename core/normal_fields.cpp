@@ -1,10 +1,10 @@
 #include "normal_fields.hpp"
 
-#include <cmath>
-#include <sstream>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
+
+#include <cmath>
+#include <sstream>
 
 #include "error.hpp"
 
@@ -12,9 +12,12 @@ namespace corrlap {
 
 const char* to_string(NormalKind kind) {
   switch (kind) {
-    case NormalKind::None: return "none";
-    case NormalKind::Face: return "face";
-    case NormalKind::Vertex: return "vertex";
+    case NormalKind::None:
+      return "none";
+    case NormalKind::Face:
+      return "face";
+    case NormalKind::Vertex:
+      return "vertex";
   }
   return "?";
 }
@@ -22,8 +25,7 @@ const char* to_string(NormalKind kind) {
 Eigen::MatrixX3d vertex_normals_from_face_normals(const Eigen::MatrixX3d& face_normals,
                                                   const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& faces,
                                                   int num_vertices) {
-  if (face_normals.rows() != faces.rows())
-    throw InputError("vertex normals: expected one face normal per face");
+  if (face_normals.rows() != faces.rows()) throw InputError("vertex normals: expected one face normal per face");
   Eigen::MatrixX3d vn = Eigen::MatrixX3d::Zero(num_vertices, 3);
   for (Eigen::Index f = 0; f < faces.rows(); ++f)
     for (int j = 0; j < 4; ++j) vn.row(faces(f, j)) += face_normals.row(f);
@@ -34,8 +36,8 @@ Eigen::MatrixX3d vertex_normals_from_face_normals(const Eigen::MatrixX3d& face_n
   return vn;
 }
 
-void validate_normals(Eigen::MatrixX3d& normals, Eigen::Index expected_rows, const std::string& what,
-                      bool normalize, double tolerance) {
+void validate_normals(Eigen::MatrixX3d& normals, Eigen::Index expected_rows, const std::string& what, bool normalize,
+                      double tolerance) {
   if (normals.rows() != expected_rows) {
     std::ostringstream os;
     os << what << ": expected " << expected_rows << " normals, got " << normals.rows();

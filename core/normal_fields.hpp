@@ -1,5 +1,5 @@
 #pragma once
-// Normal fields given to the discretizations and produced by the estimators (spec §1.5).
+// Normal fields given to the discretizations and produced by the estimators (docs/math.md §1.5).
 #include <Eigen/Core>
 #include <string>
 
@@ -18,7 +18,7 @@ struct NormalFields {
   bool has_vertex() const { return vertex.rows() > 0; }
 };
 
-/// Normalized sum of the incident face normals (spec §1.5, the reference's
+/// Normalized sum of the incident face normals (docs/math.md §1.5, the reference's
 /// computeVertexNormalsFromFaceNormals). Vertices with no face (or a zero sum) get (0,0,0).
 Eigen::MatrixX3d vertex_normals_from_face_normals(const Eigen::MatrixX3d& face_normals,
                                                   const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& faces,

@@ -18,15 +18,15 @@ Eigen::Vector3i Surfel::khalimsky() const {
   return 2 * lower_voxel + Eigen::Vector3i::Unit(axis) + Eigen::Vector3i::Ones();
 }
 bool Surfel::positive() const {
-  // spec §1.4: outward -e0 (k=0), +e1 (k=1), -e2 (k=2)
+  // docs/math.md §1.4: outward -e0 (k=0), +e1 (k=1), -e2 (k=2)
   return axis == 1 ? outward > 0 : outward < 0;
 }
 
 Eigen::MatrixX3d SurfelMesh::face_centroids() const {
   Eigen::MatrixX3d c(faces.rows(), 3);
   for (Eigen::Index f = 0; f < faces.rows(); ++f)
-    c.row(f) = 0.25 * (positions.row(faces(f, 0)) + positions.row(faces(f, 1)) +
-                       positions.row(faces(f, 2)) + positions.row(faces(f, 3)));
+    c.row(f) = 0.25 * (positions.row(faces(f, 0)) + positions.row(faces(f, 1)) + positions.row(faces(f, 2)) +
+                       positions.row(faces(f, 3)));
   return c;
 }
 

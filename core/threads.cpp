@@ -26,8 +26,7 @@ void set_thread_count(int n) {
   const int hw = tbb::info::default_concurrency();
   const int value = n <= 0 ? hw : n;
   g_control.reset();
-  g_control = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    std::size_t(value));
+  g_control = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(value));
   g_threads = value;
   if (openblas_set_num_threads) openblas_set_num_threads(value);
 }

@@ -16,7 +16,6 @@ namespace {
 constexpr double kMaxVoxels = 137438953472.0;
 }  // namespace
 
-
 VoxelGrid::VoxelGrid(const Eigen::Vector3i& lower, const Eigen::Vector3i& upper, double h)
     : lower_(lower), upper_(upper), h_(h) {
   if (!(h > 0.0) || !std::isfinite(h)) {

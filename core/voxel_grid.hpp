@@ -1,5 +1,5 @@
 #pragma once
-// Dense bit storage of a box of voxels (spec §0, §1.2).
+// Dense bit storage of a box of voxels (docs/math.md §0, §1.2).
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
@@ -40,7 +40,7 @@ struct ZeroFilledAllocator {
 }  // namespace detail
 
 /// A box [lower, upper] (inclusive, on each axis) of digital points z in Z^3 with one bit per
-/// voxel ("inside"). Voxel z sits at world position h * z (spec §0).
+/// voxel ("inside"). Voxel z sits at world position h * z (docs/math.md §0).
 /// Storage: each (y, z) row of voxels is padded to whole 64-bit words, x fastest, so that
 /// transitions along every axis can be found 64 voxels at a time.
 class VoxelGrid {
@@ -56,8 +56,8 @@ class VoxelGrid {
   bool empty_box() const { return words_.empty(); }
 
   bool in_box(int x, int y, int z) const {
-    return x >= lower_.x() && x <= upper_.x() && y >= lower_.y() && y <= upper_.y() &&
-           z >= lower_.z() && z <= upper_.z();
+    return x >= lower_.x() && x <= upper_.x() && y >= lower_.y() && y <= upper_.y() && z >= lower_.z() &&
+           z <= upper_.z();
   }
   /// False outside the box.
   bool get(int x, int y, int z) const {

@@ -1,9 +1,7 @@
 #include "corrected_fem.hpp"
 
 #include <cmath>
-
 #include <corrlap/core/error.hpp>
-
 #include <corrlap/discretizations/detail/fem_kernel.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
 
@@ -12,7 +10,9 @@ namespace corrlap {
 namespace {
 // a . b and a x b component by component: the order of the fast kernel (corrected_fem_fast.cpp),
 // so that both give the same bits.
-double dot3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
+double dot3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return a.x() * b.x() + a.y() * b.y() + a.z() * b.z();
+}
 Eigen::Vector3d cross3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return {a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x()};
 }
@@ -26,19 +26,19 @@ Eigen::Vector3d normalized3(const Eigen::Vector3d& a) {
 }  // namespace
 
 FemLocalFrame corrected_fem_local_frame(const QuadCorners& x, const Eigen::Vector3d& u) {
-  // spec §4.2: e_s = normalize(x1 - x0), e_t = normalize(x3 - x0), nu = (e1 x e3) / area.
+  // docs/math.md §4.2: e_s = normalize(x1 - x0), e_t = normalize(x3 - x0), nu = (e1 x e3) / area.
   const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
   const Eigen::Vector3d e3 = (x.row(3) - x.row(0)).transpose();
   const Eigen::Vector3d c = cross3(e1, e3);
   FemLocalFrame fr;
-  fr.area = std::sqrt(dot3(c, c));  // |(x1 - x0) x (x3 - x0)| (spec §4.4)
+  fr.area = std::sqrt(dot3(c, c));  // |(x1 - x0) x (x3 - x0)| (docs/math.md §4.4)
   const Eigen::Vector3d nu(c.x() / fr.area, c.y() / fr.area, c.z() / fr.area);
   fr.u_local = Eigen::Vector3d(dot3(u, normalized3(e1)), dot3(u, normalized3(e3)), dot3(u, nu));
   return fr;
 }
 
 Eigen::Matrix4d corrected_fem_local_stiffness(const Eigen::Vector3d& u) {
-  // spec §4.3, DGtal form (valid even when u is slightly off unit length), u = (x, y, z):
+  // docs/math.md §4.3, DGtal form (valid even when u is slightly off unit length), u = (x, y, z):
   // with s_x = 1 - x^2, s_y = 1 - y^2 and eta = x y / (2 z),
   //   K_00 = K_22 = eta + (s_x + s_y) / (3 z),      K_11 = K_33 = K_00 - 2 eta,
   //   K_01 = K_23 = (s_x - 2 s_y) / (6 z),          K_03 = K_12 = (s_y - 2 s_x) / (6 z),
@@ -62,7 +62,7 @@ Eigen::Matrix4d corrected_fem_local_stiffness(const Eigen::Vector3d& u) {
 }
 
 Eigen::Matrix4d corrected_fem_local_mass(double area, double z) {
-  // spec §4.4: (area z / 36) [4 2 1 2; 2 4 2 1; 1 2 4 2; 2 1 2 4].
+  // docs/math.md §4.4: (area z / 36) [4 2 1 2; 2 4 2 1; 1 2 4 2; 2 1 2 4].
   Eigen::Matrix4d W;
   W << 4, 2, 1, 2,  //
       2, 4, 2, 1,   //
@@ -72,7 +72,7 @@ Eigen::Matrix4d corrected_fem_local_mass(double area, double z) {
 }
 
 Eigen::Matrix4d corrected_fem_local_lumped_mass(double area, double z) {
-  // spec §4.4: (area z / 4) I.
+  // docs/math.md §4.4: (area z / 4) I.
   return Eigen::Matrix4d::Identity() * (area * z / 4.0);
 }
 
@@ -83,8 +83,8 @@ class CorrectedFem final : public Discretization {
   std::string name() const override { return "fem"; }
   NormalKind required_normals() const override { return NormalKind::Face; }
   std::vector<ParameterInfo> parameters() const override {
-    std::vector<ParameterInfo> p = {{"mass", "full", "mass matrix: full (consistent) | lumped (diagonal), spec §4.4"},
-                                    extras_parameter()};
+    std::vector<ParameterInfo> p = {
+        {"mass", "full", "mass matrix: full (consistent) | lumped (diagonal), docs/math.md §4.4"}, extras_parameter()};
     for (auto& q : normal_policy_parameters()) p.push_back(q);
     return p;
   }

@@ -1,6 +1,7 @@
-// Bitwise equal to corrected_fem_local_frame, corrected_fem_local_stiffness and corrected_fem_local_mass, checked by TEST_CASE("fem fast face values and assembly are bitwise the readable local matrices").
+// Bitwise equal to corrected_fem_local_frame, corrected_fem_local_stiffness and corrected_fem_local_mass, checked by
+// TEST_CASE("fem fast face values and assembly are bitwise the readable local matrices").
 //
-// The assembly hot path of the corrected FEM (spec §4.2-§4.4): per face, one SIMD lane per face,
+// The assembly hot path of the corrected FEM (docs/math.md §4.2-§4.4): per face, one SIMD lane per face,
 // the distinct values of K_f and the mass scales (the readable functions' operations in their
 // order, no FMA contraction: -ffp-contract=off), then the fused row kernel + vertex gather.
 #include <tbb/blocked_range.h>
@@ -37,7 +38,7 @@ __attribute__((always_inline)) inline void fem_face_batch(const double* P, std::
   }
   vec x[4][3];
   std::memcpy(x, lanes, sizeof x);
-  // Frame (spec §4.2): a = x1 - x0, b = x3 - x0, c = a x b, area = |c|.
+  // Frame (docs/math.md §4.2): a = x1 - x0, b = x3 - x0, c = a x b, area = |c|.
   const vec ax = x[1][0] - x[0][0], ay = x[1][1] - x[0][1], az = x[1][2] - x[0][2];
   const vec bx = x[2][0] - x[0][0], by = x[2][1] - x[0][1], bz = x[2][2] - x[0][2];
   const vec cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
@@ -52,7 +53,7 @@ __attribute__((always_inline)) inline void fem_face_batch(const double* P, std::
   const vec gx = ux * (ax / na) + uy * (ay / na) + uz * (az / na);
   const vec gy = ux * (bx / nb) + uy * (by / nb) + uz * (bz / nb);
   const vec gz = ux * (cx / area) + uy * (cy / area) + uz * (cz / area);
-  // Stiffness values (spec §4.3) and mass scales (spec §4.4).
+  // Stiffness values (docs/math.md §4.3) and mass scales (docs/math.md §4.4).
   const vec iz = 1.0 / gz;
   const vec sx = 1.0 - gx * gx, sy = 1.0 - gy * gy, eta = gx * gy * 0.5 * iz;
   const vec self = eta + (sx + sy) / 3.0 * iz;
@@ -90,7 +91,7 @@ void fem_range_scalar(const double* P, std::size_t V, const int* faces, const do
   fem_range_body<FemLanes1>(P, V, faces, U, F, b, e, g);
 }
 
-// Row i of L_f = -K_f from the values of fem_face_batch (the symmetric pattern of spec §4.3).
+// Row i of L_f = -K_f from the values of fem_face_batch (the symmetric pattern of docs/math.md §4.3).
 inline void fem_face_row(const double* g, int i, double* row) {
   const double self = g[0], o1 = g[1], o2 = g[2], o = g[3], s2 = g[4], oe = g[5];
   switch (i) {
@@ -126,7 +127,7 @@ void fem_face_range(const double* positions, std::size_t num_vertices, const int
 void corrected_fem_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& u, const QuadPattern* pattern,
                                  bool lumped, bool with_lumped, Operators& ops) {
   const int F = mesh.num_faces();
-  // Per face (x, y, z, area) -> the distinct values of its local matrices (spec §4.3, §4.4).
+  // Per face (x, y, z, area) -> the distinct values of its local matrices (docs/math.md §4.3, §4.4).
   constexpr std::size_t G = kFemFaceValues;
   PatternScratch geo(pattern, std::size_t(F) * G);
   tbb::parallel_for(tbb::blocked_range<int>(0, F, 2048), [&](const tbb::blocked_range<int>& r) {
@@ -146,7 +147,7 @@ void corrected_fem_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d&
   auto stiffness_mass = [&](int f, int i, double* rows) {
     const double* g = geo.data() + std::size_t(f) * G;
     fem_face_row(g, i, rows);
-    // spec §4.4 consistent mass row i: (area z / 36) [4 2 1 2] rotated.
+    // docs/math.md §4.4 consistent mass row i: (area z / 36) [4 2 1 2] rotated.
     const double sc = g[6];
     static const double w[4] = {4, 2, 1, 2};
     for (int j = 0; j < 4; ++j) rows[4 + j] = sc * w[(j - i + 4) & 3];

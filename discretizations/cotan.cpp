@@ -4,11 +4,10 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <sstream>
-#include <vector>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/assembly/parallel_assembly.hpp>
+#include <sstream>
+#include <vector>
 
 #include "triangle_kernels.hpp"
 
@@ -61,7 +60,7 @@ Operators assemble_cotan(const Eigen::MatrixX3d& V, const TriangleIndices& T, Co
   const AssemblyPlan plan(T.data(), std::size_t(nt), 3, int(nv));
   Operators ops;
   ops.L = plan.gather(K.data());
-  ops.L *= -1.0;  // spec §0: negative semi-definite
+  ops.L *= -1.0;  // docs/math.md §0: negative semi-definite
   // The mass is diagonal: sum per vertex in triangle order (deterministic), without the plan's
   // structural off-diagonal zeros.
   Eigen::VectorXd d = Eigen::VectorXd::Zero(nv);
@@ -89,7 +88,8 @@ class Cotan final : public Discretization {
     params.check_parameters(parameters(), name());
     mesh.validate("cotan");
     const std::string m = params.get_string("mass", "voronoi");
-    if (m != "voronoi" && m != "barycentric") throw InputError("cotan: mass '" + m + "': expected voronoi or barycentric");
+    if (m != "voronoi" && m != "barycentric")
+      throw InputError("cotan: mass '" + m + "': expected voronoi or barycentric");
     TriangleIndices T(2 * mesh.num_faces(), 3);
     for (int f = 0; f < mesh.num_faces(); ++f) {  // split along x0-x2 (documented in cotan.hpp)
       T.row(2 * f) << mesh.faces(f, 0), mesh.faces(f, 1), mesh.faces(f, 2);

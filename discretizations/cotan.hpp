@@ -1,10 +1,9 @@
 #pragma once
 // Cotan Laplacian and lumped mass on triangle meshes, for the paper's comparison against a
-// triangle mesh (paper §3.4, spec §10.6). Registry name "cotan".
+// triangle mesh (paper §3.4, docs/math.md §10.6). Registry name "cotan".
 #include <Eigen/Core>
-#include <memory>
-
 #include <corrlap/core/discretization.hpp>
+#include <memory>
 
 namespace corrlap {
 
@@ -13,11 +12,11 @@ using TriangleIndices = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 /// Lumped mass of the cotan Laplacian.
 enum class CotanMass {
   Barycentric,  ///< A_T / 3 per corner
-  Voronoi,      ///< mixed Voronoi areas of Meyer et al. (pmp's formula, spec §5.1 step 4)
+  Voronoi,      ///< mixed Voronoi areas of Meyer et al. (pmp's formula, docs/math.md §5.1 step 4)
 };
 
 /// L = -sum_T K_T with K_T the 1/2-cot stiffness (L[i][j] = (cot a_ij + cot b_ij)/2 for an edge,
-/// rows sum to 0, negative semi-definite, spec §0) and the diagonal mass. Throws InputError naming
+/// rows sum to 0, negative semi-definite, docs/math.md §0) and the diagonal mass. Throws InputError naming
 /// the triangle when an index is out of range, a triangle repeats a vertex, a position is not
 /// finite, or a triangle has zero area (up to round-off: A <= 1e-15 * longest edge^2).
 Operators assemble_cotan(const Eigen::MatrixX3d& V, const TriangleIndices& T, CotanMass mass = CotanMass::Voronoi);

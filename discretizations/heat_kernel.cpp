@@ -8,16 +8,14 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/normal_fields.hpp>
+#include <corrlap/discretizations/assembly/detail/storage.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <new>
 #include <numbers>
 #include <sstream>
 #include <vector>
-
-#include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/assembly/detail/storage.hpp>
-#include <corrlap/core/normal_fields.hpp>
-
-#include <corrlap/discretizations/detail/normal_policy.hpp>
 
 namespace corrlap {
 
@@ -34,7 +32,8 @@ class CellGrid {
     lower_ = x.colwise().minCoeff().transpose();
     const Eigen::Vector3d extent = x.colwise().maxCoeff().transpose() - lower_;
     for (int a = 0; a < 3; ++a)
-      if (extent[a] / R > double(1 << 20)) throw InputError("heat kernel: cut-off radius too small for the extent of the points");
+      if (extent[a] / R > double(1 << 20))
+        throw InputError("heat kernel: cut-off radius too small for the extent of the points");
     std::vector<std::pair<std::int64_t, int>> keyed(static_cast<std::size_t>(n));
     tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) { keyed[std::size_t(i)] = {key(cell_of(i)), int(i)}; });
     tbb::parallel_sort(keyed.begin(), keyed.end());
@@ -107,8 +106,8 @@ void neighbours(const Eigen::MatrixX3d& x, const CellGrid& grid, Eigen::Index i,
   s.runs.clear();
   const Eigen::Vector3i c = grid.cell_of(i);
   const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2);
-  std::pair<std::int64_t, std::int64_t> ranges[(2 * kCellsPerRadius + 1) * (2 * kCellsPerRadius + 1) *
-                                               (2 * kCellsPerRadius + 1)];
+  std::pair<std::int64_t, std::int64_t>
+      ranges[(2 * kCellsPerRadius + 1) * (2 * kCellsPerRadius + 1) * (2 * kCellsPerRadius + 1)];
   int nr = 0;
   std::size_t total = 0;
   for (int dx = -kCellsPerRadius; dx <= kCellsPerRadius; ++dx)
@@ -202,7 +201,8 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   if (storage == HeatKernelStorage::Upper && form != HeatKernelForm::Symmetric)
     throw InputError("heat kernel: upper-triangle storage needs the symmetric form");
   const Eigen::Index n = points.rows();
-  if (mu.size() != n) throw InputError("heat kernel: " + std::to_string(mu.size()) + " measures for " + std::to_string(n) + " points");
+  if (mu.size() != n)
+    throw InputError("heat kernel: " + std::to_string(mu.size()) + " measures for " + std::to_string(n) + " points");
   for (Eigen::Index i = 0; i < n; ++i)
     if (!std::isfinite(mu[i]) || !(mu[i] > 0.0)) {
       std::ostringstream os;
@@ -212,7 +212,7 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   if (n > INT_MAX) throw InputError("heat kernel: too many points");
   const double R = cutoff * std::sqrt(2.0 * t);
   const double R2 = R * R, inv4t = 1.0 / (4.0 * t);
-  const double c = 1.0 / (4.0 * std::numbers::pi * t * t);  // spec §6: 1 / (t (4 pi t)^{d/2}), d = 2
+  const double c = 1.0 / (4.0 * std::numbers::pi * t * t);  // docs/math.md §6: 1 / (t (4 pi t)^{d/2}), d = 2
   const CellGrid grid(points, R / kCellsPerRadius);
   tbb::enumerable_thread_specific<Scratch> scratch;
 
@@ -229,7 +229,8 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   const std::int64_t nnz = outer[std::size_t(n)];
   if (nnz > std::int64_t(INT_MAX)) {
     std::ostringstream os;
-    os << "heat kernel: " << nnz << " nonzeros exceed the 32-bit sparse index range; use a larger h or a smaller t/cutoff";
+    os << "heat kernel: " << nnz
+       << " nonzeros exceed the 32-bit sparse index range; use a larger h or a smaller t/cutoff";
     throw NumericalError(os.str());
   }
   Eigen::SparseMatrix<double> A(n, n);
@@ -297,12 +298,12 @@ class HeatKernel final : public Discretization {
   NormalKind required_normals() const override { return NormalKind::Face; }
   std::vector<ParameterInfo> parameters() const override {
     std::vector<ParameterInfo> p = {
-        {"t", "k*h^alpha", "diffusion time (spec §6); when absent, t = k h^alpha"},
+        {"t", "k*h^alpha", "diffusion time (docs/math.md §6); when absent, t = k h^alpha"},
         {"k", "0.1", "t = k h^alpha"},
         {"alpha", "0.6666666666666666", "t = k h^alpha"},
-        {"cutoff", "3", "couple points closer than cutoff * sqrt(2t) (spec §6, K)"},
+        {"cutoff", "3", "couple points closer than cutoff * sqrt(2t) (docs/math.md §6, K)"},
         {"distance", "euclidean",
-         "euclidean (spec §6) | tangent: distances in the plane of the mean normal (corrlap extension; "
+         "euclidean (docs/math.md §6) | tangent: distances in the plane of the mean normal (corrlap extension; "
          "removes the O(h^2/t) error of off-surface surfel centres; dual variant only)"},
         {"variant", "dual", "dual: surfel values (domain Faces) | primal: vertex values"},
         {"mass", "measure", "measure: L = diag(mu) A symmetric, M = diag(mu) | identity: L = A pointwise, M = I"}};
@@ -315,8 +316,10 @@ class HeatKernel final : public Discretization {
     mesh.validate("heat-kernel");
     const std::string variant = params.get_string("variant", "dual");
     const std::string mass = params.get_string("mass", "measure");
-    if (variant != "dual" && variant != "primal") throw InputError("heat-kernel: variant '" + variant + "': expected dual or primal");
-    if (mass != "measure" && mass != "identity") throw InputError("heat-kernel: mass '" + mass + "': expected measure or identity");
+    if (variant != "dual" && variant != "primal")
+      throw InputError("heat-kernel: variant '" + variant + "': expected dual or primal");
+    if (mass != "measure" && mass != "identity")
+      throw InputError("heat-kernel: mass '" + mass + "': expected measure or identity");
     const double h = mesh.grid_step();
     double t = params.get_double("t", -1.0);
     if (params.has("t")) {
@@ -337,7 +340,7 @@ class HeatKernel final : public Discretization {
     const Eigen::MatrixX3d& u = prepared.matrix();
     const Eigen::MatrixX3d n = trivial_face_normals(mesh);
     const int F = mesh.num_faces();
-    // spec §6: mu(s) = h^2 |u_s . n_s| (DGtal takes the absolute value); h^2 = |(x1-x0) x (x3-x0)|.
+    // docs/math.md §6: mu(s) = h^2 |u_s . n_s| (DGtal takes the absolute value); h^2 = |(x1-x0) x (x3-x0)|.
     Eigen::VectorXd mu(F);
     for (int f = 0; f < F; ++f) {
       const Eigen::Vector3d x0 = mesh.positions.row(mesh.faces(f, 0)), x1 = mesh.positions.row(mesh.faces(f, 1)),
@@ -356,7 +359,7 @@ class HeatKernel final : public Discretization {
       m = mu;
       ops.domain = Operators::Domain::Faces;
     } else {
-      // spec §6 PRIMAL: vertices, mu(v) = sum_{s ni v} mu(s)/4
+      // docs/math.md §6 PRIMAL: vertices, mu(v) = sum_{s ni v} mu(s)/4
       points = mesh.positions;
       m = Eigen::VectorXd::Zero(mesh.num_vertices());
       for (int f = 0; f < F; ++f)

@@ -1,28 +1,27 @@
 #pragma once
-// Heat-kernel Laplacian of Caissard et al. (spec §6; DGtal DiscreteExteriorCalculus::heatLaplace).
+// Heat-kernel Laplacian of Caissard et al. (docs/math.md §6; DGtal DiscreteExteriorCalculus::heatLaplace).
 // Registry name "heat-kernel".
 //
-// The pointwise operator of spec §6 is, for a point set x_s with measures mu(s),
+// The pointwise operator of docs/math.md §6 is, for a point set x_s with measures mu(s),
 //   (A f)(s) = sum_{r != s, |x_r - x_s| < K sqrt(2t)} mu(r) / (4 pi t^2) exp(-|x_r - x_s|^2 / (4t)) (f(r) - f(s)).
 // It is not symmetric, but A = diag(mu)^{-1} L with
 //   L[s][r] = mu(s) mu(r) / (4 pi t^2) exp(-|x_r - x_s|^2 / (4t))  (s != r),  L[s][s] = -sum_{r != s} L[s][r],
 // a symmetric negative semi-definite matrix (a graph Laplacian with positive weights). corrlap
 // therefore returns, by default (mass = measure), L as above and M = diag(mu): M^{-1} L is exactly
 // the pointwise operator, and the pair fits the same solvers, eigen problems and evaluation
-// protocols as every other method (spec §0). With mass = identity it returns L = A and M = I.
+// protocols as every other method (docs/math.md §0). With mass = identity it returns L = A and M = I.
 //
 // Assembly is sparse: a uniform grid of cell size K sqrt(2t) gives each point's neighbours from
 // the 27 surrounding cells; columns are built independently in parallel (TBB) and written once
 // into the CSC arrays, so the result is bitwise identical for any thread count.
 #include <Eigen/Core>
 #include <Eigen/Sparse>
-#include <memory>
-
 #include <corrlap/core/discretization.hpp>
+#include <memory>
 
 namespace corrlap {
 
-/// Diffusion time t = k h^alpha (spec §6; defaults k = 0.1, alpha = 2/3).
+/// Diffusion time t = k h^alpha (docs/math.md §6; defaults k = 0.1, alpha = 2/3).
 double heat_kernel_time(double h, double k = 0.1, double alpha = 2.0 / 3.0);
 
 enum class HeatKernelForm {
@@ -38,13 +37,13 @@ enum class HeatKernelStorage {
           ///< or CHOLMOD with stype = 1; every other consumer expects Full.
 };
 
-/// Sparse heat-kernel matrix on the points (rows of `points`) with measures `mu` > 0 (spec §6).
+/// Sparse heat-kernel matrix on the points (rows of `points`) with measures `mu` > 0 (docs/math.md §6).
 /// Only pairs closer than cutoff * sqrt(2t) are coupled. Throws InputError on bad sizes,
 /// non-positive t/cutoff or Upper storage of the (non-symmetric) pointwise form, NumericalError
 /// when the matrix would exceed 2^31 - 1 nonzeros or memory.
 ///
 /// `tangent_normals` (optional, one unit normal per point) switches to the tangent-plane distance
-/// (corrlap's extension, not in spec §6): the kernel uses |e|^2 - (e . n_rs)^2 with e = x_r - x_s and
+/// (corrlap's extension, not in docs/math.md §6): the kernel uses |e|^2 - (e . n_rs)^2 with e = x_r - x_s and
 /// n_rs the normalized mean of the two normals. Surfel centres lie up to ~h off the surface, and
 /// this O(h^2 / t) error caps the backward order of the Euclidean kernel at 1; the tangent distance
 /// removes it (order ~1.8 with t = h^1.75, docs/discretizations_extra.md). The cut-off still uses the
@@ -59,7 +58,7 @@ std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, doub
                                   HeatKernelStorage storage = HeatKernelStorage::Full);
 
 /// The registered discretization. Parameters: t (default k h^alpha), k, alpha, cutoff,
-/// distance = euclidean (spec §6, default) | tangent (see heat_kernel_matrix; dual variant only),
+/// distance = euclidean (docs/math.md §6, default) | tangent (see heat_kernel_matrix; dual variant only),
 /// variant = dual (surfel values, domain Faces; default, as the reference) | primal (vertex
 /// values, mu(v) = sum_{s ni v} mu(s)/4), mass = measure | identity, and the normal policy keys.
 /// Needs one normal per face: mu(s) = (face area) |u_s . n_s| (h^2 |u_s . n_s| on surfels).

@@ -3,18 +3,15 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <memory>
-
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <string>
-#include <vector>
-
 #include <corrlap/core/error.hpp>
-
 #include <corrlap/discretizations/detail/interpolated_kernel.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
 
 namespace corrlap {
 
@@ -38,7 +35,9 @@ Eigen::Matrix4d interpolated_local_mass(double h, const Eigen::Vector4d& uz) {
 namespace {
 // a . b and a x b component by component: the order of the fast kernel
 // (interpolated_corrected_fast.cpp), so that both give the same bits.
-double dot3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.x() * b.x() + a.y() * b.y() + a.z() * b.z(); }
+double dot3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return a.x() * b.x() + a.y() * b.y() + a.z() * b.z();
+}
 Eigen::Vector3d cross3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return {a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x()};
 }
@@ -46,10 +45,10 @@ Eigen::Vector3d cross3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u, double lambda, double kappa) {
   InterpolatedLocal r;
-  // Edge vectors delta_i = x_{i+1} - x_i (spec §3.4).
+  // Edge vectors delta_i = x_{i+1} - x_i (docs/math.md §3.4).
   Eigen::Vector3d delta[4];
   for (int i = 0; i < 4; ++i) delta[i] = (x.row((i + 1) % 4) - x.row(i)).transpose();
-  // Frame of spec §0: t1 = (x1-x0)/h, t2 = (x2-x1)/|x2-x1|, n = t1 x t2.
+  // Frame of docs/math.md §0: t1 = (x1-x0)/h, t2 = (x2-x1)/|x2-x1|, n = t1 x t2.
   const double h = std::sqrt(dot3(delta[0], delta[0]));
   const double inv_h = 1.0 / h;
   const Eigen::Vector3d t1 = delta[0] * inv_h;
@@ -60,7 +59,7 @@ InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u,
   R.col(1) = t2;
   R.col(2) = n;
   // Corner normals in frame components, ul(k, :) = (u_k.t1, u_k.t2, u_k.n), their edge-midpoint
-  // and face averages (spec §3.1).
+  // and face averages (docs/math.md §3.1).
   Eigen::Matrix<double, 4, 3> ul, ue;
   for (int k = 0; k < 4; ++k) {
     const Eigen::Vector3d uk = u.row(k).transpose();
@@ -75,26 +74,26 @@ InterpolatedLocal interpolated_local(const QuadCorners& x, const QuadCorners& u,
   r.area = h * h * uz;
   r.ubar_z = uz;
   r.mass = interpolated_local_mass(h, ul.col(2));
-  // spec §3.3 closed form S = S1 / 3 + S2 / 6, entry by entry (2 S1 + S2) / 6.
+  // docs/math.md §3.3 closed form S = S1 / 3 + S2 / 6, entry by entry (2 S1 + S2) / 6.
   constexpr double sixth = 1.0 / 6.0;
   r.S << (2.0 * uz + ue(0, 2)) * sixth, 0.0, -(2.0 * uz + ue(2, 2)) * sixth, 0.0,  //
-      0.0, (2.0 * uz + ue(1, 2)) * sixth, 0.0, -(2.0 * uz + ue(3, 2)) * sixth,      //
+      0.0, (2.0 * uz + ue(1, 2)) * sixth, 0.0, -(2.0 * uz + ue(3, 2)) * sixth,     //
       -(2.0 * ub.x() + ue(0, 0)) * sixth, -(2.0 * ub.y() + ue(1, 1)) * sixth, (2.0 * ub.x() + ue(2, 0)) * sixth,
       (2.0 * ub.y() + ue(3, 1)) * sixth;
-  // G = S D (D of spec §0: (S D)(c, j) = S(c, j-1) - S(c, j)).
+  // G = S D (D of docs/math.md §0: (S D)(c, j) = S(c, j-1) - S(c, j)).
   Eigen::Matrix<double, 3, 4> G;
   for (int c = 0; c < 3; ++c)
     for (int j = 0; j < 4; ++j) G(c, j) = r.S(c, (j + 3) % 4) - r.S(c, j);
-  // spec §3.5: a_f U^T U = S^T S / ubar^z, so D^T (a_f U^T U) D = G^T G / ubar^z.
+  // docs/math.md §3.5: a_f U^T U = S^T S / ubar^z, so D^T (a_f U^T U) D = G^T G / ubar^z.
   const double inv_uz = 1.0 / uz;
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
       r.sharp_stiffness(i, j) = (G(0, i) * G(0, j) + G(1, i) * G(1, j) + G(2, i) * G(2, j)) * inv_uz;
   r.sharp = R * r.S / (h * uz);
-  // spec §3.4 flat with correction factor kappa: V_i = delta_i^T (I - kappa Q_i) with
+  // docs/math.md §3.4 flat with correction factor kappa: V_i = delta_i^T (I - kappa Q_i) with
   // Q_i = (2 u_a u_a^T + u_a u_b^T + u_b u_a^T + 2 u_b u_b^T) / 6, i.e.
   // V_i = delta_i - kappa/6 ((2 d_a + d_b) u_a + (d_a + 2 d_b) u_b), d_a = delta_i . u_a, d_b = delta_i . u_b.
-  // P_f D = D - V U D = D - (V R) G / (h ubar^z) (spec §3.6a).
+  // P_f D = D - V U D = D - (V R) G / (h ubar^z) (docs/math.md §3.6a).
   const double w = inv_h * inv_uz, kk = kappa * sixth;
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector3d ua = u.row(i).transpose(), ub_ = u.row((i + 1) % 4).transpose();
@@ -130,9 +129,9 @@ class InterpolatedCorrected final : public Discretization {
   NormalKind required_normals() const override { return NormalKind::Vertex; }
   std::vector<ParameterInfo> parameters() const override {
     std::vector<ParameterInfo> p = {
-        {"lambda", "0.1", "stabilization weight of M1 (spec §3.5; DGtal constructor default)"},
-        {"kappa", "2", "flat correction factor (spec §3.4): 2 = DGtal, 1 = paper"},
-        {"assembly", "global", "global (spec §3.6a, DGtal L0(), 2-ring stencil) | local (§3.6b, sum of L_f)"},
+        {"lambda", "0.1", "stabilization weight of M1 (docs/math.md §3.5; DGtal constructor default)"},
+        {"kappa", "2", "flat correction factor (docs/math.md §3.4): 2 = DGtal, 1 = paper"},
+        {"assembly", "global", "global (docs/math.md §3.6a, DGtal L0(), 2-ring stencil) | local (§3.6b, sum of L_f)"},
         extras_parameter()};
     for (auto& q : normal_policy_parameters()) p.push_back(q);
     return p;
@@ -170,23 +169,25 @@ class InterpolatedCorrected final : public Discretization {
   }
 
  private:
-  // D0, sharp, flat, M1 and the row-sum lumped M (spec §2.3, §3.6), from the reference local
+  // D0, sharp, flat, M1 and the row-sum lumped M (docs/math.md §2.3, §3.6), from the reference local
   // operators (not a hot path).
   static void add_extras(const SurfelMesh& mesh, const Eigen::MatrixX3d& u, double lambda, double kappa, bool global,
                          Operators& ops) {
     const int F = mesh.num_faces();
     const EdgeTopology topo = build_edges(mesh);
-    std::vector<double> sharp(std::size_t(F) * 12), flat(std::size_t(F) * 12), m1(std::size_t(F) * 16), areas(static_cast<std::size_t>(F));
+    std::vector<double> sharp(std::size_t(F) * 12), flat(std::size_t(F) * 12), m1(std::size_t(F) * 16),
+        areas(static_cast<std::size_t>(F));
     tbb::parallel_for(tbb::blocked_range<int>(0, F, 512), [&](const tbb::blocked_range<int>& r) {
       for (int f = r.begin(); f != r.end(); ++f) {
-        const InterpolatedLocal loc = interpolated_local(quad_corners(mesh, f), quad_corner_rows(mesh, u, f), lambda, kappa);
-        Eigen::Map<QuadSharp>{sharp.data() + std::size_t(f) * 12} = loc.sharp;
-        Eigen::Map<QuadFlat>{flat.data() + std::size_t(f) * 12} = loc.flat;
-        Eigen::Map<RowMat4>{m1.data() + std::size_t(f) * 16} = loc.inner_product;
+        const InterpolatedLocal loc =
+            interpolated_local(quad_corners(mesh, f), quad_corner_rows(mesh, u, f), lambda, kappa);
+        Eigen::Map<QuadSharp>{sharp.data() + std::size_t(f)* 12} = loc.sharp;
+        Eigen::Map<QuadFlat>{flat.data() + std::size_t(f)* 12} = loc.flat;
+        Eigen::Map<RowMat4>{m1.data() + std::size_t(f)* 16} = loc.inner_product;
         areas[std::size_t(f)] = loc.area;
       }
     });
-    ops.M_lumped = row_sum_lumped(ops.M);  // spec §3.2: DGtal's lumpedM0() is not diagonal
+    ops.M_lumped = row_sum_lumped(ops.M);  // docs/math.md §3.2: DGtal's lumpedM0() is not diagonal
     ops.D0 = global_d0(topo, mesh.num_vertices());
     ops.sharp = global_sharp(topo, sharp.data());
     ops.flat = global_flat(topo, flat.data());

@@ -1,9 +1,10 @@
-// Bitwise equal to interpolated_local (mass, sharp_stiffness, projected_difference, laplacian), checked by TEST_CASE("interpolated fast face terms are bitwise the readable interpolated_local").
+// Bitwise equal to interpolated_local (mass, sharp_stiffness, projected_difference, laplacian), checked by
+// TEST_CASE("interpolated fast face terms are bitwise the readable interpolated_local").
 //
-// The per-face kernel of the interpolated corrected calculus (spec §3.2-§3.5) for the assembly hot
+// The per-face kernel of the interpolated corrected calculus (docs/math.md §3.2-§3.5) for the assembly hot
 // loop: several faces per SIMD register (one face per lane), each lane doing the readable
 // function's operations in its order (no FMA contraction: -ffp-contract=off), writing only what the
-// assembly reads; then the global (spec §3.6a) or local (§3.6b) assembly of L and M.
+// assembly reads; then the global (docs/math.md §3.6a) or local (§3.6b) assembly of L and M.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -185,13 +186,13 @@ void allocate_like(Eigen::SparseMatrix<double>& A, int V, const int* outer) {
   std::copy(outer, outer + V + 1, A.outerIndexPtr());
 }
 
-// spec §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
+// docs/math.md §3.6a: L = -D0^T (U^T C_A U + lambda P^T P) D0. Row e of P D0 is
 // r_e = (1/n_e) sum_{f ni e} s_{f,i} (P_f D)[i, :] on the vertices of f, so
 // L = -sum_f D^T (S^T S / ubar^z) D - lambda sum_e r_e r_e^T. Assembled by vertex columns: column v
 // sums the face terms of its faces (incidences ascending) and then lambda r_e[v] r_e over the
 // edges of its faces (ascending), so the result is the same for any thread count.
 // `faceterms` holds the per-face records of interpolated_face_range; `r` the edge rows (k per edge).
-// When `mpat` is given, M (spec §3.2, M = sum_f M0_f) is filled in the same column pass, with the
+// When `mpat` is given, M (docs/math.md §3.2, M = sum_f M0_f) is filled in the same column pass, with the
 // same summation order as gather_quad_rows.
 template <class Pos>
 void fill_columns(const ProjectionPattern& pp, const VertexCorners& vc, const QuadVertexPattern* mpat,
@@ -260,9 +261,9 @@ void fill_columns(const ProjectionPattern& pp, const VertexCorners& vc, const Qu
   });
 }
 
-// Rows r_e of P D0 (spec §3.6a), one per edge, on the element slots: sum over the incidences in
+// Rows r_e of P D0 (docs/math.md §3.6a), one per edge, on the element slots: sum over the incidences in
 // face order of s_{f,i} / n_e (P_f D)[i, :]. `pd` holds P_f D per face (row-major 4x4).
-// The second face of an edge is often far from the first in face order (spec §1.4 sorts by
+// The second face of an edge is often far from the first in face order (docs/math.md §1.4 sorts by
 // orientation first), so its row is a cache miss: prefetching 16 edges ahead took the pass from
 // 32 to 24 ms at h = 0.005 (one thread).
 void edge_rows(const ProjectionPattern& pp, const double* pd, double* r) {
@@ -298,7 +299,7 @@ void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& 
   const VertexGather gather(mesh, pattern, "interpolated");
   const QuadVertexPattern* pat = gather.pattern();
   const VertexCorners& vc = gather.vc();
-  // The projection structure (spec §3.6a): the pattern's (built on its first use), else built
+  // The projection structure (docs/math.md §3.6a): the pattern's (built on its first use), else built
   // for this assembly.
   std::unique_ptr<ProjectionPattern> own_pp;
   const ProjectionPattern* pp = nullptr;
@@ -323,7 +324,7 @@ void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& 
   const double* const xc[3] = {px, py, pz};
   const double* const uc[3] = {u.col(0).data(), u.col(1).data(), u.col(2).data()};
   tbb::parallel_for(tbb::blocked_range<int>(0, F, 1024), [&](const tbb::blocked_range<int>& r) {
-    // The closed forms of spec §3.2-§3.4 hold on surfels (squares); other quads are rejected.
+    // The closed forms of docs/math.md §3.2-§3.4 hold on surfels (squares); other quads are rejected.
     const int bad = interpolated_face_range(faces, r.begin(), r.end(), xc, uc, kappa, terms, pdata);
     if (bad >= 0) {
       int cur = non_square.load();
@@ -333,7 +334,7 @@ void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& 
     }
     if (!global)
       for (int f = r.begin(); f != r.end(); ++f) {
-        // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (spec §3.5), packed like K1.
+        // L_f = -D^T M1 D = -(K1 + lambda (P D)^T (P D)) (docs/math.md §3.5), packed like K1.
         double* t = terms + std::size_t(f) * kTermsStride;
         const double* pd = pdata + std::size_t(f) * 16;
         for (int i = 0; i < 4; ++i)
@@ -347,7 +348,7 @@ void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& 
   });
   if (non_square.load() >= 0)
     throw InputError("interpolated: face " + std::to_string(non_square.load()) +
-                     " is not a square; the interpolated corrected calculus needs a mesh of surfels (spec §3)");
+                     " is not a square; the interpolated corrected calculus needs a mesh of surfels (docs/math.md §3)");
   if (global) {
     double* r = data.data() + r_off;
     edge_rows(*pp, pdata, r);

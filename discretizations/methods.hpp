@@ -4,7 +4,7 @@
 // for bit; use the registry to pick a method at run time.
 //
 // Every function returns Operators with
-//   L  #V by #V stiffness, symmetric NEGATIVE semi-definite: L 1 = 0, u^T L u <= 0 (spec §0);
+//   L  #V by #V stiffness, symmetric NEGATIVE semi-definite: L 1 = 0, u^T L u <= 0 (docs/math.md §0);
 //   M  #V by #V mass, symmetric positive definite for consistent normals;
 // so that M^{-1} L approximates the Laplace-Beltrami operator and the eigenvalues of L u = lambda M u
 // are <= 0. The heat kernel's default variant lives on faces (#F by #F, domain Faces).
@@ -27,31 +27,31 @@ namespace corrlap {
 Operators assemble_operators(const std::string& method, const SurfelMesh& mesh, const NormalFields& normals,
                              const Config& options = {});
 
-/// Corrected FEM (spec §4, "fem"): bilinear quads corrected by one normal per face.
+/// Corrected FEM (docs/math.md §4, "fem"): bilinear quads corrected by one normal per face.
 /// Options: mass = full (default) | lumped.
 Operators corrected_fem(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals, const Config& options = {});
 
-/// Interpolated corrected calculus (spec §3, "interpolated"): bilinearly interpolated vertex
+/// Interpolated corrected calculus (docs/math.md §3, "interpolated"): bilinearly interpolated vertex
 /// normals. Options: lambda (0.1), kappa (2), assembly = global (default) | local, extras (D0,
 /// sharp, flat, M1).
 Operators interpolated(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals, const Config& options = {});
 
-/// PolyDEC of de Goes et al. (spec §2.1-§2.4, "polydec"), uncorrected: needs no normals and does
+/// PolyDEC of de Goes et al. (docs/math.md §2.1-§2.4, "polydec"), uncorrected: needs no normals and does
 /// not converge on digital surfaces (the paper's baseline). Options: lambda (1), extras.
 Operators polydec(const SurfelMesh& mesh, const Config& options = {});
 
-/// Projected PolyDEC (spec §2.5, "projected-polydec"): corners projected on the face normal's plane.
+/// Projected PolyDEC (docs/math.md §2.5, "projected-polydec"): corners projected on the face normal's plane.
 /// Options: lambda (1), extras.
 Operators projected_polydec(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals, const Config& options = {});
 
-/// Virtual refinement of Bunge et al. (spec §5.1, "vrm"), uncorrected baseline. Options: mass.
+/// Virtual refinement of Bunge et al. (docs/math.md §5.1, "vrm"), uncorrected baseline. Options: mass.
 Operators vrm(const SurfelMesh& mesh, const Config& options = {});
 
-/// Corrected virtual refinement (spec §5.2, "corrected-vrm") with vertex normals. Options: mass,
+/// Corrected virtual refinement (docs/math.md §5.2, "corrected-vrm") with vertex normals. Options: mass,
 /// max_iterations, gradient_tolerance.
 Operators corrected_vrm(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals, const Config& options = {});
 
-/// Heat-kernel Laplacian of Caissard et al. (spec §6, "heat-kernel"). Default variant dual: L and
+/// Heat-kernel Laplacian of Caissard et al. (docs/math.md §6, "heat-kernel"). Default variant dual: L and
 /// M are #F by #F on surfel centres (domain Faces), M = diag(mu); variant=primal gives #V by #V.
 /// Options: t (or k, alpha), cutoff, distance, variant, mass = measure | identity.
 Operators heat_kernel(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals, const Config& options = {});

@@ -4,11 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-
 #include <corrlap/core/error.hpp>
-
-#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 
 namespace corrlap {
 
@@ -16,13 +14,13 @@ QuadCorners polydec_project_corners(const QuadCorners& x, const Eigen::Vector3d&
   QuadCorners p;
   for (int k = 0; k < 4; ++k) {
     const Eigen::Vector3d v = x.row(k).transpose();
-    p.row(k) = (v - u.dot(v) * u).transpose();  // spec §2.5
+    p.row(k) = (v - u.dot(v) * u).transpose();  // docs/math.md §2.5
   }
   return p;
 }
 
 PolyDecLocal polydec_local(const QuadCorners& X, double lambda) {
-  // spec §2.2 with n = 4.
+  // docs/math.md §2.2 with n = 4.
   const Eigen::Matrix4d& D = quad_difference();
   PolyDecLocal r;
   Eigen::Matrix<double, 4, 3> E, B;
@@ -59,8 +57,8 @@ class PolyDec final : public Discretization {
   std::string name() const override { return projected_ ? "projected-polydec" : "polydec"; }
   NormalKind required_normals() const override { return projected_ ? NormalKind::Face : NormalKind::None; }
   std::vector<ParameterInfo> parameters() const override {
-    std::vector<ParameterInfo> p = {{"lambda", "1", "stabilization weight of M1 (spec §2.2; DGtal L0() uses 1)"},
-                                    extras_parameter()};
+    std::vector<ParameterInfo> p = {
+        {"lambda", "1", "stabilization weight of M1 (docs/math.md §2.2; DGtal L0() uses 1)"}, extras_parameter()};
     if (projected_)
       for (auto& q : normal_policy_parameters()) p.push_back(q);
     return p;
@@ -107,10 +105,12 @@ class PolyDec final : public Discretization {
     const detail::VertexGather gather(mesh, pattern, who);
     const detail::VertexCorners& vc = gather.vc();
     detail::gather_quad_rows<1>(
-        mesh, gather.pattern(), vc, [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
+        mesh, gather.pattern(), vc,
+        [&](int f, int i, double* row) { std::copy_n(data.data() + std::size_t(f) * stride + 4 * i, 4, row); },
         {&ops.L});
-    // spec §2.3: lumped mass M_vv = sum_f |a_f| / 4 (DGtal M0()).
-    ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int) { return data[std::size_t(f) * stride + 16] / 4.0; });
+    // docs/math.md §2.3: lumped mass M_vv = sum_f |a_f| / 4 (DGtal M0()).
+    ops.M =
+        detail::gather_corner_diagonal(mesh, vc, [&](int f, int) { return data[std::size_t(f) * stride + 16] / 4.0; });
     if (extras) {
       const EdgeTopology topo = build_edges(mesh);
       ops.M_lumped = ops.M;
@@ -122,7 +122,7 @@ class PolyDec final : public Discretization {
       }
       ops.sharp = global_sharp(topo, sharp.data());
       ops.flat = global_flat(topo, flat.data());
-      // M1 assembled WITH the edge signs s_i s_j (spec §11 #13; DGtal's M1() omits them).
+      // M1 assembled WITH the edge signs s_i s_j (docs/math.md §11 #13; DGtal's M1() omits them).
       ops.M1 = corrlap::assemble(quad_edge_plan(topo), [&](std::size_t b, std::size_t e, double* out) {
         for (std::size_t f = b; f < e; ++f, out += 16) std::copy_n(data.data() + f * stride + 41, 16, out);
       });

@@ -1,12 +1,11 @@
 #include "quad_assembly.hpp"
 
-#include <algorithm>
-#include <vector>
-
-#include <corrlap/core/error.hpp>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <corrlap/core/error.hpp>
+#include <vector>
 
 namespace corrlap {
 
@@ -78,7 +77,8 @@ Eigen::SparseMatrix<double> global_flat(const EdgeTopology& t, const double* fla
     for (int i = 0; i < 4; ++i) {
       const int e = t.face_edges(f, i);
       const double w = double(t.face_edge_signs(f, i)) / double(t.faces_per_edge[std::size_t(e)]);
-      for (int c = 0; c < 3; ++c) trip.emplace_back(e, 3 * f + c, w * flat[std::size_t(f) * 12 + std::size_t(c) * 4 + i]);
+      for (int c = 0; c < 3; ++c)
+        trip.emplace_back(e, 3 * f + c, w * flat[std::size_t(f) * 12 + std::size_t(c) * 4 + i]);
     }
   Eigen::SparseMatrix<double> V(t.num_edges(), 3 * F);
   V.setFromTriplets(trip.begin(), trip.end());
@@ -128,7 +128,7 @@ void check_quad_mesh(const SurfelMesh& mesh, const std::string& method) {
 }
 
 ParameterInfo extras_parameter() {
-  return {"extras", "false", "also build D0, sharp, flat, M1 and M_lumped (spec §2.3, §3.6)"};
+  return {"extras", "false", "also build D0, sharp, flat, M1 and M_lumped (docs/math.md §2.3, §3.6)"};
 }
 
 }  // namespace corrlap

@@ -1,23 +1,24 @@
 #include "registry.hpp"
 
 #include "corrected_fem.hpp"
-#include "interpolated_corrected.hpp"
-#include "polydec.hpp"
 #include "cotan.hpp"
 #include "heat_kernel.hpp"
+#include "interpolated_corrected.hpp"
+#include "polydec.hpp"
 #include "virtual_refinement.hpp"
 
 namespace corrlap {
 
 namespace {
 void register_builtin_discretizations(DiscretizationRegistry& r) {
-  r.add("fem", "corrected FEM, face normals (spec §4)", make_corrected_fem);
-  r.add("polydec", "PolyDEC of de Goes et al., uncorrected (spec §2)", make_polydec);
-  r.add("projected-polydec", "Projected PolyDEC, face normals (spec §2.5)", make_projected_polydec);
-  r.add("interpolated", "interpolated corrected calculus, vertex normals (spec §3)", make_interpolated_corrected);
-  r.add("vrm", "virtual refinement of Bunge et al., uncorrected baseline (spec §5.1)", make_vrm);
-  r.add("corrected-vrm", "corrected virtual refinement, vertex normals (spec §5.2)", make_corrected_vrm);
-  r.add("heat-kernel", "heat-kernel Laplacian of Caissard et al., face normals (spec §6)", make_heat_kernel);
+  r.add("fem", "corrected FEM, face normals (docs/math.md §4)", make_corrected_fem);
+  r.add("polydec", "PolyDEC of de Goes et al., uncorrected (docs/math.md §2)", make_polydec);
+  r.add("projected-polydec", "Projected PolyDEC, face normals (docs/math.md §2.5)", make_projected_polydec);
+  r.add("interpolated", "interpolated corrected calculus, vertex normals (docs/math.md §3)",
+        make_interpolated_corrected);
+  r.add("vrm", "virtual refinement of Bunge et al., uncorrected baseline (docs/math.md §5.1)", make_vrm);
+  r.add("corrected-vrm", "corrected virtual refinement, vertex normals (docs/math.md §5.2)", make_corrected_vrm);
+  r.add("heat-kernel", "heat-kernel Laplacian of Caissard et al., face normals (docs/math.md §6)", make_heat_kernel);
   r.add("cotan", "cotan Laplacian on the quads split into triangles", make_cotan);
 }
 }  // namespace

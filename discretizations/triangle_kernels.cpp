@@ -20,7 +20,7 @@ double heron_area(double l0, double l1, double l2) {
 bool cotan_triangle_stiffness(double l0, double l1, double l2, Eigen::Matrix3d& K) {
   K.setZero();
   const double A = heron_area(l0, l1, l2);
-  if (!(A > DBL_MIN)) return false;  // spec §5.1 step 3: pmp skips the triangle
+  if (!(A > DBL_MIN)) return false;  // docs/math.md §5.1 step 3: pmp skips the triangle
   const double s0 = l0 * l0, s1 = l1 * l1, s2 = l2 * l2;
   // gamma_k = (l_i^2 + l_j^2 - l_k^2) / (8A) = cot(theta_k) / 2
   const double g0 = (s1 + s2 - s0) / (8.0 * A), g1 = (s0 + s2 - s1) / (8.0 * A), g2 = (s0 + s1 - s2) / (8.0 * A);
@@ -35,7 +35,7 @@ bool cotan_triangle_stiffness(double l0, double l1, double l2, Eigen::Matrix3d& 
 
 Eigen::Vector3d mixed_voronoi_triangle_mass(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
                                             const Eigen::Vector3d& x2) {
-  // spec §5.1 step 4 (pmp): e_i = x_{i+1} - x_i, delta_i = -e_i . e_{i+2} (corner i's dot product).
+  // docs/math.md §5.1 step 4 (pmp): e_i = x_{i+1} - x_i, delta_i = -e_i . e_{i+2} (corner i's dot product).
   const Eigen::Vector3d x[3] = {x0, x1, x2};
   Eigen::Vector3d e[3];
   for (int i = 0; i < 3; ++i) e[i] = x[(i + 1) % 3] - x[i];

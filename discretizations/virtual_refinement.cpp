@@ -8,22 +8,21 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
+#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <memory>
 #include <sstream>
 #include <vector>
 
-#include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
-
-#include <corrlap/discretizations/detail/normal_policy.hpp>
 #include "quad_assembly.hpp"
-#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
 
 namespace corrlap {
 
 namespace {
 
-// K_f = P^T K_fan P with P = [I_4; w^T] (refined index 4 = virtual point), spec §5.1 step 5.
+// K_f = P^T K_fan P with P = [I_4; w^T] (refined index 4 = virtual point), docs/math.md §5.1 step 5.
 Eigen::Matrix4d restrict_fan(const Eigen::Matrix<double, 5, 5>& F, const Eigen::Vector4d& w) {
   Eigen::Matrix4d R;
   for (int a = 0; a < 4; ++a)
@@ -31,20 +30,16 @@ Eigen::Matrix4d restrict_fan(const Eigen::Matrix<double, 5, 5>& F, const Eigen::
   return R;
 }
 
-Eigen::Matrix4d row_sum_lump(const Eigen::Matrix4d& M) {
-  return M.rowwise().sum().asDiagonal();
-}
+Eigen::Matrix4d row_sum_lump(const Eigen::Matrix4d& M) { return M.rowwise().sum().asDiagonal(); }
 
-Eigen::Vector4d bilinear_basis(double s, double t) {
-  return {(1 - s) * (1 - t), s * (1 - t), s * t, (1 - s) * t};
-}
+Eigen::Vector4d bilinear_basis(double s, double t) { return {(1 - s) * (1 - t), s * (1 - t), s * t, (1 - s) * t}; }
 
 }  // namespace
 
 // ---------------------------------------------------------------------- uncorrected VRM
 
 Eigen::Vector4d vrm_virtual_weights(const QuadPositions& Xin) {
-  // spec §5.1 step 1: A_ij = sum_k (x_j x d_k).(x_i x d_k), b_i = sum_k (x_i x d_k).(x_k x d_k),
+  // docs/math.md §5.1 step 1: A_ij = sum_k (x_j x d_k).(x_i x d_k), b_i = sum_k (x_i x d_k).(x_k x d_k),
   // plus the row sum_j w_j = 1, solved by complete orthogonal decomposition (least squares,
   // minimum norm), as pmp does. Centring keeps the entries O(h^4) instead of O(|x|^2 h^2).
   const Eigen::RowVector3d c = Xin.colwise().mean();
@@ -94,7 +89,7 @@ VrmLocal vrm_local(const QuadPositions& X) {
     }
   }
   out.K = restrict_fan(Kfan, out.w);
-  // M_f = diag(row sums of P^T M_fan P) (spec §5.1 step 5)
+  // M_f = diag(row sums of P^T M_fan P) (docs/math.md §5.1 step 5)
   out.M = row_sum_lump(restrict_fan(Eigen::Matrix<double, 5, 5>(mfan.asDiagonal()), out.w));
   return out;
 }
@@ -103,7 +98,7 @@ VrmLocal vrm_local(const QuadPositions& X) {
 
 Eigen::Vector4d corrected_fan_areas(const Eigen::Vector4d& uz, double s, double t,
                                     Eigen::Matrix<double, 4, 2>* gradient, Eigen::Matrix2d* hessians) {
-  // spec §5.2: U(s,t) = a + b s + c t + d s t (bilinear interpolation of uz). Triangle T_i =
+  // docs/math.md §5.2: U(s,t) = a + b s + c t + d s t (bilinear interpolation of uz). Triangle T_i =
   // (q_i, q_{i+1}, p); its integral of U is |T_i|/3 times the sum of U at the three side midpoints
   // (exact for degree <= 2). |T_i| = cross(q_{i+1} - q_i, p - q_i)/2 is affine in p.
   static const double q[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
@@ -173,7 +168,7 @@ VirtualPoint minimize_virtual_point(const Eigen::Vector4d& uz, const VirtualPoin
     const double det = H.determinant();
     bool newton = H(0, 0) > 0 && det > 0;
     if (newton) {
-      dir = -H.inverse() * g;  // spec §5.2: Newton with the analytic Hessian
+      dir = -H.inverse() * g;  // docs/math.md §5.2: Newton with the analytic Hessian
     } else {
       dir = -gstep * g;  // fallback: gradient step 1/ubar^2
     }
@@ -225,7 +220,7 @@ CorrectedVrmLocal corrected_vrm_local(const QuadPositions& X, const QuadPosition
   CorrectedVrmLocal out;
   Eigen::Vector4d uz;
   for (int k = 0; k < 4; ++k) uz[k] = U.row(k).dot(n);
-  // Parametric Jacobian of the bilinear quad: h^2 on a surfel (spec §5.2, A_i = h^2 iint_{T_i} U).
+  // Parametric Jacobian of the bilinear quad: h^2 on a surfel (docs/math.md §5.2, A_i = h^2 iint_{T_i} U).
   const double J = (X.row(1) - X.row(0)).cross(X.row(3) - X.row(0)).norm();
   out.point = minimize_virtual_point(uz, options);
   out.w = bilinear_basis(out.point.s, out.point.t);
@@ -238,10 +233,10 @@ CorrectedVrmLocal corrected_vrm_local(const QuadPositions& X, const QuadPosition
     const int j = (i + 1) % 4;
     const int id[3] = {i, j, 4};
     const Eigen::Vector3d y0 = X.row(i).transpose(), y1 = X.row(j).transpose();
-    // triangle normal (choice, spec §5.2): normalize(u_i + u_{i+1} + u_p)
+    // triangle normal (choice, docs/math.md §5.2): normalize(u_i + u_{i+1} + u_p)
     Eigen::Vector3d uT = U.row(i).transpose() + U.row(j).transpose() + up;
     const double un = uT.norm();
-    // lumped barycentric triangle mass with the integral area A_i (spec §5.2)
+    // lumped barycentric triangle mass with the integral area A_i (docs/math.md §5.2)
     for (int a = 0; a < 3; ++a) Mfan(id[a], id[a]) += out.areas[i] / 3.0;
     Eigen::Matrix3d Kt;
     if (!(un > 0.0) || !cotan_triangle_stiffness((p - y1).cross(uT / un).norm(), (p - y0).cross(uT / un).norm(),
@@ -276,8 +271,8 @@ class Vrm final : public Discretization {
   std::vector<ParameterInfo> parameters() const override {
     if (!corrected_) return {};
     std::vector<ParameterInfo> p = {
-        {"mass", "full", "full: M_f = P^T M_fan P (4x4, spec §5.2); lumped: its row sums"},
-        {"max_iterations", "50", "virtual-point minimizer: iteration limit (spec §5.2)"},
+        {"mass", "full", "full: M_f = P^T M_fan P (4x4, docs/math.md §5.2); lumped: its row sums"},
+        {"max_iterations", "50", "virtual-point minimizer: iteration limit (docs/math.md §5.2)"},
         {"gradient_tolerance", "1e-12", "virtual-point minimizer: stop when |grad E/h^4| is below"}};
     for (auto& q : normal_policy_parameters()) p.push_back(q);
     return p;
@@ -304,7 +299,8 @@ class Vrm final : public Discretization {
     std::string policy = "warn";
     if (corrected_) {
       const std::string mass = params.get_string("mass", "full");
-      if (mass != "full" && mass != "lumped") throw InputError(name() + ": mass '" + mass + "': expected full or lumped");
+      if (mass != "full" && mass != "lumped")
+        throw InputError(name() + ": mass '" + mass + "': expected full or lumped");
       lumped_mass = mass == "lumped";
       vopt.max_iterations = params.get_int("max_iterations", 50);
       vopt.gradient_tolerance = params.get_double("gradient_tolerance", 1e-12);
@@ -312,11 +308,11 @@ class Vrm final : public Discretization {
       if (!(vopt.gradient_tolerance > 0)) throw InputError(name() + ": gradient_tolerance must be > 0");
       policy = params.get_string("orientation", "warn");
       u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops.warnings).matrix();
-      n = trivial_face_normals(mesh);  // spec §1.3/§1.5: outward trivial normal
+      n = trivial_face_normals(mesh);  // docs/math.md §1.3/§1.5: outward trivial normal
     }
 
     // Per face: K_f (16 values, row-major) then M_f: its diagonal (4 values) when the mass is
-    // lumped (vrm always, spec §5.1 step 5), else the full 4x4. Not zero-filled: the parallel
+    // lumped (vrm always, docs/math.md §5.1 step 5), else the full 4x4. Not zero-filled: the parallel
     // kernel loop writes every value, so the first-touch page faults are spread over the threads
     // (huge pages where possible). Not pooled either (unlike fem's small per-face scratch): the
     // kernels dominate here, and a pooled 20-32 doubles per face would stay resident.
@@ -345,7 +341,8 @@ class Vrm final : public Discretization {
           for (int k = 0; k < 4; ++k) Uf.row(k) = u.row(mesh.faces(f, k));
           const CorrectedVrmLocal l = corrected_vrm_local(X, Uf, n.row(f).transpose(), lumped_mass, vopt);
           K = l.K;
-          if (full_mass) Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(out + 16) = l.M;
+          if (full_mass)
+            Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(out + 16) = l.M;
           else
             for (int k = 0; k < 4; ++k) out[16 + k] = l.M(k, k);
           skipped = l.skipped_triangles;
@@ -371,7 +368,7 @@ class Vrm final : public Discretization {
     const detail::QuadVertexPattern* pat = gather.pattern();
     const detail::VertexCorners& vc = gather.vc();
     const double* lp = loc.get();
-    // spec §5.1 step 6: L = -sum K_f (negative semi-definite); negating each finished column gives
+    // docs/math.md §5.1 step 6: L = -sum K_f (negative semi-definite); negating each finished column gives
     // the bits of negating the finished matrix.
     auto negate_L = [](int, const auto& col, int len) {
       for (int t = 0; t < len; ++t) col[0][t] *= -1.0;
@@ -392,7 +389,8 @@ class Vrm final : public Discretization {
       detail::gather_quad_rows<1>(mesh, pat, vc, columns, {&ops.L}, negate_L);
       // Diagonal local masses: the assembled M is diagonal, entry v = sum over the corners at v in
       // ascending face order (what summing the assembled zeros of the off-diagonal gives, bit for bit).
-      ops.M = detail::gather_corner_diagonal(mesh, vc, [&](int f, int i) { return lp[std::size_t(f) * S + 16 + std::size_t(i)]; });
+      ops.M = detail::gather_corner_diagonal(
+          mesh, vc, [&](int f, int i) { return lp[std::size_t(f) * S + 16 + std::size_t(i)]; });
     }
 
     // Merge the per-thread reports in face order.
@@ -430,8 +428,8 @@ class Vrm final : public Discretization {
         std::ostringstream os;
         os.precision(3);
         os << name() << ": the virtual-point minimizer did not converge on " << bad << " of " << F
-           << " faces (worst: face " << worst << ", |grad E/h^4| = " << worst_g << ", (s0, t0) = ("
-           << worst_point->s << ", " << worst_point->t << "))";
+           << " faces (worst: face " << worst << ", |grad E/h^4| = " << worst_g << ", (s0, t0) = (" << worst_point->s
+           << ", " << worst_point->t << "))";
         if (policy == "error") throw NumericalError(os.str());
         ops.warnings.push_back(os.str());
       }

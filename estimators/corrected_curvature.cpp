@@ -1,27 +1,26 @@
 #include "corrected_curvature.hpp"
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
-#include <cstdint>
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/normal_fields.hpp>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <string>
-
-#include <corrlap/core/error.hpp>
-#include <corrlap/core/normal_fields.hpp>
 
 namespace corrlap {
 
 namespace {
 using V3 = Eigen::Vector3d;
 
-// spec §8.1, triangle (a, b, c) with normals (ua, ub, uc); uM = mean normal, not normalized.
+// docs/math.md §8.1, triangle (a, b, c) with normals (ua, ub, uc); uM = mean normal, not normalized.
 struct TriangleMeasures {
   double mu0 = 0, mu1 = 0, mu2 = 0;
   Eigen::Matrix3d muxy = Eigen::Matrix3d::Zero();
@@ -42,7 +41,7 @@ void add_triangle(const V3& a, const V3& b, const V3& c, const V3& ua, const V3&
 }
 
 double inclusion_ratio(double d_min, double d_max, double r) {
-  // spec §8.3: 1 inside, 0 outside, linear in between.
+  // docs/math.md §8.3: 1 inside, 0 outside, linear in between.
   if (d_max <= r) return 1.0;
   if (r <= d_min) return 0.0;
   return (r - d_min) / (d_max - d_min);
@@ -73,9 +72,8 @@ void CorrectedCurvature::build_adjacency() {
       const int u = faces_(f, k), v = faces_(f, (k + 1) % 4);
       recs.push_back({std::min(u, v), std::max(u, v), f, u < v ? 1 : -1});
     }
-  std::sort(recs.begin(), recs.end(), [](const Rec& x, const Rec& y) {
-    return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.f < y.f);
-  });
+  std::sort(recs.begin(), recs.end(),
+            [](const Rec& x, const Rec& y) { return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.f < y.f); });
   face_neighbours_.assign(std::size_t(F), {});
   face_left_edges_.assign(std::size_t(F), {});
   std::vector<std::array<int, 2>> edges;
@@ -91,8 +89,10 @@ void CorrectedCurvature::build_adjacency() {
       // Constant normals: mu1 lives on the edge (a < b), between its left face (a -> b) and right face.
       int left = -1, right = -1, nl = 0, nr = 0;
       for (std::size_t p = i; p < j; ++p) {
-        if (recs[p].dir > 0) left = recs[p].f, ++nl;
-        else right = recs[p].f, ++nr;
+        if (recs[p].dir > 0)
+          left = recs[p].f, ++nl;
+        else
+          right = recs[p].f, ++nr;
       }
       double m = 0.0;
       Eigen::Matrix3d mxy = Eigen::Matrix3d::Zero();
@@ -111,9 +111,9 @@ void CorrectedCurvature::build_adjacency() {
           const V3 e_ur = e.cross(ur), e1_ur = e1.cross(ur), e_e1_ur = e.cross(e1_ur);
           for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b)
-              mxy(a, b) = -0.5 * ((-psi - 0.5 * s2) * e_ur[a] * e1_ur[b] +
-                                  s1 * s1 * (e_ur[a] * ur[b] - e_e1_ur[a] * e1_ur[b]) +
-                                  (psi - 0.5 * s2) * e_e1_ur[a] * ur[b]);
+              mxy(a, b) =
+                  -0.5 * ((-psi - 0.5 * s2) * e_ur[a] * e1_ur[b] + s1 * s1 * (e_ur[a] * ur[b] - e_e1_ur[a] * e1_ur[b]) +
+                          (psi - 0.5 * s2) * e_e1_ur[a] * ur[b]);
         }
       }
       emuxy.push_back(mxy);
@@ -144,10 +144,10 @@ void CorrectedCurvature::build_adjacency() {
 void CorrectedCurvature::build_grid() {
   const Eigen::Index F = centroids_.rows();
   double edge = 0;
-  for (Eigen::Index f = 0; f < F; ++f)
-    edge += (positions_.row(faces_(f, 1)) - positions_.row(faces_(f, 0))).norm();
+  for (Eigen::Index f = 0; f < F; ++f) edge += (positions_.row(faces_(f, 1)) - positions_.row(faces_(f, 0))).norm();
   grid_cell_ = std::max(edge / double(F), 1e-12) * 2.0;
-  const Eigen::Vector3d lo = centroids_.colwise().minCoeff().transpose(), hi = centroids_.colwise().maxCoeff().transpose();
+  const Eigen::Vector3d lo = centroids_.colwise().minCoeff().transpose(),
+                        hi = centroids_.colwise().maxCoeff().transpose();
   grid_origin_ = lo;
   const Eigen::Vector3d ext = (hi - lo) / grid_cell_;
   for (int a = 0; a < 3; ++a) grid_dims_[a] = std::clamp(int(std::floor(ext[a])) + 1, 1, 4096);
@@ -186,7 +186,9 @@ int CorrectedCurvature::nearest_face(const Eigen::Vector3d& x) const {
           if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != s) continue;
           const int X = c.x() + dx, Y = c.y() + dy, Z = c.z() + dz;
           if (X < 0 || Y < 0 || Z < 0 || X >= grid_dims_.x() || Y >= grid_dims_.y() || Z >= grid_dims_.z()) continue;
-          const std::size_t cell = (std::size_t(Z) * std::size_t(grid_dims_.y()) + std::size_t(Y)) * std::size_t(grid_dims_.x()) + std::size_t(X);
+          const std::size_t cell =
+              (std::size_t(Z) * std::size_t(grid_dims_.y()) + std::size_t(Y)) * std::size_t(grid_dims_.x()) +
+              std::size_t(X);
           for (int i = grid_start_[cell]; i < grid_start_[cell + 1]; ++i) {
             const int f = grid_faces_[std::size_t(i)];
             const double d2 = (centroids_.row(f).transpose() - x).squaredNorm();
@@ -213,7 +215,7 @@ CorrectedCurvature CorrectedCurvature::interpolated(const SurfelMesh& mesh, cons
   c.muxy_.resize(std::size_t(F));
   c.face_normals_.resize(F, 3);
   tbb::parallel_for(0, F, [&](int f) {
-    // spec §8.2: fan around the barycentre b with u_b = normalized sum of the corner normals.
+    // docs/math.md §8.2: fan around the barycentre b with u_b = normalized sum of the corner normals.
     V3 b = V3::Zero(), ub = V3::Zero();
     for (int k = 0; k < 4; ++k) {
       b += c.positions_.row(mesh.faces(f, k)).transpose();
@@ -261,7 +263,7 @@ CorrectedCurvature CorrectedCurvature::constant(const SurfelMesh& mesh, const Ei
   }
   c.build_adjacency();
   c.compute_vertex_mu2();
-  // Vertex normals for vertex-centred balls: normalized sum of incident face normals (spec §1.5).
+  // Vertex normals for vertex-centred balls: normalized sum of incident face normals (docs/math.md §1.5).
   c.vertex_normals_ = vertex_normals_from_face_normals(c.face_normals_, c.faces_, int(c.positions_.rows()));
   return c;
 }
@@ -314,7 +316,7 @@ Eigen::Vector3d CorrectedCurvature::totals() const {
 std::vector<std::pair<int, double>> CorrectedCurvature::faces_in_ball(const Eigen::Vector3d& x, double r,
                                                                       int seed) const {
   std::vector<std::pair<int, double>> result;
-  if (r < 1e-6) {  // spec §8.3
+  if (r < 1e-6) {  // docs/math.md §8.3
     result.emplace_back(seed, 1e-6);
     return result;
   }
@@ -381,7 +383,7 @@ void CorrectedCurvature::estimate(const Eigen::Vector3d& x, double r, int seed, 
     }
   }
   out.area[i] = m0;
-  // spec §8.3: H = mu1 / (2 mu0), G = mu2 / mu0 (0 if mu0 = 0).
+  // docs/math.md §8.3: H = mu1 / (2 mu0), G = mu2 / mu0 (0 if mu0 = 0).
   out.H[i] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);
   out.G[i] = m0 == 0.0 ? 0.0 : m2 / m0;
   const Eigen::Matrix3d T = 0.5 * (mxy + mxy.transpose()) + 1000.0 * m0 * N * N.transpose();
@@ -395,7 +397,8 @@ void CorrectedCurvature::estimate(const Eigen::Vector3d& x, double r, int seed, 
 
 namespace {
 void check_radius(double r, const Eigen::MatrixX3d& positions) {
-  if (!(r >= 0.0) || !std::isfinite(r)) throw InputError("curvature: ball radius must be >= 0, got " + std::to_string(r));
+  if (!(r >= 0.0) || !std::isfinite(r))
+    throw InputError("curvature: ball radius must be >= 0, got " + std::to_string(r));
   const double diag = (positions.colwise().maxCoeff() - positions.colwise().minCoeff()).norm();
   if (r > 2.0 * diag)
     throw InputError("curvature: ball radius " + std::to_string(r) + " is larger than the mesh (diagonal " +
@@ -430,7 +433,7 @@ CurvatureEstimates CorrectedCurvature::at_vertices(double r) const {
       out.d1.row(v).setZero(), out.d2.row(v).setZero();
       return;
     }
-    // spec §8.3 (choice): ball at the vertex, seed = an incident face.
+    // docs/math.md §8.3 (choice): ball at the vertex, seed = an incident face.
     estimate(positions_.row(v).transpose(), r, seed, vertex_normals_.row(v).transpose(), out, v);
   });
   return out;

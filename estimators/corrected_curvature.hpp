@@ -1,26 +1,25 @@
 #pragma once
-// Corrected curvature measures (spec §8; the reference's CorrectedNormalCurrentComputer/Formula):
+// Corrected curvature measures (docs/math.md §8; the reference's CorrectedNormalCurrentComputer/Formula):
 // per-face measures mu0, mu1, mu2, muXY for interpolated vertex normals (fan around the
 // barycentre), or constant face normals (mu0 on faces, mu1 on edges); ball measures with the
 // reference's ball-face inclusion ratio and a breadth-first walk from a seed face; H, G, principal
 // curvatures and directions.
 #include <Eigen/Core>
-#include <vector>
-
 #include <corrlap/core/surfel_mesh.hpp>
+#include <vector>
 
 namespace corrlap {
 
 /// Curvature estimates at a set of points (faces or vertices).
 struct CurvatureEstimates {
-  Eigen::VectorXd H, G, k1, k2;  ///< mean, Gaussian, principal curvatures (k1 <= k2, spec §8.3)
+  Eigen::VectorXd H, G, k1, k2;  ///< mean, Gaussian, principal curvatures (k1 <= k2, docs/math.md §8.3)
   Eigen::MatrixX3d d1, d2;       ///< unit principal directions of k1 and k2
   Eigen::VectorXd area;          ///< mu0 of the ball
 };
 
 class CorrectedCurvature {
  public:
-  /// Interpolated normals (spec §8.1/8.2): vertex_normals #V x 3 (unit, checked).
+  /// Interpolated normals (docs/math.md §8.1/8.2): vertex_normals #V x 3 (unit, checked).
   static CorrectedCurvature interpolated(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals);
   /// Constant per-face normals (reference fallback): mu0 per face, mu1 and muXY per edge
   /// (dihedral angle), mu2 per vertex (spherical polygon of the surrounding face normals).
@@ -31,13 +30,13 @@ class CorrectedCurvature {
   const Eigen::VectorXd& face_mu1() const { return mu1_; }  ///< zero in the constant variant
   const Eigen::VectorXd& face_mu2() const { return mu2_; }
   const std::vector<Eigen::Matrix3d>& face_muXY() const { return muxy_; }
-  const Eigen::VectorXd& edge_mu1() const { return edge_mu1_; }      ///< constant variant only
-  const Eigen::VectorXd& vertex_mu2() const { return vertex_mu2_; }  ///< constant variant only
+  const Eigen::VectorXd& edge_mu1() const { return edge_mu1_; }                 ///< constant variant only
+  const Eigen::VectorXd& vertex_mu2() const { return vertex_mu2_; }             ///< constant variant only
   const std::vector<Eigen::Matrix3d>& edge_muXY() const { return edge_muxy_; }  ///< constant variant only
   /// Totals over the whole mesh (mu0, mu1, mu2).
   Eigen::Vector3d totals() const;
 
-  /// Faces meeting the ball B(x, r) with their inclusion ratios (spec §8.3), walk from seed face.
+  /// Faces meeting the ball B(x, r) with their inclusion ratios (docs/math.md §8.3), walk from seed face.
   std::vector<std::pair<int, double>> faces_in_ball(const Eigen::Vector3d& x, double r, int seed) const;
 
   /// Estimates with balls of radius r centred at face centroids (seed = the face; N = face normal).

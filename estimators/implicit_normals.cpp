@@ -8,7 +8,7 @@ namespace corrlap {
 
 Eigen::Vector3d project_onto_surface(const ImplicitShape& shape, const Eigen::Vector3d& x,
                                      const ProjectionParams& params) {
-  // spec §1.5, the reference's ImplicitPolynomial3Shape::nearestPoint as documented there:
+  // docs/math.md §1.5, the reference's ImplicitPolynomial3Shape::nearestPoint as documented there:
   // x_n = x_{n-1} - gamma * P(x_{n-1}) * grad P / |grad P|^2, stopped after max_iterations steps
   // or as soon as |P(x_n)| < accuracy (a criterion on the value of P, not on the step length).
   Eigen::Vector3d p = x;
@@ -37,13 +37,13 @@ Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& x
 Eigen::MatrixX3d true_face_normals(const ImplicitShape& shape, const SurfelMesh& mesh, const ProjectionParams& params) {
   const Eigen::MatrixX3d c = mesh.face_centroids();
   Eigen::MatrixX3d n(c.rows(), 3);
-  tbb::parallel_for(Eigen::Index(0), c.rows(), [&](Eigen::Index f) {
-    n.row(f) = true_normal(shape, c.row(f).transpose(), params).transpose();
-  });
+  tbb::parallel_for(Eigen::Index(0), c.rows(),
+                    [&](Eigen::Index f) { n.row(f) = true_normal(shape, c.row(f).transpose(), params).transpose(); });
   return n;
 }
 
-Eigen::MatrixX3d true_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh, const ProjectionParams& params) {
+Eigen::MatrixX3d true_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh,
+                                     const ProjectionParams& params) {
   Eigen::MatrixX3d n(mesh.positions.rows(), 3);
   tbb::parallel_for(Eigen::Index(0), mesh.positions.rows(), [&](Eigen::Index v) {
     n.row(v) = true_normal(shape, mesh.positions.row(v).transpose(), params).transpose();

@@ -1,14 +1,13 @@
 #pragma once
-// True normals of implicit shapes (spec §1.5): exact radial normals on spheres, otherwise the
+// True normals of implicit shapes (docs/math.md §1.5): exact radial normals on spheres, otherwise the
 // gradient at the projection of the point onto {P = 0} by a damped Newton iteration.
 #include <Eigen/Core>
-
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 namespace corrlap {
 
-/// Damped Newton projection onto {P = 0} (spec §1.5; reference defaults).
+/// Damped Newton projection onto {P = 0} (docs/math.md §1.5; reference defaults).
 struct ProjectionParams {
   int max_iterations = 20;
   double accuracy = 1e-4;
@@ -20,8 +19,7 @@ Eigen::Vector3d project_onto_surface(const ImplicitShape& shape, const Eigen::Ve
                                      const ProjectionParams& params = {});
 
 /// Unit outward normal of the shape "at" x: radial for spheres, else grad P at the projection.
-Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& x,
-                            const ProjectionParams& params = {});
+Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& x, const ProjectionParams& params = {});
 
 /// True normal at every face centroid (#F x 3).
 Eigen::MatrixX3d true_face_normals(const ImplicitShape& shape, const SurfelMesh& mesh,

@@ -1,16 +1,15 @@
 #include "integral_invariant.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <string>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <string>
 
 namespace corrlap {
 
@@ -21,7 +20,7 @@ bool BallMoments::operator==(const BallMoments& o) const {
 Eigen::Matrix3d BallMoments::covariance() const {
   Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
   if (m0 == 0) return c;
-  // spec §7 step 3: Cov = sum yy^T - (1/|Y|)(sum y)(sum y)^T. Translation invariant, so the exact
+  // docs/math.md §7 step 3: Cov = sum yy^T - (1/|Y|)(sum y)(sum y)^T. Translation invariant, so the exact
   // moments relative to the centre are used: no cancellation from large absolute coordinates.
   const double s[3] = {double(m1[0]), double(m1[1]), double(m1[2])};
   const int idx[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
@@ -32,13 +31,13 @@ Eigen::Matrix3d BallMoments::covariance() const {
 }
 
 double ii_digital_radius(double h, const IIParams& params) {
-  // spec §7 step 1: r_d = k * h^(alpha - 1); R = r_d * h.
+  // docs/math.md §7 step 1: r_d = k * h^(alpha - 1); R = r_d * h.
   return params.k * std::pow(h, params.alpha - 1.0);
 }
 
 namespace {
 
-/// Kernel predicate of spec §7 step 2: R - ||h delta|| >= 0 (closed ball).
+/// Kernel predicate of docs/math.md §7 step 2: R - ||h delta|| >= 0 (closed ball).
 bool in_kernel(int dx, int dy, int dz, double R, double h) {
   const double x = h * dx, y = h * dy, z = h * dz;
   return R - std::sqrt(x * x + y * y + z * z) >= 0.0;
@@ -268,14 +267,14 @@ std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius
   return out;
 }
 
-Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params,
-                                 IIMethod method, const ProgressFn& progress) {
+Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params, IIMethod method,
+                                 const ProgressFn& progress) {
   if (!mesh.has_surfels())
     throw InputError("II normals need the voxels of the surface (a mesh from --shape or --volume, not a mesh file)");
   const double h = grid.h();
   const double rd = ii_digital_radius(h, params);
   check_radius(grid, rd);
-  // Distinct centres: inner and outer voxels of all surfels (spec §7 step 3), shared by neighbours.
+  // Distinct centres: inner and outer voxels of all surfels (docs/math.md §7 step 3), shared by neighbours.
   const Eigen::Vector3i lo = grid.lower();
   const Eigen::Vector3i sz = grid.size() + Eigen::Vector3i::Constant(2);  // outer voxels may be 1 outside
   auto key = [&](const Eigen::Vector3i& v) {
@@ -293,8 +292,10 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
   std::vector<Eigen::Vector3i> centres(uniq.size());
   for (std::size_t i = 0; i < uniq.size(); ++i) {
     std::int64_t k = uniq[i];
-    const int x = int(k % sz.x()); k /= sz.x();
-    const int y = int(k % sz.y()); k /= sz.y();
+    const int x = int(k % sz.x());
+    k /= sz.x();
+    const int y = int(k % sz.y());
+    k /= sz.y();
     centres[i] = Eigen::Vector3i(x, y, int(k)) + lo - Eigen::Vector3i::Ones();
   }
   const std::vector<BallMoments> mom = method == IIMethod::Fast ? ii_moments(grid, rd, h, centres, progress)
@@ -303,11 +304,11 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
   tbb::parallel_for(std::size_t(0), F, [&](std::size_t f) {
     const auto in = std::lower_bound(uniq.begin(), uniq.end(), keys[2 * f]) - uniq.begin();
     const auto out = std::lower_bound(uniq.begin(), uniq.end(), keys[2 * f + 1]) - uniq.begin();
-    // spec §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
+    // docs/math.md §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
     const Eigen::Matrix3d C = 0.5 * (mom[std::size_t(in)].covariance() + mom[std::size_t(out)].covariance());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
     Eigen::Vector3d n = es.eigenvectors().col(0);
-    // spec §7 step 5: orient by the trivial normal (>= 0 keeps it).
+    // docs/math.md §7 step 5: orient by the trivial normal (>= 0 keeps it).
     if (n.dot(mesh.surfels[f].trivial_normal()) < 0.0) n = -n;
     normals.row(Eigen::Index(f)) = n.transpose();
   });

@@ -1,24 +1,23 @@
 #pragma once
-// Integral-invariant (II) normal estimator (spec §7): covariance of the digital ball B(c, R) ∩ X at
+// Integral-invariant (II) normal estimator (docs/math.md §7): covariance of the digital ball B(c, R) ∩ X at
 // the inner and outer voxel of each surfel, averaged; normal = eigenvector of the smallest
 // eigenvalue, oriented by the trivial normal.
 #include <Eigen/Core>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
 #include <cstdint>
 #include <functional>
 #include <vector>
 
-#include <corrlap/core/surfel_mesh.hpp>
-#include <corrlap/core/voxel_grid.hpp>
-
 namespace corrlap {
 
-/// Parameters of spec §7. Euclidean radius R = k h^alpha, digital radius r_d = k h^(alpha-1).
+/// Parameters of docs/math.md §7. Euclidean radius R = k h^alpha, digital radius r_d = k h^(alpha-1).
 struct IIParams {
   double k = 3.0;       ///< "r-radius"
   double alpha = 0.33;  ///< reference Shortcuts default (the paper says 1/3)
 };
 
-/// Digital radius r_d = k * h^(alpha - 1) computed as the reference does (spec §7 step 1).
+/// Digital radius r_d = k * h^(alpha - 1) computed as the reference does (docs/math.md §7 step 1).
 double ii_digital_radius(double h, const IIParams& params);
 
 /// Exact (integer) moments of orders 0, 1, 2 of B(c, R) ∩ X relative to the centre c:
@@ -43,17 +42,16 @@ std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double di
 /// ball is swept row by row, a row's contribution being a closed-form sum over its runs clipped to
 /// the ball's chord. Cost O(#centres * r_d^2), integer exact, parallel (TBB).
 std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius, double h,
-                                    const std::vector<Eigen::Vector3i>& centres,
-                                    const ProgressFn& progress = {});
+                                    const std::vector<Eigen::Vector3i>& centres, const ProgressFn& progress = {});
 
 enum class IIMethod { Fast, BruteForce };
 
-/// II normal per surfel/face (#F x 3), spec §7. mesh.surfels must be present (mesh from voxels).
+/// II normal per surfel/face (#F x 3), docs/math.md §7. mesh.surfels must be present (mesh from voxels).
 /// Throws InputError when the radius is below one voxel, larger than the box, or the mesh has no surfels.
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params = {},
                                  IIMethod method = IIMethod::Fast, const ProgressFn& progress = {});
 
-/// Vertex normals: normalized sum of the incident II face normals (spec §1.5).
+/// Vertex normals: normalized sum of the incident II face normals (docs/math.md §1.5).
 Eigen::MatrixX3d ii_vertex_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params = {},
                                    const ProgressFn& progress = {});
 

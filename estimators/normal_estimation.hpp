@@ -1,11 +1,10 @@
 #pragma once
-// One entry point for the face-normal estimators used by the CLI and applications (spec §1.5, §7).
+// One entry point for the face-normal estimators used by the CLI and applications (docs/math.md §1.5, §7).
 #include <Eigen/Core>
-#include <string>
-
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <string>
 
 namespace corrlap {
 

@@ -67,7 +67,7 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
     if (source == NormalSource::II) estimator = NormalEstimator::II;
     n.face = estimate_face_normals(estimator, mesh, grid, shape, request.ii, request.progress);
   }
-  // spec §1.5: vertex normals = normalized sum of the incident face normals (one definition).
+  // docs/math.md §1.5: vertex normals = normalized sum of the incident face normals (one definition).
   if (need_vertex && !n.has_vertex() && n.has_face())
     n.vertex = vertex_normals_from_face_normals(n.face, mesh.faces, mesh.num_vertices());
   if (need == NormalKind::Face && !n.has_face())

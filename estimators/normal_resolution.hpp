@@ -1,6 +1,6 @@
 #pragma once
 // One place that turns "which normals" (a source name, optional files) into the NormalFields an
-// operator or the curvature needs (spec §1.5). Every CLI command calls it, so a source means the
+// operator or the curvature needs (docs/math.md §1.5). Every CLI command calls it, so a source means the
 // same field everywhere: "true" vertex normals are the normalized sum of the incident true face
 // normals (the reference's computeVertexNormalsFromFaceNormals, its vertex_normals_true.txt).
 #include <Eigen/Core>
@@ -16,9 +16,9 @@ namespace corrlap {
 /// Where normals come from when no file gives them.
 enum class NormalSource {
   Auto,     ///< true for implicit shapes, else II when voxels are given, else none (an error)
-  True,     ///< true face normals of the implicit shape (spec §1.5)
-  II,       ///< integral-invariant face normals of the voxels (spec §7)
-  Trivial,  ///< surfel normals (spec §1.3)
+  True,     ///< true face normals of the implicit shape (docs/math.md §1.5)
+  II,       ///< integral-invariant face normals of the voxels (docs/math.md §7)
+  Trivial,  ///< surfel normals (docs/math.md §1.3)
 };
 /// "auto", "true", "ii", "trivial" -> source; InputError listing the valid names otherwise.
 NormalSource parse_normal_source(const std::string& name);
@@ -36,7 +36,7 @@ struct NormalRequest {
 ///  - files first: a face file gives face normals, a vertex file vertex normals;
 ///  - what is still missing comes from the source: face normals (true needs `shape`, II needs
 ///    `grid`, the voxels the mesh was extracted from), and vertex normals are always the normalized
-///    sum of the incident face normals (spec §1.5), for every source and for a face file alike;
+///    sum of the incident face normals (docs/math.md §1.5), for every source and for a face file alike;
 ///  - need None: empty fields. Face: .face set. Vertex: .vertex set (and .face when computed).
 /// Throws InputError naming what is missing (`what`, e.g. the method name, starts the message),
 /// or a file whose row count does not match the mesh. Unit length is left to the consumer (the
@@ -49,7 +49,7 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
 /// neither is available.
 NormalSource effective_normal_source(NormalSource source, const ImplicitShape* shape, const VoxelGrid* grid);
 
-/// corrlap's "true vertex normals" (spec §1.5): the normalized sum of the incident true face
+/// corrlap's "true vertex normals" (docs/math.md §1.5): the normalized sum of the incident true face
 /// normals, what resolve_normals gives for the source True.
 Eigen::MatrixX3d true_vertex_normals_from_faces(const ImplicitShape& shape, const SurfelMesh& mesh);
 

@@ -1,5 +1,5 @@
 // Poisson problem on the digitized unit sphere: voxels -> surface -> II normals -> corrected FEM ->
-// L g = M b with CHOLMOD (spec §10.4), b = Laplacian of f = x^2 (spec §10.2); prints the errors.
+// L g = M b with CHOLMOD (docs/math.md §10.4), b = Laplacian of f = x^2 (docs/math.md §10.2); prints the errors.
 #include <corrlap/corrlap.hpp>
 #include <cstdio>
 
@@ -7,7 +7,7 @@ int main() {
   using namespace corrlap;
   const VoxelGrid voxels = digitize(make_implicit_shape("sphere1"), {.h = 0.1, .min_aabb = -1.5, .max_aabb = 1.5});
   const SurfelMesh mesh = extract_surface(voxels);
-  const Eigen::MatrixX3d normals = ii_face_normals(voxels, mesh);  // integral invariant, spec §7
+  const Eigen::MatrixX3d normals = ii_face_normals(voxels, mesh);  // integral invariant, docs/math.md §7
   const Operators ops = corrected_fem(mesh, normals);              // L, M: #V x #V, L <= 0
   auto solver = make_linear_solver("cholmod");
   const PoissonResult r = solve_poisson(ops, mesh.positions, test_function("x2"), *solver);

@@ -1,6 +1,5 @@
 // libFuzzer target: JSON configurations (core/config.cpp), read through every typed getter.
 #include <corrlap/core/config.hpp>
-
 #include <string_view>
 
 #include "fuzz_support.hpp"

@@ -1,6 +1,5 @@
 // libFuzzer target: key=value configurations (core/config.cpp); lines of the input are the items.
 #include <corrlap/core/config.hpp>
-
 #include <string>
 #include <vector>
 
@@ -9,8 +8,10 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::vector<std::string> items(1);
   for (std::size_t i = 0; i < size; ++i) {
-    if (data[i] == '\n') items.emplace_back();
-    else items.back() += char(data[i]);
+    if (data[i] == '\n')
+      items.emplace_back();
+    else
+      items.back() += char(data[i]);
   }
   corrlap::fuzz::expect_named_errors([&] {
     const auto config = corrlap::Config::from_key_values(items);

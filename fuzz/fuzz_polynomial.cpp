@@ -1,6 +1,5 @@
 // libFuzzer target: the polynomial parser (surface/polynomial.cpp), then one evaluation.
 #include <corrlap/surface/polynomial.hpp>
-
 #include <string_view>
 
 #include "fuzz_support.hpp"

@@ -3,14 +3,14 @@
 // file in a RAM-backed folder with the extension the reader dispatches on. Expected failures are
 // corrlap::Error (bad input gets a named error); anything else escaping a reader is a finding
 // (a crash, a sanitizer report, or a std::exception that would reach the user as "internal error").
-#include <cstddef>
-#include <cstdint>
-#include <cstdio>
-#include <string>
-#include <cstdlib>
 #include <unistd.h>
 
 #include <corrlap/core/error.hpp>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 
 namespace corrlap::fuzz {
 

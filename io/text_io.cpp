@@ -3,14 +3,13 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <vector>
-
-#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 
@@ -131,7 +130,8 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
     if (!std::getline(in, line) || !parse_numbers(line, i, j, v))
       throw IoError("Matrix Market file '" + path + "': truncated or malformed entry " + std::to_string(k + 1));
     if (i < 1 || i > r || j < 1 || j > c || !std::isfinite(v))
-      throw IoError("Matrix Market file '" + path + "': entry " + std::to_string(k + 1) + " out of range or not finite");
+      throw IoError("Matrix Market file '" + path + "': entry " + std::to_string(k + 1) +
+                    " out of range or not finite");
     t.emplace_back(int(i - 1), int(j - 1), v);
     if (symmetric && i != j) t.emplace_back(int(j - 1), int(i - 1), v);
   }

@@ -2,13 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <corrlap/core/error.hpp>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 #ifdef CORRLAP_HAVE_ZLIB
 #include <zlib.h>
@@ -96,7 +95,8 @@ Volume read_vol(const std::string& path) {
     if (it == fields.end()) fail(path, std::string("header has no '") + keys[a] + "' field");
     char* end = nullptr;
     const long d = std::strtol(it->second.c_str(), &end, 10);
-    if (*end != '\0' || d <= 0 || d > 1000000) fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
+    if (*end != '\0' || d <= 0 || d > 1000000)
+      fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
     s[a] = int(d);
   }
   check_size(path, s);
@@ -235,12 +235,14 @@ Volume read_nrrd(const std::string& path) {
     std::string extra;
     if (!(ss >> d[0] >> d[1] >> d[2]) || (ss >> extra)) fail(path, "malformed 'sizes' field (expected three integers)");
     for (int a = 0; a < 3; ++a) {
-      if (d[a] <= 0 || d[a] > 1000000) fail(path, "invalid size " + std::to_string(d[a]) + " on axis " + std::to_string(a));
+      if (d[a] <= 0 || d[a] > 1000000)
+        fail(path, "invalid size " + std::to_string(d[a]) + " on axis " + std::to_string(a));
       s[a] = int(d[a]);
     }
   }
   check_size(path, s);
-  if (auto it = fields.find("endian"); it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
+  if (auto it = fields.find("endian");
+      it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
     fail(path, "invalid endian '" + it->second + "' (little or big)");  // irrelevant for 1-byte types
   const std::string encoding = lower(field("encoding"));
   if (!ended) fail(path, "header not terminated by a blank line (truncated file?)");
@@ -251,12 +253,14 @@ Volume read_nrrd(const std::string& path) {
     if (in.peek() != std::char_traits<char>::eof()) fail(path, "file is larger than the announced sizes");
   } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
     const std::size_t n = std::size_t(s.prod());
-    if (bytes_left(in) < 2 * n - 1) fail(path, "truncated ascii data: fewer characters than " + std::to_string(n) + " values need");
+    if (bytes_left(in) < 2 * n - 1)
+      fail(path, "truncated ascii data: fewer characters than " + std::to_string(n) + " values need");
     v.values.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       long long x = 0;
       if (!(in >> x)) fail(path, "truncated or malformed ascii data at value " + std::to_string(i));
-      if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255)) fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
+      if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255))
+        fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
       v.values[i] = std::uint8_t(x);
     }
     std::string extra;
@@ -326,7 +330,8 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
           grid.set(x, y, z, true);
           ++inside;
         }
-  if (inside == 0) throw InputError("volume: no voxel above the threshold " + std::to_string(threshold) + " (empty volume)");
+  if (inside == 0)
+    throw InputError("volume: no voxel above the threshold " + std::to_string(threshold) + " (empty volume)");
   return grid;
 }
 

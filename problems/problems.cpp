@@ -13,23 +13,27 @@ Eigen::VectorXd solve_dirichlet(const SpMat& L, const SpMat& M, const Eigen::Vec
   const Eigen::Index n = L.rows();
   if (L.cols() != n || M.rows() != n || M.cols() != n || f.size() != n) {
     std::ostringstream os;
-    os << "Dirichlet problem: sizes differ (L " << L.rows() << "x" << L.cols() << ", M " << M.rows() << "x"
-       << M.cols() << ", f " << f.size() << ")";
+    os << "Dirichlet problem: sizes differ (L " << L.rows() << "x" << L.cols() << ", M " << M.rows() << "x" << M.cols()
+       << ", f " << f.size() << ")";
     throw InputError(os.str());
   }
   if (Eigen::Index(fixed.size()) != values.size())
     throw InputError("Dirichlet problem: " + std::to_string(fixed.size()) + " fixed vertices but " +
                      std::to_string(values.size()) + " values");
-  // L 1 = 0 (spec §0): without a fixed vertex -L is singular, and a Cholesky of a singular PSD
+  // L 1 = 0 (docs/math.md §0): without a fixed vertex -L is singular, and a Cholesky of a singular PSD
   // matrix may pass on rounding errors and return garbage, so refuse up front.
   if (fixed.empty()) throw InputError("Dirichlet problem: no fixed vertex (L 1 = 0 makes the system singular)");
   // Map every vertex to its index among the free ones (-1: fixed).
   std::vector<int> free_index(std::size_t(n), 0);
   for (std::size_t i = 0; i < fixed.size(); ++i) {
     const int v = fixed[i];
-    if (v < 0 || v >= n) throw InputError("Dirichlet problem: fixed vertex " + std::to_string(v) + " out of range [0, " + std::to_string(n) + ")");
-    if (free_index[std::size_t(v)] < 0) throw InputError("Dirichlet problem: vertex " + std::to_string(v) + " fixed twice");
-    if (!std::isfinite(values[Eigen::Index(i)])) throw InputError("Dirichlet problem: value of vertex " + std::to_string(v) + " is not finite");
+    if (v < 0 || v >= n)
+      throw InputError("Dirichlet problem: fixed vertex " + std::to_string(v) + " out of range [0, " +
+                       std::to_string(n) + ")");
+    if (free_index[std::size_t(v)] < 0)
+      throw InputError("Dirichlet problem: vertex " + std::to_string(v) + " fixed twice");
+    if (!std::isfinite(values[Eigen::Index(i)]))
+      throw InputError("Dirichlet problem: value of vertex " + std::to_string(v) + " is not finite");
     free_index[std::size_t(v)] = -1;
   }
   int nfree = 0;
@@ -77,7 +81,7 @@ double mass_weighted_mean(const SpMat& M, const Eigen::VectorXd& v) {
 
 Eigen::VectorXd solve_neumann_poisson(const SpMat& L, const SpMat& M, const Eigen::VectorXd& b, LinearSolver& solver,
                                       double pin_value, int pin) {
-  // spec §10.4: without the compatibility projection, pinning makes a point source whose error
+  // docs/math.md §10.4: without the compatibility projection, pinning makes a point source whose error
   // spoils the convergence rate.
   const Eigen::VectorXd compatible = b.array() - mass_weighted_mean(M, b);
   return solve_dirichlet(L, M, compatible, {pin}, Eigen::VectorXd::Constant(1, pin_value), solver);
@@ -85,8 +89,8 @@ Eigen::VectorXd solve_neumann_poisson(const SpMat& L, const SpMat& M, const Eige
 
 ErrorNorms error_norms(const SpMat& M, const Eigen::VectorXd& e) {
   if (M.rows() != e.size() || M.cols() != e.size())
-    throw InputError("error norms: M is " + std::to_string(M.rows()) + "x" + std::to_string(M.cols()) +
-                     ", error has " + std::to_string(e.size()) + " entries");
+    throw InputError("error norms: M is " + std::to_string(M.rows()) + "x" + std::to_string(M.cols()) + ", error has " +
+                     std::to_string(e.size()) + " entries");
   ErrorNorms r;
   r.linf = e.lpNorm<Eigen::Infinity>();
   const double area = (M * Eigen::VectorXd::Ones(e.size())).sum();
@@ -102,9 +106,10 @@ PoissonErrors poisson_errors(const SpMat& M, const Eigen::VectorXd& g, const Eig
 
 double neumann_residual(const SpMat& L, const SpMat& M, const Eigen::VectorXd& b, const Eigen::VectorXd& g, int pin) {
   if (L.rows() != g.size() || L.cols() != g.size() || b.size() != g.size())
-    throw InputError("Neumann residual: L is " + std::to_string(L.rows()) + "x" + std::to_string(L.cols()) + ", b has " +
-                     std::to_string(b.size()) + " and g " + std::to_string(g.size()) + " entries");
-  if (pin < 0 || pin >= g.size()) throw InputError("Neumann residual: pinned vertex " + std::to_string(pin) + " out of range");
+    throw InputError("Neumann residual: L is " + std::to_string(L.rows()) + "x" + std::to_string(L.cols()) +
+                     ", b has " + std::to_string(b.size()) + " and g " + std::to_string(g.size()) + " entries");
+  if (pin < 0 || pin >= g.size())
+    throw InputError("Neumann residual: pinned vertex " + std::to_string(pin) + " out of range");
   const Eigen::VectorXd bc = b.array() - mass_weighted_mean(M, b);
   const Eigen::VectorXd Mb = M * bc;
   Eigen::VectorXd r = L * g - Mb;
@@ -128,7 +133,7 @@ PoissonResult solve_poisson(const Operators& ops, const Eigen::MatrixX3d& positi
   PoissonResult r;
   r.f = std::move(s.f);
   r.b = std::move(s.laplacian);
-  r.g = solve_neumann_poisson(ops.L, ops.M, r.b, solver, r.f[0], 0);  // spec §10.4: g_0 = f(q_0)
+  r.g = solve_neumann_poisson(ops.L, ops.M, r.b, solver, r.f[0], 0);  // docs/math.md §10.4: g_0 = f(q_0)
   r.residual = neumann_residual(ops.L, ops.M, r.b, r.g, 0);
   r.errors = poisson_errors(ops.M, r.g, r.f);
   return r;
@@ -136,12 +141,13 @@ PoissonResult solve_poisson(const Operators& ops, const Eigen::MatrixX3d& positi
 
 Eigen::VectorXd forward_laplacian(const SpMat& L, const SpMat& M, const Eigen::VectorXd& u, LinearSolver& solver,
                                   double dt) {
-  if (!(dt >= 0.0) || !std::isfinite(dt)) throw InputError("forward evaluation: dt must be >= 0, got " + std::to_string(dt));
+  if (!(dt >= 0.0) || !std::isfinite(dt))
+    throw InputError("forward evaluation: dt must be >= 0, got " + std::to_string(dt));
   if (L.rows() != u.size() || L.cols() != u.size() || M.rows() != u.size() || M.cols() != u.size())
     throw InputError("forward evaluation: L is " + std::to_string(L.rows()) + "x" + std::to_string(L.cols()) + ", M " +
                      std::to_string(M.rows()) + "x" + std::to_string(M.cols()) + ", u has " + std::to_string(u.size()) +
                      " entries");
-  // spec §10.3: M - dt L is SPD for dt >= 0 because L is negative semi-definite.
+  // docs/math.md §10.3: M - dt L is SPD for dt >= 0 because L is negative semi-definite.
   SpMat A = dt == 0.0 ? SpMat(M) : SpMat(M - dt * L);
   A.makeCompressed();
   solver.compute(A);

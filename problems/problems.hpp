@@ -1,16 +1,14 @@
 #pragma once
 // Problems shared by every backend: Dirichlet conditions, the pure-Neumann Poisson problem of
-// spec §10.4 on a closed surface (backward evaluation) and the forward evaluation of spec §10.3,
-// with their error norms. L is negative semi-definite (spec §0); the systems handed to the
+// docs/math.md §10.4 on a closed surface (backward evaluation) and the forward evaluation of docs/math.md §10.3,
+// with their error norms. L is negative semi-definite (docs/math.md §0); the systems handed to the
 // LinearSolver are SPD: -L restricted to the free vertices, or M - dt L.
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Sparse>
-
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/core/linear_solver.hpp>
 #include <corrlap/problems/test_functions.hpp>
+#include <vector>
 
 namespace corrlap {
 
@@ -19,20 +17,20 @@ namespace corrlap {
 /// solver (e.g. not positive definite when a connected component has no fixed vertex). No fixed
 /// vertex at all is an InputError (L 1 = 0 makes the system singular).
 Eigen::VectorXd solve_dirichlet(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
-                                const Eigen::VectorXd& f, const std::vector<int>& fixed,
-                                const Eigen::VectorXd& values, LinearSolver& solver);
+                                const Eigen::VectorXd& f, const std::vector<int>& fixed, const Eigen::VectorXd& values,
+                                LinearSolver& solver);
 
 /// M-weighted mean 1^T M v / 1^T M 1.
 double mass_weighted_mean(const Eigen::SparseMatrix<double>& M, const Eigen::VectorXd& v);
 
-/// Pure-Neumann Poisson problem of spec §10.4: given b (samples of the Laplacian), project it onto
+/// Pure-Neumann Poisson problem of docs/math.md §10.4: given b (samples of the Laplacian), project it onto
 /// the compatible right-hand sides (b <- b - mean_M(b) 1), solve L g = M b with vertex `pin`
 /// fixed to `pin_value`, and return g.
 Eigen::VectorXd solve_neumann_poisson(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                       const Eigen::VectorXd& b, LinearSolver& solver, double pin_value = 0.0,
                                       int pin = 0);
 
-/// Norms of an error vector e of spec §10.3/§10.4: L_inf = max |e|, L_2 = sqrt(e^T M e / 1^T M 1).
+/// Norms of an error vector e of docs/math.md §10.3/§10.4: L_inf = max |e|, L_2 = sqrt(e^T M e / 1^T M 1).
 struct ErrorNorms {
   double linf = 0.0;
   double l2 = 0.0;
@@ -40,7 +38,7 @@ struct ErrorNorms {
 using PoissonErrors = ErrorNorms;
 ErrorNorms error_norms(const Eigen::SparseMatrix<double>& M, const Eigen::VectorXd& e);
 
-/// Backward errors of spec §10.4, the mean removed: norms of e = (g - mean_M g) - (f - mean_M f).
+/// Backward errors of docs/math.md §10.4, the mean removed: norms of e = (g - mean_M g) - (f - mean_M f).
 PoissonErrors poisson_errors(const Eigen::SparseMatrix<double>& M, const Eigen::VectorXd& g, const Eigen::VectorXd& f);
 
 /// Relative residual |L g - M b_c| / |M b_c| of the solved system, b_c = b - mean_M(b) (the
@@ -48,13 +46,13 @@ PoissonErrors poisson_errors(const Eigen::SparseMatrix<double>& M, const Eigen::
 double neumann_residual(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                         const Eigen::VectorXd& b, const Eigen::VectorXd& g, int pin = 0);
 
-/// Backward (Poisson) evaluation of spec §10.4 with a test function of spec §10.2 on the unit sphere.
+/// Backward (Poisson) evaluation of docs/math.md §10.4 with a test function of docs/math.md §10.2 on the unit sphere.
 struct PoissonResult {
-  Eigen::VectorXd f;        ///< #V exact solution u(q_v)
-  Eigen::VectorXd b;        ///< #V right-hand side Delta u(q_v), before the compatibility projection
-  Eigen::VectorXd g;        ///< #V computed solution, g[0] = f[0]
-  double residual = 0.0;    ///< neumann_residual of the solve
-  PoissonErrors errors;     ///< poisson_errors(M, g, f)
+  Eigen::VectorXd f;      ///< #V exact solution u(q_v)
+  Eigen::VectorXd b;      ///< #V right-hand side Delta u(q_v), before the compatibility projection
+  Eigen::VectorXd g;      ///< #V computed solution, g[0] = f[0]
+  double residual = 0.0;  ///< neumann_residual of the solve
+  PoissonErrors errors;   ///< poisson_errors(M, g, f)
 };
 /// Samples u and Delta u at q_v = (x_v - c)/|x_v - c| (`positions` #V x 3, the mesh's), solves
 /// L g = M b with vertex 0 pinned to u(q_0) and measures the error. `ops.L` and `ops.M` are #V x #V
@@ -63,8 +61,8 @@ struct PoissonResult {
 PoissonResult solve_poisson(const Operators& ops, const Eigen::MatrixX3d& positions, const TestFunction& function,
                             LinearSolver& solver, const Eigen::Vector3d& center = Eigen::Vector3d::Zero());
 
-/// Forward evaluation of spec §10.3: X = (M - dt L)^{-1} L u, an approximation of Delta u. dt = 0 is
-/// the naive M^{-1} L u (which does not converge); the spec's diffused variant uses dt = 0.035 h.
+/// Forward evaluation of docs/math.md §10.3: X = (M - dt L)^{-1} L u, an approximation of Delta u. dt = 0 is
+/// the naive M^{-1} L u (which does not converge); docs/math.md's diffused variant uses dt = 0.035 h.
 /// `solver` factorizes M - dt L (SPD since L is negative semi-definite). Throws InputError for
 /// dt < 0 or size mismatches, SolverError.
 Eigen::VectorXd forward_laplacian(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
@@ -72,6 +70,7 @@ Eigen::VectorXd forward_laplacian(const Eigen::SparseMatrix<double>& L, const Ei
 
 /// Norms of forward_laplacian(u) - Delta u for a test function sampled as in solve_poisson.
 ErrorNorms forward_error(const Operators& ops, const Eigen::MatrixX3d& positions, const TestFunction& function,
-                         LinearSolver& solver, double dt = 0.0, const Eigen::Vector3d& center = Eigen::Vector3d::Zero());
+                         LinearSolver& solver, double dt = 0.0,
+                         const Eigen::Vector3d& center = Eigen::Vector3d::Zero());
 
 }  // namespace corrlap

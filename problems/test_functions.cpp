@@ -6,7 +6,7 @@
 namespace corrlap {
 
 namespace {
-// P6(z) = (231 z^6 - 315 z^4 + 105 z^2 - 5) / 16, a degree-6 zonal harmonic: Delta f = -42 f (spec §10.2).
+// P6(z) = (231 z^6 - 315 z^4 + 105 z^2 - 5) / 16, a degree-6 zonal harmonic: Delta f = -42 f (docs/math.md §10.2).
 double p6(const Eigen::Vector3d& q) {
   const double z2 = q.z() * q.z();
   return (((231.0 * z2 - 315.0) * z2 + 105.0) * z2 - 5.0) / 16.0;
@@ -14,7 +14,7 @@ double p6(const Eigen::Vector3d& q) {
 }  // namespace
 
 const std::vector<TestFunction>& test_functions() {
-  // spec §10.2: Delta_{S^2} f = Delta F - q^T (grad^2 F) q - 2 q . grad F for the ambient F.
+  // docs/math.md §10.2: Delta_{S^2} f = Delta F - q^T (grad^2 F) q - 2 q . grad F for the ambient F.
   static const std::vector<TestFunction> list = {
       {"x2", "f = x^2, Delta f = 2 - 6x^2", [](const Eigen::Vector3d& q) { return q.x() * q.x(); },
        [](const Eigen::Vector3d& q) { return 2.0 - 6.0 * q.x() * q.x(); }},

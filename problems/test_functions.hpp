@@ -1,5 +1,5 @@
 #pragma once
-// Test functions of spec §10.2 on the unit sphere: values u(q) and their exact Laplace-Beltrami
+// Test functions of docs/math.md §10.2 on the unit sphere: values u(q) and their exact Laplace-Beltrami
 // Delta_{S^2} u(q) at points q with |q| = 1, looked up by the names the CLI uses (--rhs).
 #include <Eigen/Core>
 #include <string>
@@ -20,7 +20,7 @@ const std::vector<TestFunction>& test_functions();
 const TestFunction& test_function(const std::string& name);
 bool has_test_function(const std::string& name);
 
-/// Samples at the vertices (spec §10.1): f[v] = u(q_v), laplacian[v] = Delta u(q_v) with
+/// Samples at the vertices (docs/math.md §10.1): f[v] = u(q_v), laplacian[v] = Delta u(q_v) with
 /// q_v = (x_v - c) / |x_v - c| the radial projection onto the unit sphere of centre c.
 struct TestFunctionSamples {
   Eigen::VectorXd f;          ///< #V

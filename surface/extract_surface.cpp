@@ -8,10 +8,9 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <ctime>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 
@@ -20,7 +19,7 @@ namespace {
 constexpr int kBits = 21;
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
-// Surfel key (spec §1.4): positive flag, then Khalimsky coordinates relative to the box
+// Surfel key (docs/math.md §1.4): positive flag, then Khalimsky coordinates relative to the box
 // (kc - 2 lower, all in [0, 2n]). Ascending keys = the reference's face order.
 inline std::uint64_t surfel_key(std::uint64_t positive, std::uint64_t kx, std::uint64_t ky, std::uint64_t kz) {
   return (positive << 63) | (kx << 42) | (ky << 21) | kz;
@@ -31,7 +30,7 @@ inline std::uint64_t surfel_key(std::uint64_t positive, std::uint64_t kx, std::u
 // (pass B) the axis-1 surfels between rows (y, z) and (y+1, z), z ascending.
 // Why this order: among surfels with equal (positive, kc_x) it is exactly ascending (kc_y, kc_z)
 // (axis-2 surfels of row y have kc_y = 2y+1, axis-1 surfels kc_y = 2y+2, axis-0 surfels have their
-// own even kc_x), so a stable bucket sort by (positive, kc_x) yields the face order of spec §1.4.
+// own even kc_x), so a stable bucket sort by (positive, kc_x) yields the face order of docs/math.md §1.4.
 // Row (y, z) of the grid: all voxels outside, all inside, or mixed. Two equal uniform rows have
 // no surfel between them, and a uniform row has none inside it: the scan skips them.
 enum RowState : std::uint8_t { kEmptyRow = 0, kFullRow = 1, kMixedRow = 2 };
@@ -138,7 +137,7 @@ inline DecodedFace decode(std::uint64_t key) {
   d.axis = (d.kc[0] % 2 == 0) ? 0 : (d.kc[1] % 2 == 0 ? 1 : 2);  // the even coordinate
   return d;
 }
-// Relative pointel (Khalimsky / 2) of corner c of the face (spec §1.4): base order
+// Relative pointel (Khalimsky / 2) of corner c of the face (docs/math.md §1.4): base order
 // B = [(i-,j-),(i-,j+),(i+,j+),(i+,j-)], reversed for negative surfels.
 inline void corner_pointel(const DecodedFace& d, int c, int q[3]) {
   static constexpr int si[4] = {-1, -1, +1, +1}, sj[4] = {-1, +1, +1, -1};
@@ -177,7 +176,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   if ((n.array() * 2 + 4 >= (1 << kBits)).any())
     throw InputError("surface extraction: the box is too large (more than 1M voxels along an axis)");
 
-  // 1. Surfel keys of chunks of y rows, in parallel (spec §1.3).
+  // 1. Surfel keys of chunks of y rows, in parallel (docs/math.md §1.3).
   const int chunks = std::min(n.y(), 64);
   std::vector<std::vector<std::uint64_t>> chunk_keys(std::size_t(chunks), std::vector<std::uint64_t>{});
   auto chunk_begin = [&](int c) { return int((std::int64_t(n.y()) * c) / chunks); };
@@ -188,12 +187,13 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   std::size_t F = 0;
   for (const auto& v : chunk_keys) F += v.size();
   if (F == 0)
-    throw InputError("surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the box)");
+    throw InputError(
+        "surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the box)");
   // Corner occurrences 4 f + c must fit in 32 bits with one value left as the "none" marker.
   if (F >= (std::size_t{1} << 30)) throw InputError("surface extraction: 2^30 or more surfels");
   lap("transitions");
 
-  // 2. Face order (spec §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the
+  // 2. Face order (docs/math.md §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the
   //    chunks are in y order and each chunk is already in (kc_y, kc_z) order (see scan_rows).
   const std::size_t NKX = 2 * std::size_t(n.x()) + 2, NB = 2 * NKX;
   auto bucket = [&](std::uint64_t key) { return std::size_t(key >> 63) * NKX + std::size_t((key >> 42) & kMask); };
@@ -241,7 +241,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   });
   lap("surfels");
 
-  // 3. Vertices numbered by first appearance (spec §1.4). A pointel with relative x index P is
+  // 3. Vertices numbered by first appearance (docs/math.md §1.4). A pointel with relative x index P is
   //    a corner only of faces with kc_x in {2P-1, 2P, 2P+1}: per class a contiguous range of
   //    faces. Each pointel slab P is handled by one task with a dense (y, z) table of first
   //    occurrences, visiting the corners in increasing occurrence order 4 f + c.
@@ -250,7 +250,8 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   constexpr std::uint32_t kNone = ~std::uint32_t{0};
   std::vector<std::uint8_t> is_new(4 * F, 0);
   std::uint32_t* raw = reinterpret_cast<std::uint32_t*>(mesh.faces.data());
-  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> tables([&] { return std::vector<std::uint32_t>(NYZ, kNone); });
+  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> tables(
+      [&] { return std::vector<std::uint32_t>(NYZ, kNone); });
   tbb::enumerable_thread_specific<std::vector<std::uint32_t>> touched_lists;
   tbb::parallel_for(0, n.x() + 1, [&](int P) {
     std::vector<std::uint32_t>& first = tables.local();

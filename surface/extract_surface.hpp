@@ -1,15 +1,14 @@
 #pragma once
-// Voxels -> digital surface (spec §1.3, §1.4): the boundary of a voxel set as a quad mesh of
+// Voxels -> digital surface (docs/math.md §1.3, §1.4): the boundary of a voxel set as a quad mesh of
 // surfels, numbered exactly like the reference.
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
 #include <string>
 #include <vector>
 
-#include <corrlap/core/surfel_mesh.hpp>
-#include <corrlap/core/voxel_grid.hpp>
-
 namespace corrlap {
 
-/// Surface of a voxel set (spec §1.3) as a quad mesh numbered exactly like the reference (§1.4):
+/// Surface of a voxel set (docs/math.md §1.3) as a quad mesh numbered exactly like the reference (§1.4):
 /// faces sorted by (positive, kc_x, kc_y, kc_z), vertices numbered in order of first appearance.
 /// Surfels exist only between two voxels of the box. Throws InputError if there is no surfel.
 SurfelMesh extract_surface(const VoxelGrid& grid);

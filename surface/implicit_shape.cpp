@@ -4,11 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <cstdint>
 #include <limits>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 
@@ -27,8 +26,8 @@ double ImplicitShape::sphere_radius() const {
     for (int j = 0; j <= 2; ++j)
       for (int k = 0; k <= 2; ++k) {
         const double c = polynomial.coefficient(i, j, k);
-        const bool square = (i == 2 && j == 0 && k == 0) || (i == 0 && j == 2 && k == 0) ||
-                            (i == 0 && j == 0 && k == 2);
+        const bool square =
+            (i == 2 && j == 0 && k == 0) || (i == 0 && j == 2 && k == 0) || (i == 0 && j == 0 && k == 2);
         if (square && c != 1.0) return 0.0;
         if (!square && !(i == 0 && j == 0 && k == 0) && c != 0.0) return 0.0;
       }
@@ -37,7 +36,7 @@ double ImplicitShape::sphere_radius() const {
 }
 
 const std::vector<std::pair<std::string, std::string>>& named_shapes() {
-  // spec §1.1 (the reference's getPolynomialList, exact strings)
+  // docs/math.md §1.1 (the reference's getPolynomialList, exact strings)
   static const std::vector<std::pair<std::string, std::string>> list = {
       {"sphere1", "x^2+y^2+z^2-1"},
       {"sphere9", "x^2+y^2+z^2-81"},
@@ -87,8 +86,7 @@ ImplicitShape make_implicit_shape(std::string_view name_or_polynomial, const Eig
 }
 
 void digitization_box(const DigitizationParams& p, Eigen::Vector3i& lower, Eigen::Vector3i& upper) {
-  if (!(p.h > 0.0) || !std::isfinite(p.h))
-    throw InputError("digitization: grid step h must be positive and finite");
+  if (!(p.h > 0.0) || !std::isfinite(p.h)) throw InputError("digitization: grid step h must be positive and finite");
   if (!(p.min_aabb < p.max_aabb) || !std::isfinite(p.min_aabb) || !std::isfinite(p.max_aabb))
     throw InputError("digitization: bounding box needs finite MIN < MAX");
   if (p.offset < 0) throw InputError("digitization: offset must be >= 0");
@@ -108,7 +106,7 @@ namespace {
 // P in two forms for digitization:
 //  - the dense coefficients, evaluated row by row with exactly the operations (same order, same
 //    powers by repeated multiplication, zero coefficients included) of Polynomial::operator(),
-//    so that every voxel gets the bit of the voxel-by-voxel definition (spec §1.2);
+//    so that every voxel gets the bit of the voxel-by-voxel definition (docs/math.md §1.2);
 //  - the non-zero monomials, for cheap conservative interval bounds over boxes.
 class DigitizationKernel {
  public:
@@ -119,7 +117,8 @@ class DigitizationKernel {
       for (int j = 0; j <= d_[1]; ++j)
         for (int k = 0; k <= d_[2]; ++k) {
           const double c = p.coefficient(i, j, k);
-          dense_[(std::size_t(i) * std::size_t(d_[1] + 1) + std::size_t(j)) * std::size_t(d_[2] + 1) + std::size_t(k)] = c;
+          dense_[(std::size_t(i) * std::size_t(d_[1] + 1) + std::size_t(j)) * std::size_t(d_[2] + 1) + std::size_t(k)] =
+              c;
           if (c != 0.0) terms_.push_back({i, j, k, c});
         }
   }
@@ -233,7 +232,8 @@ struct DigitizeTile {
     const int lx0 = z0[0] - grid.lower().x(), lx1 = z1[0] - grid.lower().x();
     const std::size_t w = std::size_t(lx0 >> 6);
     const int b0 = lx0 & 63, b1 = b0 + (lx1 - lx0);
-    const std::uint64_t mask = (b1 == 63 ? ~std::uint64_t{0} : (std::uint64_t{2} << b1) - 1) & ~((std::uint64_t{1} << b0) - 1);
+    const std::uint64_t mask =
+        (b1 == 63 ? ~std::uint64_t{0} : (std::uint64_t{2} << b1) - 1) & ~((std::uint64_t{1} << b0) - 1);
     for (int z = z0[2]; z <= z1[2]; ++z)
       for (int y = z0[1]; y <= z1[1]; ++y) grid.row(y, z)[w] |= mask;
   }
@@ -277,13 +277,27 @@ struct DigitizeTile {
         double values[64];
         const int count = z1[0] - z0[0] + 1;  // <= 64: a leaf lies in one word
         switch (dx) {  // fixed degree: the loop over x vectorizes (lanes = voxels, same operations)
-          case 0: row_values<0>(coef, z0[0], count, values); break;
-          case 1: row_values<1>(coef, z0[0], count, values); break;
-          case 2: row_values<2>(coef, z0[0], count, values); break;
-          case 3: row_values<3>(coef, z0[0], count, values); break;
-          case 4: row_values<4>(coef, z0[0], count, values); break;
-          case 5: row_values<5>(coef, z0[0], count, values); break;
-          case 6: row_values<6>(coef, z0[0], count, values); break;
+          case 0:
+            row_values<0>(coef, z0[0], count, values);
+            break;
+          case 1:
+            row_values<1>(coef, z0[0], count, values);
+            break;
+          case 2:
+            row_values<2>(coef, z0[0], count, values);
+            break;
+          case 3:
+            row_values<3>(coef, z0[0], count, values);
+            break;
+          case 4:
+            row_values<4>(coef, z0[0], count, values);
+            break;
+          case 5:
+            row_values<5>(coef, z0[0], count, values);
+            break;
+          case 6:
+            row_values<6>(coef, z0[0], count, values);
+            break;
           default:
             for (int k = 0; k < count; ++k) {
               double px = (z0[0] + k) * h;
@@ -340,13 +354,14 @@ VoxelGrid digitize(const ImplicitShape& shape, const DigitizationParams& params)
   const DigitizationKernel kernel(shape.polynomial);
   const DigitizeTile tile{kernel, grid, params.h, !shape.center.isZero(), shape.center};
   // Tiles of 64^3 voxels (x: one word), culled recursively by interval bounds; only the voxels
-  // of leaves the bounds cannot decide are evaluated (spec §1.2: result identical to voxel by voxel).
+  // of leaves the bounds cannot decide are evaluated (docs/math.md §1.2: result identical to voxel by voxel).
   constexpr int T = 64;
   const int tx = (n.x() + T - 1) / T, ty = (n.y() + T - 1) / T, tz = (n.z() + T - 1) / T;
   tbb::parallel_for(0, tx * ty * tz, [&](int t) {
     const int ix = t % tx, iy = (t / tx) % ty, iz = t / (tx * ty);
     const int z0[3] = {lower.x() + ix * T, lower.y() + iy * T, lower.z() + iz * T};
-    const int z1[3] = {std::min(z0[0] + T - 1, upper.x()), std::min(z0[1] + T - 1, upper.y()), std::min(z0[2] + T - 1, upper.z())};
+    const int z1[3] = {std::min(z0[0] + T - 1, upper.x()), std::min(z0[1] + T - 1, upper.y()),
+                       std::min(z0[2] + T - 1, upper.z())};
     tile(z0, z1);
   });
   return grid;

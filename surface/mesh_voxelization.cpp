@@ -3,14 +3,12 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <numeric>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 
@@ -51,8 +49,8 @@ inline int edge_sign(const Eigen::MatrixX3d& P, int u, int v, int b, int c, doub
 }
 
 struct Prepared {
-  Eigen::MatrixX3d P;       // merged vertex positions
-  std::vector<Tri> tris;    // non-degenerate triangles
+  Eigen::MatrixX3d P;     // merged vertex positions
+  std::vector<Tri> tris;  // non-degenerate triangles
 };
 
 Prepared prepare(const PolygonMesh& mesh, MeshVoxelizationReport& r) {
@@ -62,7 +60,8 @@ Prepared prepare(const PolygonMesh& mesh, MeshVoxelizationReport& r) {
     if (!mesh.positions.row(v).allFinite())
       throw InputError("mesh voxelization: vertex " + std::to_string(v) + " has a non-finite position");
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (mesh.faces[f].size() < 3) throw InputError("mesh voxelization: face " + std::to_string(f) + " has fewer than 3 corners");
+    if (mesh.faces[f].size() < 3)
+      throw InputError("mesh voxelization: face " + std::to_string(f) + " has fewer than 3 corners");
     for (int id : mesh.faces[f])
       if (id < 0 || id >= nv)
         throw InputError("mesh voxelization: face " + std::to_string(f) + " refers to vertex " + std::to_string(id) +
@@ -122,15 +121,19 @@ Prepared prepare(const PolygonMesh& mesh, MeshVoxelizationReport& r) {
       ++j;
     }
     const int n = forward + backward;
-    if (n == 1) ++r.boundary_edges;
-    else if (n > 2) ++r.nonmanifold_edges;
-    else if (forward != 1) ++r.inconsistent_edges;
+    if (n == 1)
+      ++r.boundary_edges;
+    else if (n > 2)
+      ++r.nonmanifold_edges;
+    else if (forward != 1)
+      ++r.inconsistent_edges;
     i = j;
   }
   // Global orientation: the signed volume is positive for an outward-oriented closed mesh.
   double vol = 0;
   for (const Tri& t : out.tris)
-    vol += Eigen::Vector3d(out.P.row(t[0])).dot(Eigen::Vector3d(out.P.row(t[1])).cross(Eigen::Vector3d(out.P.row(t[2]))));
+    vol +=
+        Eigen::Vector3d(out.P.row(t[0])).dot(Eigen::Vector3d(out.P.row(t[1])).cross(Eigen::Vector3d(out.P.row(t[2]))));
   r.inward_oriented = vol < 0;
   return out;
 }
@@ -196,8 +199,10 @@ class RayCaster {
         if (s_ab == 0 || s_ab != s_bc || s_ab != s_ca) continue;
         const double sum = e0 + e1 + e2;
         double x;
-        if (sum != 0) x = (e0 * m_.P(t[0], a_) + e1 * m_.P(t[1], a_) + e2 * m_.P(t[2], a_)) / sum;
-        else x = (m_.P(t[0], a_) + m_.P(t[1], a_) + m_.P(t[2], a_)) / 3.0;  // unreachable for a real triangle
+        if (sum != 0)
+          x = (e0 * m_.P(t[0], a_) + e1 * m_.P(t[1], a_) + e2 * m_.P(t[2], a_)) / sum;
+        else
+          x = (m_.P(t[0], a_) + m_.P(t[1], a_) + m_.P(t[2], a_)) / 3.0;  // unreachable for a real triangle
         rows[std::size_t(j - lo_[b_])].push_back({x, int(orientation) * s_ab});
       }
     }
@@ -213,15 +218,15 @@ class RayCaster {
   std::vector<int> bucket_;
 };
 
-
 // ---- self-intersections: pairs of triangles without a common vertex that properly cross ----
-inline double orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+inline double orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                       const Eigen::Vector3d& d) {
   return (b - a).cross(c - a).dot(d - a);
 }
 
 // Segment pq crosses the interior of triangle abc (strictly: touching is not counted).
-bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                     const Eigen::Vector3d& c) {
+bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a,
+                     const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const double dp = orient3d(a, b, c, p), dq = orient3d(a, b, c, q);
   if (!((dp > 0 && dq < 0) || (dp < 0 && dq > 0))) return false;
   const double s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
@@ -257,7 +262,9 @@ std::int64_t count_self_intersections(const Prepared& m) {
     for (int a = 0; a < 3; ++a) c[a] = std::clamp(int((x[a] - lo[a]) / cell[a]), 0, g - 1);
     return c;
   };
-  auto cell_id = [&](const Eigen::Vector3i& c) { return (std::size_t(c.z()) * std::size_t(g) + std::size_t(c.y())) * std::size_t(g) + std::size_t(c.x()); };
+  auto cell_id = [&](const Eigen::Vector3i& c) {
+    return (std::size_t(c.z()) * std::size_t(g) + std::size_t(c.y())) * std::size_t(g) + std::size_t(c.x());
+  };
   const std::size_t ncells = std::size_t(g) * std::size_t(g) * std::size_t(g);
   std::vector<std::vector<int>> cells(ncells);
   for (std::size_t t = 0; t < nt; ++t) {
@@ -313,7 +320,8 @@ std::vector<std::string> MeshVoxelizationReport::warnings() const {
        << " edges are traversed in the same direction by both their triangles";
     w.push_back(os.str());
   }
-  if (degenerate_triangles) w.push_back(std::to_string(degenerate_triangles) + " degenerate (zero-area) triangles ignored");
+  if (degenerate_triangles)
+    w.push_back(std::to_string(degenerate_triangles) + " degenerate (zero-area) triangles ignored");
   if (inward_oriented) w.push_back("mesh is oriented inward (negative volume): orientation flipped");
   if (merged_vertices) w.push_back(std::to_string(merged_vertices) + " duplicate vertices (equal positions) merged");
   return w;
@@ -330,7 +338,8 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
   const double side = (r.bbox_max - r.bbox_min).maxCoeff();
   double h = 0;
   if (params.resolution > 0) {
-    if (params.resolution > 100000) throw InputError("mesh voxelization: resolution " + std::to_string(params.resolution) + " is absurd");
+    if (params.resolution > 100000)
+      throw InputError("mesh voxelization: resolution " + std::to_string(params.resolution) + " is absurd");
     if (!(side > 0)) throw InputError("mesh voxelization: the mesh bounding box is a single point");
     h = side / params.resolution;
   } else {
@@ -347,7 +356,8 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
   Eigen::Vector3i lo, hi;
   for (int c = 0; c < 3; ++c) {
     const double l = std::floor(r.bbox_min[c] / h) - 1, u = std::ceil(r.bbox_max[c] / h) + 1;
-    if (!(std::abs(l) < 1e9 && std::abs(u) < 1e9)) throw InputError("mesh voxelization: grid step too small for the mesh extent");
+    if (!(std::abs(l) < 1e9 && std::abs(u) < 1e9))
+      throw InputError("mesh voxelization: grid step too small for the mesh extent");
     lo[c] = int(l);
     hi[c] = int(u);
   }
@@ -384,9 +394,9 @@ VoxelGrid voxelize_mesh(const PolygonMesh& mesh, const MeshVoxelizationParams& p
     const double vote_bytes = double(n.x()) * n.y() * n.z();
     if (vote_bytes > 4294967296.0) {
       std::ostringstream os;
-      os << "mesh voxelization: the mesh is not closed (" << r.boundary_edges << " boundary edges, " << r.nonmanifold_edges
-         << " non-manifold edges) and the ray vote at this resolution would need " << vote_bytes / 1073741824.0
-         << " GiB; close the mesh or use a coarser resolution";
+      os << "mesh voxelization: the mesh is not closed (" << r.boundary_edges << " boundary edges, "
+         << r.nonmanifold_edges << " non-manifold edges) and the ray vote at this resolution would need "
+         << vote_bytes / 1073741824.0 << " GiB; close the mesh or use a coarser resolution";
       throw InputError(os.str());
     }
     std::vector<std::uint8_t> votes(std::size_t(vote_bytes), 0);

@@ -1,5 +1,5 @@
 #pragma once
-// Voxelization of a closed triangle (or polygon) mesh: every voxel whose centre h*z (spec §0)
+// Voxelization of a closed triangle (or polygon) mesh: every voxel whose centre h*z (docs/math.md §0)
 // lies inside the mesh is set, so that real models become digital surfaces (extract_surface).
 //
 // Inside test: exact signed crossing counts of axis-parallel rays through the voxel centres
@@ -10,12 +10,11 @@
 // winding number (inside iff > 0 after orienting the mesh outward); for a mesh with holes the
 // winding number depends on the ray, and the six axis rays vote (inside iff at least 4 say so).
 #include <Eigen/Core>
+#include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <corrlap/core/polygon_mesh.hpp>
-#include <corrlap/core/voxel_grid.hpp>
 
 namespace corrlap {
 
@@ -31,14 +30,14 @@ struct MeshVoxelizationParams {
 struct MeshVoxelizationReport {
   int input_vertices = 0, merged_vertices = 0;  ///< vertices merged because they had equal positions
   int triangles = 0, degenerate_triangles = 0;  ///< degenerate: zero area
-  int boundary_edges = 0;       ///< edges with one triangle (holes)
-  int nonmanifold_edges = 0;    ///< edges with more than two triangles
-  int inconsistent_edges = 0;   ///< edges whose two triangles traverse them in the same direction
-  bool inward_oriented = false; ///< negative signed volume: orientation flipped before the test
-  std::int64_t ambiguous_voxels = 0;  ///< closed: winding number not in {0,1} (self-intersection,
-                                      ///< overlapping parts); open: rays disagreeing
-  std::int64_t self_intersections = 0;  ///< pairs of triangles without a common vertex whose
-                                        ///< interiors cross (touching contacts are not counted)
+  int boundary_edges = 0;                       ///< edges with one triangle (holes)
+  int nonmanifold_edges = 0;                    ///< edges with more than two triangles
+  int inconsistent_edges = 0;                   ///< edges whose two triangles traverse them in the same direction
+  bool inward_oriented = false;                 ///< negative signed volume: orientation flipped before the test
+  std::int64_t ambiguous_voxels = 0;            ///< closed: winding number not in {0,1} (self-intersection,
+                                                ///< overlapping parts); open: rays disagreeing
+  std::int64_t self_intersections = 0;          ///< pairs of triangles without a common vertex whose
+                                                ///< interiors cross (touching contacts are not counted)
   std::int64_t inside_voxels = 0;
   double h = 0.0;
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero(), bbox_max = Eigen::Vector3d::Zero();

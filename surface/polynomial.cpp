@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <limits>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 
@@ -25,8 +24,7 @@ void Polynomial::resize(int dx, int dy, int dz) {
   std::vector<double> c(std::size_t(dx + 1) * (dy + 1) * (dz + 1), 0.0);
   for (int i = 0; i <= std::min(dx, deg_[0]); ++i)
     for (int j = 0; j <= std::min(dy, deg_[1]); ++j)
-      for (int k = 0; k <= std::min(dz, deg_[2]); ++k)
-        c[(std::size_t(i) * (dy + 1) + j) * (dz + 1) + k] = at(i, j, k);
+      for (int k = 0; k <= std::min(dz, deg_[2]); ++k) c[(std::size_t(i) * (dy + 1) + j) * (dz + 1) + k] = at(i, j, k);
   c_.swap(c);
   deg_[0] = dx;
   deg_[1] = dy;
@@ -220,8 +218,10 @@ std::string Polynomial::to_string() const {
       for (int k = deg_[2]; k >= 0; --k) {
         const double c = at(i, j, k);
         if (c == 0.0) continue;
-        if (!first) os << (c < 0 ? " - " : " + ");
-        else if (c < 0) os << "-";
+        if (!first)
+          os << (c < 0 ? " - " : " + ");
+        else if (c < 0)
+          os << "-";
         first = false;
         const double a = std::abs(c);
         const int e[3] = {i, j, k};
@@ -278,9 +278,12 @@ class Parser {
   Polynomial expr() {
     Polynomial p = term();
     for (;;) {
-      if (accept('+')) p = p + term();
-      else if (accept('-')) p = p - term();
-      else return p;
+      if (accept('+'))
+        p = p + term();
+      else if (accept('-'))
+        p = p - term();
+      else
+        return p;
     }
   }
   Polynomial term() {
@@ -339,8 +342,7 @@ class Parser {
     if (c == 'z' || c == 'Z') return ++pos_, Polynomial::variable(2);
     if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
       const std::size_t start = pos_;
-      while (pos_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.'))
-        ++pos_;
+      while (pos_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.')) ++pos_;
       if (pos_ < s_.size() && (s_[pos_] == 'e' || s_[pos_] == 'E')) {
         std::size_t q = pos_ + 1;
         if (q < s_.size() && (s_[q] == '+' || s_[q] == '-')) ++q;

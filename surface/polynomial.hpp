@@ -1,5 +1,5 @@
 #pragma once
-// Trivariate polynomials P(x, y, z) with a parser for strings such as "x^2+y^2+z^2-1" (spec §1.1).
+// Trivariate polynomials P(x, y, z) with a parser for strings such as "x^2+y^2+z^2-1" (docs/math.md §1.1).
 #include <Eigen/Core>
 #include <string>
 #include <string_view>
@@ -31,8 +31,7 @@ class Polynomial {
 
   /// Conservative range of P over the box lo..hi (interval arithmetic on the monomials),
   /// widened by a relative rounding margin so that "hi < 0" really means P < 0 everywhere.
-  void bounds(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double& min_value,
-              double& max_value) const;
+  void bounds(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double& min_value, double& max_value) const;
 
   int degree(int axis) const { return deg_[axis]; }
   int total_degree() const;

@@ -1,9 +1,7 @@
 // corrlap backends: the linear solver and eigen solver backends with their options.
-#include <iostream>
-
-#include <nlohmann/json.hpp>
-
 #include <corrlap/backends/registry.hpp>
+#include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "command.hpp"
 
@@ -41,7 +39,9 @@ RegisterCommand reg(45, "backends", [](CLI::App& app) {
     const nlohmann::json linear = describe(linear_solver_registry());
     const nlohmann::json eigen = describe(eigen_solver_registry());
     if (*json) {
-      std::cout << nlohmann::json{{"linear_solvers", linear}, {"eigen_solvers", eigen}}.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+      std::cout << nlohmann::json{{"linear_solvers", linear}, {"eigen_solvers", eigen}}.dump(
+                       2, ' ', false, nlohmann::json::error_handler_t::replace)
+                << "\n";
       return;
     }
     print(linear, "linear solvers (config key \"solver\")");

@@ -1,17 +1,16 @@
-// corrlap curvature: corrected curvature measures (spec §8) -> H, G, k1, k2, directions per face/vertex.
+// corrlap curvature: corrected curvature measures (docs/math.md §8) -> H, G, k1, k2, directions per face/vertex.
 #include <chrono>
-#include <filesystem>
-#include <iostream>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <filesystem>
+#include <iostream>
 
-#include "validators.hpp"
 #include "command.hpp"
 #include "normal_options.hpp"
 #include "surface_source.hpp"
+#include "validators.hpp"
 
 namespace corrlap::cli {
 
@@ -55,10 +54,10 @@ void run(const CurvatureArgs& a) {
   }
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
-  // The normals of `corrlap operators` for the same source (spec §1.5, resolve_normals).
+  // The normals of `corrlap operators` for the same source (docs/math.md §1.5, resolve_normals).
   const NormalFields n = opt.resolve(surface, need, "curvature");
-  const CorrectedCurvature cc =
-      need == NormalKind::Vertex ? CorrectedCurvature::interpolated(mesh, n.vertex) : CorrectedCurvature::constant(mesh, n.face);
+  const CorrectedCurvature cc = need == NormalKind::Vertex ? CorrectedCurvature::interpolated(mesh, n.vertex)
+                                                           : CorrectedCurvature::constant(mesh, n.face);
   const CurvatureEstimates ef = cc.at_faces(a.radius);
   const CurvatureEstimates ev = cc.at_vertices(a.radius);
   std::filesystem::create_directories(a.out);
@@ -82,17 +81,20 @@ void run(const CurvatureArgs& a) {
 
 RegisterCommand reg(31, "curvature", [](CLI::App& app) {
   auto args = std::make_shared<CurvatureArgs>();
-  auto* cmd = app.add_subcommand("curvature", "corrected curvature measures: H, G, k1, k2 and directions (spec 8)");
+  auto* cmd =
+      app.add_subcommand("curvature", "corrected curvature measures: H, G, k1, k2 and directions (docs/math.md §8)");
   args->source.add_options(*cmd, /*with_mesh=*/true);
   cmd->add_option("--face-normals", args->face_normals, "with --mesh: one unit normal per face (constant per face)");
   cmd->add_option("--vertex-normals", args->vertex_normals, "with --mesh: one unit normal per vertex (interpolated)");
-  cmd->add_option("--normals", args->normals, "with --shape/--volume: true or ii (default: true for shapes, ii for volumes)")
+  cmd->add_option("--normals", args->normals,
+                  "with --shape/--volume: true or ii (default: true for shapes, ii for volumes)")
       ->check(CLI::IsMember({"true", "ii", "trivial"}));
   cmd->add_flag("--constant", args->constant, "with --normals: use the face normals as constant per face");
   cmd->add_option("--radius", args->radius, "ball radius in world units (default 0.1)")->check(non_negative_number());
   cmd->add_option("--ii-radius", args->ii_radius, "II r-radius k (default 3)")->check(positive_number());
   cmd->add_option("--ii-alpha", args->ii_alpha, "II alpha (default 0.33)");
-  cmd->add_option("--out", args->out, "output directory (H_faces.txt, G_, k1_, k2_, d1_, d2_ per faces/vertices, curvature.ply)")
+  cmd->add_option("--out", args->out,
+                  "output directory (H_faces.txt, G_, k1_, k2_, d1_, d2_ per faces/vertices, curvature.ply)")
       ->required();
   cmd->callback([args] { run(*args); });
 });

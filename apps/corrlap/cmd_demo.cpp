@@ -1,12 +1,8 @@
 // corrlap demo: the main job on a built-in example (the unit sphere), running the whole data flow
 // voxels -> digital surface -> normals and curvature -> operators -> solver -> results.
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <string>
-
-#include <Eigen/Geometry>
-
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/discretizations/registry.hpp>
@@ -18,6 +14,8 @@
 #include <corrlap/problems/test_functions.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <cstdio>
+#include <string>
 
 #include "command.hpp"
 
@@ -36,21 +34,23 @@ DigitizationParams sphere_params(double h) {
 }
 
 void digitization_table(const ImplicitShape& sphere) {
-  std::printf("== 1. Digitization of the unit sphere (spec §1): the digital area does not converge to 4*pi\n");
+  std::printf("== 1. Digitization of the unit sphere (docs/math.md §1): the digital area does not converge to 4*pi\n");
   std::printf("%8s %10s %10s %10s %6s %12s %10s %10s\n", "h", "vertices", "edges", "faces", "euler", "area F*h^2",
               "area/4pi", "time_s");
   for (double h : {0.2, 0.1, 0.05, 0.01}) {
     const auto t0 = Clock::now();
     const SurfelMesh mesh = extract_surface(digitize(sphere, sphere_params(h)));
     const MeshInfo info = compute_mesh_info(mesh);
-    std::printf("%8.3f %10d %10d %10d %6d %12.6f %10.6f %10.4f\n", h, info.vertices, info.edges, info.faces,
-                info.euler, info.area, info.area / (4 * M_PI), since(t0));
+    std::printf("%8.3f %10d %10d %10d %6d %12.6f %10.6f %10.4f\n", h, info.vertices, info.edges, info.faces, info.euler,
+                info.area, info.area / (4 * M_PI), since(t0));
   }
   std::printf("\n");
 }
 
 void normals_and_curvature(const ImplicitShape& sphere) {
-  std::printf("== 2. Normals (spec §7) and corrected curvature (spec §8, exact vertex normals) on the unit sphere\n");
+  std::printf(
+      "== 2. Normals (docs/math.md §7) and corrected curvature (docs/math.md §8, exact vertex normals) on the unit "
+      "sphere\n");
   std::printf("%8s %16s %16s %12s %12s %10s\n", "h", "II mean angle", "II max angle", "mean H", "max|H-1|", "time_s");
   for (double h : {0.1, 0.05}) {
     const auto t0 = Clock::now();
@@ -65,7 +65,7 @@ void normals_and_curvature(const ImplicitShape& sphere) {
       worst = std::max(worst, a);
     }
     mean /= mesh.num_faces();
-    // Exact radial vertex normals, as in spec §12.4 (mean H 1.0026, max |H-1| 0.045 at h = 0.1), not
+    // Exact radial vertex normals, as in docs/math.md §12.4 (mean H 1.0026, max |H-1| 0.045 at h = 0.1), not
     // the "true" field of --normals true (normalized sum of face normals: max |H-1| 0.33 here).
     const Eigen::MatrixX3d vn = exact_vertex_normals(sphere, mesh);
     const CurvatureEstimates c = CorrectedCurvature::interpolated(mesh, vn).at_vertices(0.1);
@@ -76,11 +76,11 @@ void normals_and_curvature(const ImplicitShape& sphere) {
 }
 
 void operators_table(const ImplicitShape& sphere) {
-  std::printf("== 3. Operators (true normals) -> backward Poisson f = x^2 (spec §10.4, %s) and eigenvalues\n",
+  std::printf("== 3. Operators (true normals) -> backward Poisson f = x^2 (docs/math.md §10.4, %s) and eigenvalues\n",
               kDefaultLinearSolver);
   std::printf("   area = 1^T M 1 (4*pi = %.5f); eigenvalues -lambda should be 0, 2 (x3), 6 (x5)\n", 4 * M_PI);
-  std::printf("%18s %7s %10s %12s %12s %10s %10s %10s\n", "method", "h", "area", "Poisson L2", "order", "mu_1",
-              "mu_4", "time_s");
+  std::printf("%18s %7s %10s %12s %12s %10s %10s %10s\n", "method", "h", "area", "Poisson L2", "order", "mu_1", "mu_4",
+              "time_s");
   NormalRequest request;
   request.source = NormalSource::True;
   for (const char* method : {"polydec", "projected-polydec", "fem", "interpolated", "corrected-vrm"}) {
@@ -94,7 +94,8 @@ void operators_table(const ImplicitShape& sphere) {
       auto solver = make_linear_solver(kDefaultLinearSolver);
       const PoissonErrors e = solve_poisson(ops, mesh.positions, test_function("x2"), *solver).errors;
       const EigenResult r = make_eigen_solver(kDefaultEigenSolver)->solve(ops.L, ops.M, 5);
-      const double area = Eigen::VectorXd::Ones(mesh.num_vertices()).dot(ops.M * Eigen::VectorXd::Ones(mesh.num_vertices()));
+      const double area =
+          Eigen::VectorXd::Ones(mesh.num_vertices()).dot(ops.M * Eigen::VectorXd::Ones(mesh.num_vertices()));
       char order[32] = "";
       if (previous > 0) std::snprintf(order, sizeof order, "%.2f", std::log(previous / e.l2) / std::log(2.0));
       std::printf("%18s %7.3f %10.5f %12.3e %12s %10.5f %10.5f %10.3f\n", method, h, area, e.l2, order, r.values[1],
@@ -102,8 +103,9 @@ void operators_table(const ImplicitShape& sphere) {
       previous = e.l2;
     }
   }
-  std::printf("\nUncorrected PolyDEC neither gets the area nor the spectrum right; the corrected methods do,\n"
-              "and their Poisson error decreases about like h^1.7 (spec §12.5).\n");
+  std::printf(
+      "\nUncorrected PolyDEC neither gets the area nor the spectrum right; the corrected methods do,\n"
+      "and their Poisson error decreases about like h^1.7 (docs/math.md §12.5).\n");
 }
 
 void run_demo() {

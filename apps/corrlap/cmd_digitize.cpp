@@ -1,12 +1,11 @@
 // corrlap digitize: implicit shape or volume -> digital surface mesh (+ optional normals).
-#include <iostream>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <iostream>
 
 #include "command.hpp"
 #include "surface_source.hpp"
@@ -28,10 +27,9 @@ void run(const DigitizeArgs& a) {
     std::string kind = a.normals;
     auto shape = a.source.implicit_shape();
     if (kind == "auto") kind = shape ? "true" : "trivial";
-    if (kind == "true" && !shape)
-      throw InputError("--normals true needs an implicit shape (--shape or --polynomial)");
+    if (kind == "true" && !shape) throw InputError("--normals true needs an implicit shape (--shape or --polynomial)");
     const Eigen::MatrixX3d fn = kind == "true" ? true_face_normals(*shape, mesh) : mesh.face_normals_from_positions();
-    // spec §1.5: vertex normals = normalized sum of incident face normals (the reference's choice)
+    // docs/math.md §1.5: vertex normals = normalized sum of incident face normals (the reference's choice)
     const Eigen::MatrixX3d vn = vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices());
     if (!a.face_normals_out.empty()) write_normals(a.face_normals_out, fn);
     if (!a.vertex_normals_out.empty()) write_normals(a.vertex_normals_out, vn);
@@ -39,13 +37,14 @@ void run(const DigitizeArgs& a) {
     attributes.vertex_normals = vn;
   }
   if (!a.out.empty()) write_mesh(a.out, mesh, attributes);
-  std::cerr << "digitized " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, "
-            << mesh.num_faces() << " faces" << (a.out.empty() ? "" : " -> " + a.out) << "\n";
+  std::cerr << "digitized " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
+            << " faces" << (a.out.empty() ? "" : " -> " + a.out) << "\n";
 }
 
 RegisterCommand reg(10, "digitize", [](CLI::App& app) {
   auto args = std::make_shared<DigitizeArgs>();
-  auto* cmd = app.add_subcommand("digitize", "digitize an implicit shape, a volume or a closed triangle mesh into a surfel mesh");
+  auto* cmd = app.add_subcommand("digitize",
+                                 "digitize an implicit shape, a volume or a closed triangle mesh into a surfel mesh");
   args->source.add_options(*cmd, /*with_mesh=*/false);
   cmd->add_option("--out", args->out, "output mesh (.obj, or .ply with face and vertex normals)");
   cmd->add_option("--face-normals", args->face_normals_out, "write one normal per face (text, nx ny nz)");

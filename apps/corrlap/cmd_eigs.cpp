@@ -1,14 +1,12 @@
-// corrlap eigs: the k smallest values of -lambda for L u = lambda M u (spec §10.5, §12.3).
+// corrlap eigs: the k smallest values of -lambda for L u = lambda M u (docs/math.md §10.5, §12.3).
 // Dense solver for small meshes by default; --solver NAME uses Spectra's shift-invert Lanczos with
 // that linear solver backend for (L - sigma M)^{-1}.
 #include <chrono>
-#include <cstdio>
-#include <iostream>
-
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
-
 #include <corrlap/discretizations/registry.hpp>
+#include <cstdio>
+#include <iostream>
 
 #include "command.hpp"
 #include "operator_options.hpp"
@@ -48,9 +46,8 @@ void run(const EigsArgs& a) {
   for (Eigen::Index i = 0; i < r.values.size(); ++i) std::fprintf(f, "%.17g\n", r.values[i]);
   if (f != stdout) std::fclose(f);
   if (r.values.size() < a.k) std::cerr << "eigs: only " << r.values.size() << " eigenvalues exist\n";
-  std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << n << " x " << n << " problem with "
-            << eig->name() << (sparse ? " (" + config.get_string("solver", "") + ")" : std::string()) << " in "
-            << seconds << " s\n";
+  std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << n << " x " << n << " problem with " << eig->name()
+            << (sparse ? " (" + config.get_string("solver", "") + ")" : std::string()) << " in " << seconds << " s\n";
 }
 
 RegisterCommand reg(31, "eigs", [](CLI::App& app) {
@@ -61,7 +58,8 @@ RegisterCommand reg(31, "eigs", [](CLI::App& app) {
   cmd->add_option("--out", args->out, "write one value per line (ascending, %.17g) instead of printing");
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, eigen-llt, cg); default: "
-                              "dense solver up to 6000 unknowns, ") + kDefaultLinearSolver + " above");
+                              "dense solver up to 6000 unknowns, ") +
+                      kDefaultLinearSolver + " above");
   cmd->add_option("--solver-config", args->solver_config_file, "JSON file of eigen/linear solver options");
   cmd->add_option("--solver-option", args->solver_options, "eigen/linear solver option key=value (repeatable)");
   cmd->callback([args] { run(*args); });

@@ -1,12 +1,10 @@
 // corrlap info: counts and topology of a mesh file.
 #include <cmath>
-#include <iostream>
-
-#include <nlohmann/json.hpp>
-
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "command.hpp"
 
@@ -48,7 +46,8 @@ void run(const InfoArgs& a) {
             << "faces                 " << info.faces << "\n"
             << "euler characteristic  " << info.euler << "\n"
             << "components            " << info.components << "\n"
-            << "genus                 " << (info.genus() >= 0 ? std::to_string(info.genus()) : "n/a (open or non-manifold)") << "\n"
+            << "genus                 "
+            << (info.genus() >= 0 ? std::to_string(info.genus()) : "n/a (open or non-manifold)") << "\n"
             << "boundary edges        " << info.boundary_edges << "\n"
             << "non-manifold edges    " << info.nonmanifold_edges << "\n"
             << "non-manifold vertices " << info.nonmanifold_vertices << "\n"

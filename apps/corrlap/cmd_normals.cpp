@@ -1,13 +1,12 @@
 // corrlap normals: face or vertex normals of a digital surface (trivial, true, integral invariant).
 #include <chrono>
+#include <corrlap/io/text_io.hpp>
 #include <iostream>
 
-#include <corrlap/io/text_io.hpp>
-
-#include "validators.hpp"
 #include "command.hpp"
 #include "normal_options.hpp"
 #include "surface_source.hpp"
+#include "validators.hpp"
 
 namespace corrlap::cli {
 
@@ -26,9 +25,10 @@ void run(const NormalsArgs& a) {
   opt.ii.alpha = a.alpha;
   const auto t0 = std::chrono::steady_clock::now();
   const LoadedSurface surface = a.source.load();
-  // Vertices: the normalized sum of the incident face normals (spec §1.5), as every command uses.
+  // Vertices: the normalized sum of the incident face normals (docs/math.md §1.5), as every command uses.
   const bool at_vertices = a.at == "vertices";
-  const NormalFields fields = opt.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
+  const NormalFields fields =
+      opt.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
   const Eigen::MatrixX3d& n = at_vertices ? fields.vertex : fields.face;
   write_normals(a.out, n);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -40,7 +40,8 @@ RegisterCommand reg(30, "normals", [](CLI::App& app) {
   auto args = std::make_shared<NormalsArgs>();
   auto* cmd = app.add_subcommand("normals", "estimate normals: one 'nx ny nz' per face (digitize order) or per vertex");
   args->source.add_options(*cmd, /*with_mesh=*/true);
-  cmd->add_option("--estimator", args->estimator, "ii (integral invariant, spec 7), true (implicit shapes), trivial")
+  cmd->add_option("--estimator", args->estimator,
+                  "ii (integral invariant, docs/math.md §7), true (implicit shapes), trivial")
       ->check(CLI::IsMember({"ii", "true", "trivial"}));
   cmd->add_option("--radius", args->radius, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
       ->check(positive_number());

@@ -1,8 +1,7 @@
 // corrlap operators: writes L.mtx and M.mtx (Matrix Market, full precision) of one discretization.
+#include <corrlap/io/text_io.hpp>
 #include <filesystem>
 #include <iostream>
-
-#include <corrlap/io/text_io.hpp>
 
 #include "command.hpp"
 #include "operator_options.hpp"

@@ -1,19 +1,17 @@
-// corrlap solve: pure-Neumann Poisson problem of spec §10.4 with any discretization and any
+// corrlap solve: pure-Neumann Poisson problem of docs/math.md §10.4 with any discretization and any
 // linear solver backend; prints timings, the residual and the error vs the analytic solution.
-#include <filesystem>
 #include <chrono>
 #include <cmath>
-#include <iostream>
-#include <optional>
-
-#include <nlohmann/json.hpp>
-
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/problems/test_functions.hpp>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
 
 #include "command.hpp"
 #include "normal_options.hpp"
@@ -55,18 +53,19 @@ void run(const SolveArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
-  // The normals of `corrlap operators` for the same options (spec §1.5, resolve_normals).
+  // The normals of `corrlap operators` for the same options (docs/math.md §1.5, resolve_normals).
   const NormalFields normals = a.normals.resolve(surface, method->required_normals(), a.method);
   const std::string kind = method->required_normals() == NormalKind::None ? "none" : a.normals.describe(surface);
   const Operators ops = method->assemble(mesh, normals, params);
   for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
   if (const std::string note = boundary_condition_note(mesh); !note.empty()) std::cerr << "solve: " << note << "\n";
   if (ops.domain != Operators::Domain::Vertices)
-    throw InputError("corrlap solve: method '" + a.method + "' defines operators on faces; the Poisson problem is set on vertices");
+    throw InputError("corrlap solve: method '" + a.method +
+                     "' defines operators on faces; the Poisson problem is set on vertices");
   const double assemble_s = seconds_since(t0);
   const Eigen::Index n = ops.L.rows();
 
-  // Right-hand side b = Delta f at q_v = (x_v - c) / |x_v - c| (spec §10.1), or from a file.
+  // Right-hand side b = Delta f at q_v = (x_v - c) / |x_v - c| (docs/math.md §10.1), or from a file.
   const Eigen::Vector3d c(a.source.center[0], a.source.center[1], a.source.center[2]);
   Eigen::VectorXd g;
   double residual = 0.0;
@@ -75,7 +74,7 @@ void run(const SolveArgs& a) {
     const PoissonResult r = solve_poisson(ops, mesh.positions, *analytic, *solver, c);
     g = r.g;
     residual = r.residual;
-    // The analytic solution is known on the unit sphere only (spec §10.2).
+    // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
     const auto& shape = surface.shape;
     if (shape && std::abs(shape->sphere_radius() - 1.0) < 1e-12) err = r.errors;
   } else {
@@ -86,8 +85,8 @@ void run(const SolveArgs& a) {
     }
     const Eigen::VectorXd b = read_scalars(a.rhs);
     if (b.size() != n)
-      throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(b.size()) + " values, the mesh has " +
-                       std::to_string(n) + " vertices");
+      throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(b.size()) +
+                       " values, the mesh has " + std::to_string(n) + " vertices");
     g = solve_neumann_poisson(ops.L, ops.M, b, *solver, 0.0, 0);
     residual = neumann_residual(ops.L, ops.M, b, g, 0);
   }
@@ -124,7 +123,7 @@ void run(const SolveArgs& a) {
     if (report.iterations > 0) std::cout << " (" << report.iterations << " iterations)";
     std::cout << "\nresidual    " << residual << "\n";
     if (err)
-      std::cout << "error Linf  " << err->linf << "\nerror L2    " << err->l2 << " (M-weighted, spec §10.4)\n";
+      std::cout << "error Linf  " << err->linf << "\nerror L2    " << err->l2 << " (M-weighted, docs/math.md §10.4)\n";
     else
       std::cout << "error       n/a (analytic solution known for x2/expx/p6 on the unit sphere only)\n";
   }
@@ -133,19 +132,23 @@ void run(const SolveArgs& a) {
 
 RegisterCommand reg(40, "solve", [](CLI::App& app) {
   auto args = std::make_shared<SolveArgs>();
-  auto* cmd = app.add_subcommand("solve", "Poisson problem L g = M b on a closed surface (spec §10.4) with any method and backend");
+  auto* cmd = app.add_subcommand(
+      "solve", "Poisson problem L g = M b on a closed surface (docs/math.md §10.4) with any method and backend");
   args->source.add_options(*cmd);
   cmd->add_option("--method", args->method, "discretization (registry name)")->capture_default_str();
   args->normals.add_options(*cmd);
   cmd->add_option("--param", args->params, "method parameter key=value (repeatable)");
   std::string names;
   for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
-  cmd->add_option("--rhs", args->rhs,
-                  names + " (spec §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
+  cmd->add_option(
+         "--rhs", args->rhs,
+         names +
+             " (docs/math.md §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
       ->capture_default_str();
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
-  cmd->add_option("--config", args->config_file, "JSON file of backend options, e.g. {\"solver\": \"cg\", \"tolerance\": 1e-10}");
+  cmd->add_option("--config", args->config_file,
+                  "JSON file of backend options, e.g. {\"solver\": \"cg\", \"tolerance\": 1e-10}");
   cmd->add_option("options", args->options, "backend options key=value (override --config)");
   cmd->add_option("--out", args->out, "write the solution g (one value per vertex)");
   cmd->add_flag("--json", args->json, "print one JSON object");

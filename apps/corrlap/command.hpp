@@ -1,7 +1,6 @@
 #pragma once
 // Subcommands of the corrlap CLI register themselves here (one file per subcommand).
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <string>
 #include <vector>
@@ -9,7 +8,7 @@
 namespace corrlap::cli {
 
 struct Command {
-  int order;                                  ///< position in --help
+  int order;  ///< position in --help
   std::string name;
   std::function<void(CLI::App& parent)> setup;  ///< adds the subcommand and its callback
 };

@@ -1,13 +1,12 @@
 // corrlap: command-line front end. Each subcommand lives in its own cmd_*.cpp file.
 #include <algorithm>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/threads.hpp>
 #include <iostream>
 #include <new>
 
-#include <corrlap/core/error.hpp>
-#include <corrlap/core/threads.hpp>
-
-#include "validators.hpp"
 #include "command.hpp"
+#include "validators.hpp"
 
 namespace corrlap::cli {
 std::vector<Command>& commands() {
@@ -29,8 +28,10 @@ int main(int argc, char** argv) {
   for (const auto& c : list) c.setup(app);
   app.parse_complete_callback([&] {
     try {
-      if (threads > 0) set_thread_count(threads);
-      else apply_thread_count_from_environment();
+      if (threads > 0)
+        set_thread_count(threads);
+      else
+        apply_thread_count_from_environment();
     } catch (const corrlap::Error& e) {
       std::cerr << "corrlap: error: " << e.what() << "\n";
       std::exit(1);

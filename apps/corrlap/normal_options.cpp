@@ -1,10 +1,11 @@
 #include "normal_options.hpp"
-#include "validators.hpp"
 
 #include <atomic>
 #include <iostream>
 #include <memory>
 #include <mutex>
+
+#include "validators.hpp"
 
 namespace corrlap::cli {
 
@@ -28,10 +29,11 @@ ProgressFn stderr_progress(const std::string& what) {
 void NormalOptions::add_options(CLI::App& cmd) {
   cmd.add_option("--face-normals", face_file, "one unit normal per face (text, nx ny nz, file order)");
   cmd.add_option("--vertex-normals", vertex_file, "one unit normal per vertex (text, nx ny nz, file order)");
-  cmd.add_option("--normals", source,
-                 "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
-                 "spec 7), trivial (surfel normals), auto (true for shapes, ii for volumes); vertex normals are "
-                 "the normalized sum of the face normals (spec 1.5)")
+  cmd.add_option(
+         "--normals", source,
+         "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
+         "docs/math.md §7), trivial (surfel normals), auto (true for shapes, ii for volumes); vertex normals are "
+         "the normalized sum of the face normals (docs/math.md §1.5)")
       ->check(CLI::IsMember({"auto", "true", "ii", "trivial"}))
       ->capture_default_str();
   cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")

@@ -1,10 +1,9 @@
 #include "operator_options.hpp"
 
-#include <iostream>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/registry.hpp>
+#include <iostream>
 
 namespace corrlap::cli {
 
@@ -20,7 +19,7 @@ void OperatorOptions::add_options(CLI::App& cmd) {
       ->check(CLI::IsMember({"global", "local"}));
   cmd.add_option("--mass", mass, "fem: full (default) | lumped; heat-kernel: measure (default) | identity")
       ->check(CLI::IsMember({"full", "lumped", "measure", "identity"}));
-  cmd.add_option("--t", heat_t, "heat-kernel: diffusion time (default 0.1 h^(2/3), spec §6)");
+  cmd.add_option("--t", heat_t, "heat-kernel: diffusion time (default 0.1 h^(2/3), docs/math.md §6)");
   cmd.add_option("--cutoff", cutoff, "heat-kernel: couple points closer than cutoff * sqrt(2t) (default 3)");
   cmd.add_option("--orientation", orientation, "normals with u.n <= 0: error | warn (default) | clamp")
       ->check(CLI::IsMember({"error", "warn", "clamp"}));
@@ -34,7 +33,7 @@ OperatorOptions::Input OperatorOptions::prepare(bool extras) const {
   const auto disc = make_discretization(method);
   Input in;
   LoadedSurface surface = source.load();
-  // The one normal resolution of the library (spec §1.5): the same field for every command.
+  // The one normal resolution of the library (docs/math.md §1.5): the same field for every command.
   in.normals = normals.resolve(surface, disc->required_normals(), method);
   in.mesh = std::move(surface.mesh);
   if (!config_file.empty()) in.params = Config::from_json_file(config_file);
@@ -49,8 +48,10 @@ OperatorOptions::Input OperatorOptions::prepare(bool extras) const {
   if (extras) {
     bool supported = false;
     for (const auto& p : disc->parameters()) supported = supported || p.name == "extras";
-    if (supported) in.params.set("extras", true);
-    else std::cerr << "warning: " << method << " has no extra operators (D0, sharp, flat, M1)\n";
+    if (supported)
+      in.params.set("extras", true);
+    else
+      std::cerr << "warning: " << method << " has no extra operators (D0, sharp, flat, M1)\n";
   }
   return in;
 }

@@ -2,12 +2,10 @@
 // Options shared by `corrlap operators` and `corrlap eigs`: surface source, method, normals and
 // method parameters; builds the operators and reports warnings on stderr.
 #include <CLI/CLI.hpp>
-
+#include <corrlap/core/discretization.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <corrlap/core/discretization.hpp>
 
 #include "normal_options.hpp"
 #include "surface_source.hpp"

@@ -1,16 +1,16 @@
 #include "surface_source.hpp"
-#include "validators.hpp"
 
-#include <iostream>
-#include <sstream>
-
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/surface/mesh_voxelization.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/mesh_voxelization.hpp>
+#include <iostream>
+#include <sstream>
+
+#include "validators.hpp"
 
 namespace corrlap::cli {
 
@@ -25,9 +25,15 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   CLI::Option* m = nullptr;
   if (with_mesh) m = g->add_option("--mesh", mesh, "quad mesh of surfels (.obj), vertex/face order kept");
   g->require_option(1);
-  (void)s; (void)p; (void)v; (void)m; (void)mf;
-  h_option = cmd.add_option("--h", h, "grid step (shapes: world units per voxel; volumes: voxel size; mesh files: "
-                                      "voxel size in mesh units)")->check(positive_number());
+  (void)s;
+  (void)p;
+  (void)v;
+  (void)m;
+  (void)mf;
+  h_option = cmd.add_option("--h", h,
+                            "grid step (shapes: world units per voxel; volumes: voxel size; mesh files: "
+                            "voxel size in mesh units)")
+                 ->check(positive_number());
   cmd.add_option("--resolution", resolution, "mesh files: longest bounding-box side = N voxels")
       ->check(positive_number());
   cmd.add_option("--center", center, "shape centre X Y Z")->expected(3);
@@ -63,13 +69,15 @@ VoxelGrid SurfaceSource::voxels() const {
     VolumeReadOptions opt;
     opt.threshold = threshold;
     opt.h = h;
-    if (raw_dimensions.size() == 3) opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
+    if (raw_dimensions.size() == 3)
+      opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
     return read_volume_as_voxels(volume, opt);
   }
   if (!mesh_file.empty()) {
     const bool h_given = h_option && h_option->count() > 0;
     if (resolution > 0 && h_given) throw InputError("--mesh-file: give either --resolution or --h, not both");
-    if (resolution <= 0 && !h_given) throw InputError("--mesh-file needs --resolution N (voxels along the longest side) or --h STEP");
+    if (resolution <= 0 && !h_given)
+      throw InputError("--mesh-file needs --resolution N (voxels along the longest side) or --h STEP");
     MeshVoxelizationParams params;
     params.resolution = resolution;
     params.h = h;
@@ -104,11 +112,16 @@ LoadedSurface SurfaceSource::load() const {
 
 std::string SurfaceSource::describe() const {
   std::ostringstream os;
-  if (!shape.empty()) os << shape << ", h=" << h;
-  else if (!polynomial.empty()) os << "\"" << polynomial << "\", h=" << h;
-  else if (!volume.empty()) os << volume << ", threshold " << threshold;
-  else if (!mesh_file.empty()) os << mesh_file << (resolution > 0 ? ", resolution " + std::to_string(resolution) : ", h=" + std::to_string(h));
-  else os << mesh;
+  if (!shape.empty())
+    os << shape << ", h=" << h;
+  else if (!polynomial.empty())
+    os << "\"" << polynomial << "\", h=" << h;
+  else if (!volume.empty())
+    os << volume << ", threshold " << threshold;
+  else if (!mesh_file.empty())
+    os << mesh_file << (resolution > 0 ? ", resolution " + std::to_string(resolution) : ", h=" + std::to_string(h));
+  else
+    os << mesh;
   return os.str();
 }
 

@@ -2,14 +2,12 @@
 // Shared CLI options that produce a digital surface: --shape/--polynomial/--volume/--mesh-file/--mesh,
 // --h, --center, --bbox, --offset, --threshold, --raw-dimensions, --resolution.
 #include <CLI/CLI.hpp>
-
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/core/surfel_mesh.hpp>
-#include <corrlap/core/voxel_grid.hpp>
 
 namespace corrlap::cli {
 
@@ -23,16 +21,16 @@ struct LoadedSurface {
 
 struct SurfaceSource {
   std::string shape, polynomial, volume, mesh;
-  std::string mesh_file;                ///< closed triangle/polygon mesh voxelized (.obj, .ply, .off)
-  int resolution = 0;                   ///< mesh files: longest bbox side = resolution voxels
+  std::string mesh_file;  ///< closed triangle/polygon mesh voxelized (.obj, .ply, .off)
+  int resolution = 0;     ///< mesh files: longest bbox side = resolution voxels
   double h = 1.0;
   std::vector<double> center = {0.0, 0.0, 0.0};
   std::vector<double> bbox = {-10.0, 10.0};
   int offset = 5;
-  double threshold = 0.0;               ///< volumes: voxels with value > threshold are inside
-  std::vector<int> raw_dimensions;      ///< raw volumes: NX NY NZ
+  double threshold = 0.0;           ///< volumes: voxels with value > threshold are inside
+  std::vector<int> raw_dimensions;  ///< raw volumes: NX NY NZ
   bool allow_mesh = true;
-  CLI::Option* h_option = nullptr;      ///< to know whether --h was given explicitly
+  CLI::Option* h_option = nullptr;  ///< to know whether --h was given explicitly
 
   /// Adds the options to a subcommand.
   void add_options(CLI::App& cmd, bool with_mesh = true);

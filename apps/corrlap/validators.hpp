@@ -2,7 +2,6 @@
 // Option checks with messages a user can read: CLI11's PositiveNumber / NonNegativeNumber print
 // their range bound, the largest double, as a 309-digit number.
 #include <CLI/CLI.hpp>
-
 #include <cmath>
 #include <string>
 
@@ -20,7 +19,8 @@ inline CLI::Validator number_check(const char* description, bool (*accept)(doubl
           used = 0;
         }
         if (used != text.size() || used == 0) return "'" + text + "' is not a number";
-        if (!std::isfinite(value) || !accept(value)) return "must be " + std::string(description) + " (got " + text + ")";
+        if (!std::isfinite(value) || !accept(value))
+          return "must be " + std::string(description) + " (got " + text + ")";
         return {};
       },
       description);

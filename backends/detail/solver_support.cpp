@@ -71,13 +71,12 @@ bool Pattern::matches(const Eigen::SparseMatrix<double>& A) const {
 }
 
 void check_same_pattern(const Pattern& analyzed, const Eigen::SparseMatrix<double>& A, const std::string& solver) {
-  if (analyzed.empty())
-    throw SolverError(SolverStatus::NotAnalyzed, solver + ": factorize() called before analyze()");
+  if (analyzed.empty()) throw SolverError(SolverStatus::NotAnalyzed, solver + ": factorize() called before analyze()");
   if (!analyzed.matches(A)) {
     std::ostringstream os;
     os << solver << ": factorize() got a matrix (" << A.rows() << " x " << A.cols() << ", " << A.nonZeros()
-       << " nonzeros) whose sparsity pattern differs from the analyzed one (" << analyzed.rows << " x "
-       << analyzed.rows << ", " << analyzed.inner.size() << " nonzeros); call analyze() again";
+       << " nonzeros) whose sparsity pattern differs from the analyzed one (" << analyzed.rows << " x " << analyzed.rows
+       << ", " << analyzed.inner.size() << " nonzeros); call analyze() again";
     throw SolverError(SolverStatus::InvalidInput, os.str());
   }
 }

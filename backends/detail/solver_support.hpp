@@ -1,14 +1,12 @@
 #pragma once
 // Checks and helpers shared by the linear solver backends (input validation with SolverError
 // statuses, timing, config forwarding). Internal to backends/: no third-party solver header here.
-#include <chrono>
-#include <string>
-#include <vector>
-
 #include <Eigen/Sparse>
-
+#include <chrono>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/linear_solver.hpp>
+#include <string>
+#include <vector>
 
 namespace corrlap::detail {
 
@@ -44,9 +42,7 @@ double relative_residual(const Eigen::SparseMatrix<double>& A, const Eigen::Matr
 class Stopwatch {
  public:
   Stopwatch() : start_(std::chrono::steady_clock::now()) {}
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
 
  private:
   std::chrono::steady_clock::time_point start_;

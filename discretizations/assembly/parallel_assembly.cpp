@@ -1,14 +1,13 @@
 #include "parallel_assembly.hpp"
 
-#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
-
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
@@ -143,7 +142,6 @@ AssemblyPlan::AssemblyPlan(const int* ids, std::size_t num_elements, int k, int 
   start_[nnz] = std::int64_t(contributions_.size());
 }
 
-
 Eigen::SparseMatrix<double> AssemblyPlan::gather(const double* locals) const {
   // A fresh matrix filled in one parallel pass (row indices copied where the values are
   // written), rather than a serial copy of the pattern followed by the values.
@@ -176,10 +174,9 @@ Eigen::SparseMatrix<double> assemble(const AssemblyPlan& plan, const LocalKernel
   const std::size_t count = plan.num_elements() * kk;
   std::unique_ptr<double[]> locals(new double[count]);
   advise_huge_pages(locals.get(), count * sizeof(double));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, plan.num_elements(), 1024),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      kernel(r.begin(), r.end(), locals.get() + r.begin() * kk);
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, plan.num_elements(), 1024),
+      [&](const tbb::blocked_range<std::size_t>& r) { kernel(r.begin(), r.end(), locals.get() + r.begin() * kk); });
   return plan.gather(locals.get());
 }
 

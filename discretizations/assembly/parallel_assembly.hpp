@@ -13,14 +13,13 @@
 
 namespace corrlap {
 
-/// Assembly plan for elements with k vertex ids each, into an n x n matrix (vertex-based, spec §0:
+/// Assembly plan for elements with k vertex ids each, into an n x n matrix (vertex-based, docs/math.md §0:
 /// A[v_i, v_j] += A_f[i, j]); with signs, edge-based: A[e_i, e_j] += s_i s_j A_f[i, j].
 class AssemblyPlan {
  public:
   AssemblyPlan() = default;
   /// element_ids: num_elements x k ids (row-major) in [0, n). signs: optional, num_elements x k of +-1.
-  AssemblyPlan(const int* element_ids, std::size_t num_elements, int k, int n,
-               const std::int8_t* signs = nullptr);
+  AssemblyPlan(const int* element_ids, std::size_t num_elements, int k, int n, const std::int8_t* signs = nullptr);
 
   int local_size() const { return k_; }
   std::size_t num_elements() const { return num_elements_; }
@@ -59,7 +58,6 @@ class AssemblyPlan {
   std::vector<std::int64_t, UninitAllocator<std::int64_t>> start_;          // per stored entry: range in contributions_
   std::vector<std::int64_t, UninitAllocator<std::int64_t>> contributions_;  // (local entry index + 1) * sign
 };
-
 
 /// Fills local matrices for elements [begin, end) into `locals` (already offset to element begin).
 using LocalKernel = std::function<void(std::size_t begin, std::size_t end, double* locals)>;

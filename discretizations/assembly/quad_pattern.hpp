@@ -2,8 +2,8 @@
 // The symbolic part of the vertex assembly of a quad mesh, built once from the connectivity and
 // reused by every numeric assembly on it (the model of Eigen's analyzePattern and CHOLMOD's
 // analyze): the vertex -> corner incidence, the column structure of the #V x #V vertex matrices
-// and the slot of every face corner in its column (spec §0 assembly A[v_i, v_j] += A_f[i, j]) and,
-// built on first use, the edge/2-ring structure of the interpolated global projection (spec §3.6a).
+// and the slot of every face corner in its column (docs/math.md §0 assembly A[v_i, v_j] += A_f[i, j]) and,
+// built on first use, the edge/2-ring structure of the interpolated global projection (docs/math.md §3.6a).
 //
 //   const QuadPattern pattern = QuadPattern::build(mesh);
 //   for (...) method->assemble_into(mesh, normals, params, pattern, ops);

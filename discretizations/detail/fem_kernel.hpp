@@ -1,6 +1,6 @@
 #pragma once
 // Fast assembly of the corrected FEM (corrected_fem_fast.cpp), bitwise equal to the readable local
-// matrices of corrected_fem.hpp (spec §4.2-§4.4). Internal header.
+// matrices of corrected_fem.hpp (docs/math.md §4.2-§4.4). Internal header.
 #include <Eigen/Core>
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
@@ -9,8 +9,8 @@
 namespace corrlap::detail {
 
 /// Values per face written by fem_face_range: the six distinct entries of K_f
-/// (self, o1, o2, o, self - 2 eta, o + 2 eta; spec §4.3 pattern) and the mass scales
-/// area z / 36 and area z / 4 (spec §4.4).
+/// (self, o1, o2, o, self - 2 eta, o + 2 eta; docs/math.md §4.3 pattern) and the mass scales
+/// area z / 36 and area z / 4 (docs/math.md §4.4).
 inline constexpr std::size_t kFemFaceValues = 8;
 
 /// Values of faces [b, e) into g + kFemFaceValues f. `positions` (V x 3) and `normals` (F x 3,

@@ -1,5 +1,5 @@
 #pragma once
-// Fast per-face terms of the interpolated corrected calculus (spec §3.2-§3.5) for the assembly
+// Fast per-face terms of the interpolated corrected calculus (docs/math.md §3.2-§3.5) for the assembly
 // hot loop (interpolated_corrected_fast.cpp), bitwise the matrices of the readable
 // interpolated_local() (mass, sharp_stiffness, projected_difference), computed without Eigen
 // temporaries and only for what the assembly reads. Internal header.
@@ -13,15 +13,15 @@ namespace corrlap::detail {
 /// Layout of the per-face records written by interpolated_face_range: `terms` (16 doubles) for
 /// the column pass and `pd` (16 doubles, P_f D) for the edge rows, kept apart so that each pass
 /// streams only what it reads.
-///  [0, 4)   u_k^z (frame normal component of corner k) and [4] q = h^2 / 144: M_{0,f} (spec §3.2)
+///  [0, 4)   u_k^z (frame normal component of corner k) and [4] q = h^2 / 144: M_{0,f} (docs/math.md §3.2)
 ///           is q times integer combinations of the u_k^z (interpolated_mass_row);
-///  [5, 15)  K1 = D^T (S^T S / ubar^z) D, the sharp part of -L_f (spec §3.5), packed symmetric
+///  [5, 15)  K1 = D^T (S^T S / ubar^z) D, the sharp part of -L_f (docs/math.md §3.5), packed symmetric
 ///           (index kSym[i][j]);
-///  pd: P_f D (row-major 4x4), whose rows give the edge rows of P D0 (spec §3.6a).
+///  pd: P_f D (row-major 4x4), whose rows give the edge rows of P D0 (docs/math.md §3.6a).
 inline constexpr int kTermsStride = 16, kTermsK1 = 5;
 inline constexpr int kSym[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
 
-/// Row g of M_{0,f} from the record: 144 int phi_g phi_l phi_k is 9, 3 or 1 (spec §3.2 matrix).
+/// Row g of M_{0,f} from the record: 144 int phi_g phi_l phi_k is 9, 3 or 1 (docs/math.md §3.2 matrix).
 inline void interpolated_mass_row(const double* t, int g, double* row) {
   static constexpr double W[4][4][4] = {{{9, 3, 1, 3}, {3, 3, 1, 1}, {1, 1, 1, 1}, {3, 1, 1, 3}},
                                         {{3, 3, 1, 1}, {3, 9, 3, 1}, {1, 3, 3, 1}, {1, 1, 1, 1}},
@@ -41,7 +41,7 @@ int interpolated_face_range(const int* faces, int b, int e, const double* const 
                             FaceKernelIsa isa = FaceKernelIsa::Best);
 
 /// ops.L and ops.M of the interpolated corrected calculus for vertex normals u (#V x 3): global
-/// projection (spec §3.6a) or sum of the local L_f (§3.6b), through `pattern` when given. Throws
+/// projection (docs/math.md §3.6a) or sum of the local L_f (§3.6b), through `pattern` when given. Throws
 /// InputError naming the first face that is not a square.
 void interpolated_fast_assembly(const SurfelMesh& mesh, const Eigen::MatrixX3d& u, const QuadPattern* pattern,
                                 double lambda, double kappa, bool global, Operators& ops);

@@ -1,13 +1,12 @@
 #include "normal_policy.hpp"
 
-#include <cmath>
-#include <sstream>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <cmath>
 #include <corrlap/core/error.hpp>
+#include <sstream>
 
 namespace corrlap {
 
@@ -27,9 +26,8 @@ OrientationPolicy parse_orientation_policy(const std::string& text) {
 std::string OrientationReport::summary(const std::string& method) const {
   std::ostringstream os;
   os.precision(6);
-  os << method << ": " << inconsistent << " of " << checked
-     << (worst_corner >= 0 ? " face corners" : " faces") << " have normals with u.n <= 0 (worst: face "
-     << worst_face;
+  os << method << ": " << inconsistent << " of " << checked << (worst_corner >= 0 ? " face corners" : " faces")
+     << " have normals with u.n <= 0 (worst: face " << worst_face;
   if (worst_corner >= 0) os << " corner " << worst_corner;
   os << ", u.n = " << worst_dot << ")";
   return os.str();
@@ -38,22 +36,20 @@ std::string OrientationReport::summary(const std::string& method) const {
 Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh) {
   if (!mesh.has_surfels()) return mesh.face_normals_from_positions();
   Eigen::MatrixX3d n(mesh.num_faces(), 3);
-  tbb::parallel_for(0, mesh.num_faces(), [&](int f) {
-    n.row(f) = mesh.surfels[std::size_t(f)].trivial_normal().transpose();
-  });
+  tbb::parallel_for(0, mesh.num_faces(),
+                    [&](int f) { n.row(f) = mesh.surfels[std::size_t(f)].trivial_normal().transpose(); });
   return n;
 }
 
 PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                const Config& params, const std::string& method,
-                                std::vector<std::string>& warnings, OrientationReport* out_report) {
+                                const Config& params, const std::string& method, std::vector<std::string>& warnings,
+                                OrientationReport* out_report) {
   if (kind == NormalKind::None) return PreparedNormals(Eigen::MatrixX3d());
   const bool face = kind == NormalKind::Face;
   const Eigen::MatrixX3d& given = face ? normals.face : normals.vertex;
   const std::string what = method + ": " + (face ? "face" : "vertex") + " normals";
   if (given.rows() == 0)
-    throw InputError(method + " needs " + (face ? "one normal per face" : "one normal per vertex") +
-                     " (none given)");
+    throw InputError(method + " needs " + (face ? "one normal per face" : "one normal per vertex") + " (none given)");
   const Eigen::Index expected = face ? mesh.num_faces() : mesh.num_vertices();
   // Copy only when the normals change (normalize here, clamp below).
   PreparedNormals result(given);
@@ -70,8 +66,7 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
   if (!(clamp_min > 0.0 && clamp_min < 1.0)) throw InputError(method + ": clamp_min must be in (0, 1)");
 
   // Trivial normals on the fly from the surfels (no F x 3 matrix); from positions otherwise.
-  const Eigen::MatrixX3d from_positions =
-      mesh.has_surfels() ? Eigen::MatrixX3d() : mesh.face_normals_from_positions();
+  const Eigen::MatrixX3d from_positions = mesh.has_surfels() ? Eigen::MatrixX3d() : mesh.face_normals_from_positions();
   const auto trivial = [&](int f) -> Eigen::Vector3d {
     return mesh.has_surfels() ? mesh.surfels[std::size_t(f)].trivial_normal()
                               : Eigen::Vector3d(from_positions.row(f).transpose());

@@ -2,12 +2,11 @@
 // Validation of the normal field given to a corrected discretization, and the policy for
 // normals inconsistent with the surfel orientation (u . n_triv <= 0).
 #include <Eigen/Core>
-#include <string>
-#include <vector>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <string>
+#include <vector>
 
 namespace corrlap {
 
@@ -18,8 +17,8 @@ OrientationPolicy parse_orientation_policy(const std::string& text);
 
 /// Outcome of the orientation check.
 struct OrientationReport {
-  int checked = 0;        ///< faces (face normals) or face corners (vertex normals)
-  int inconsistent = 0;   ///< u . n_triv <= 0
+  int checked = 0;       ///< faces (face normals) or face corners (vertex normals)
+  int inconsistent = 0;  ///< u . n_triv <= 0
   Eigen::Index worst_face = -1, worst_corner = -1;
   double worst_dot = 1.0;
   std::string summary(const std::string& method) const;
@@ -49,11 +48,11 @@ class PreparedNormals {
 ///  - normals pointing inward on more than half of the elements are rejected under every policy
 ///    (flipped orientation: the mass matrix would be negative).
 PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                const Config& params, const std::string& method,
-                                std::vector<std::string>& warnings, OrientationReport* report = nullptr);
+                                const Config& params, const std::string& method, std::vector<std::string>& warnings,
+                                OrientationReport* report = nullptr);
 
 /// Trivial (outward) unit normal of every face: from the surfel data when present, else from
-/// the corner positions (spec §1.5; equal on surfels).
+/// the corner positions (docs/math.md §1.5; equal on surfels).
 Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh);
 
 }  // namespace corrlap

@@ -30,7 +30,7 @@ NormalRequest from(NormalSource source) {
 }
 }  // namespace
 
-TEST_CASE("true vertex normals are the normalized sum of the true face normals (spec 1.5, reference data)") {
+TEST_CASE("true vertex normals are the normalized sum of the true face normals (docs/math.md §1.5, reference data)") {
   const Sphere& s = sphere();
   const NormalFields n = resolve_normals(s.mesh, NormalKind::Vertex, from(NormalSource::True), &s.shape, &s.grid);
   const Eigen::MatrixX3d expected =

@@ -106,7 +106,8 @@ const std::vector<BadCall>& catalogue() {
       {"operators --method fem --mesh {D}/s.obj --out {D}/o", "fem needs face normals"},
       {"operators --method fem --mesh {D}/s.obj --face-normals {D}/one_normal.txt --out {D}/o", "1 rows, expected"},
       {"operators --method fem --mesh {D}/s.obj --face-normals {D}/nan_normal.txt --out {D}/o", "non-finite"},
-      {"operators --method fem --mesh {D}/s.obj --face-normals {D}/missing.txt --out {D}/o", "missing.txt': cannot open"},
+      {"operators --method fem --mesh {D}/s.obj --face-normals {D}/missing.txt --out {D}/o",
+       "missing.txt': cannot open"},
       {"operators --method fem --shape sphere1 --h 0.2 --normals bogus --out {D}/o", "--normals: bogus not in"},
       {"operators --method fem --shape sphere1 --h 0.2 --normals true --param nosuch=1 --out {D}/o",
        "unknown config key 'nosuch'"},
@@ -121,7 +122,8 @@ const std::vector<BadCall>& catalogue() {
        "lambda must be finite and >= 0"},
       {"operators --method interpolated --shape sphere1 --h 0.2 --normals true --kappa nan --out {D}/o",
        "kappa must be finite"},
-      {"operators --method heat-kernel --shape sphere1 --h 0.2 --normals true --t -1 --out {D}/o", "t must be positive"},
+      {"operators --method heat-kernel --shape sphere1 --h 0.2 --normals true --t -1 --out {D}/o",
+       "t must be positive"},
       // solve.
       {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs nosuch",
        "--rhs 'nosuch': neither a test function"},
@@ -136,7 +138,8 @@ const std::vector<BadCall>& catalogue() {
       // eigs.
       {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 0", "-k must be positive"},
       {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 100000", "k = 100000 must be in"},
-      {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 5 --solver nosuch", "unknown linear solver 'nosuch'"},
+      {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 5 --solver nosuch",
+       "unknown linear solver 'nosuch'"},
       {"eigs --method fem --mesh {D}/s.obj --face-normals {D}/fn.txt -k 3 --shift 5", "--shift"},
       // backends.
       {"backends --nosuch", "--nosuch"},
@@ -156,7 +159,7 @@ TEST_CASE("CLI bad-input catalogue: every case fails with a named error, never a
     const int rc = run_cli(args, nullptr, &err);
     CAPTURE(err);
     CHECK(rc != 0);
-    CHECK(rc != 2);  // "internal error"
+    CHECK(rc != 2);   // "internal error"
     CHECK(rc < 128);  // no signal
     CHECK(err.find("internal error") == std::string::npos);
     CHECK(err.find(expand(call.expected, dir)) != std::string::npos);

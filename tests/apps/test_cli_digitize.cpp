@@ -1,9 +1,8 @@
 // `corrlap digitize` and `corrlap info` end to end.
 #include <doctest/doctest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <corrlap/io/mesh_io.hpp>
+#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 
@@ -16,7 +15,7 @@ TEST_CASE("digitize torus then info --json reports the genus-1 counts") {
   REQUIRE(run_cli("digitize --shape torus --h 0.5 --out " + obj, &out, &err) == 0);
   REQUIRE(run_cli("info --json " + obj, &out, &err) == 0);
   const auto j = nlohmann::json::parse(out);
-  CHECK(j["vertices"] == 2584);  // spec §12.1
+  CHECK(j["vertices"] == 2584);  // docs/math.md §12.1
   CHECK(j["faces"] == 2584);
   CHECK(j["edges"] == 5168);
   CHECK(j["euler"] == 0);
@@ -38,7 +37,7 @@ TEST_CASE("digitize writes true normals to text files and into PLY") {
   REQUIRE(mesh.faces.size() == 294);
   REQUIRE(attributes.face_normals.rows() == 294);
   REQUIRE(attributes.vertex_normals.rows() == 296);
-  // True normals of the unit sphere are radial at the face centroids (spec §1.5).
+  // True normals of the unit sphere are radial at the face centroids (docs/math.md §1.5).
   double worst = 0;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -54,7 +53,8 @@ TEST_CASE("digitize and info reject bad input with a message and exit code 1") {
   CHECK(err.find("known shapes") != std::string::npos);
   CHECK(run_cli("digitize --polynomial \"x^2+\" --out " + tmp_path("x.obj"), nullptr, &err) == 1);
   CHECK(err.find("position") != std::string::npos);
-  CHECK(run_cli("digitize --shape sphere1 --h 0.5 --bbox 3 4 --offset 0 --out " + tmp_path("x.obj"), nullptr, &err) == 1);
+  CHECK(run_cli("digitize --shape sphere1 --h 0.5 --bbox 3 4 --offset 0 --out " + tmp_path("x.obj"), nullptr, &err) ==
+        1);
   CHECK(err.find("no surfel") != std::string::npos);
   CHECK(run_cli("info /nonexistent/mesh.obj", nullptr, &err) == 1);
   CHECK(err.find("/nonexistent/mesh.obj") != std::string::npos);

@@ -1,4 +1,4 @@
-// `corrlap eigs` with a sparse shift-invert backend reproduces spec §12.3 and the dense solver.
+// `corrlap eigs` with a sparse shift-invert backend reproduces docs/math.md §12.3 and the dense solver.
 #include <doctest/doctest.h>
 
 #include <sstream>
@@ -16,7 +16,7 @@ std::vector<double> parse_values(const std::string& text) {
 }
 }  // namespace
 
-TEST_CASE("eigs with cholmod shift-invert reproduces the FEM spectrum of spec 12.3 (h = 0.1)") {
+TEST_CASE("eigs with cholmod shift-invert reproduces the FEM spectrum of docs/math.md §12.3 (h = 0.1)") {
   std::string out, err;
   const int rc = corrlap::test::run_cli(
       "eigs --method fem --shape sphere1 --h 0.1 --bbox -2 2 --normals true -k 10 --solver cholmod", &out, &err);
@@ -25,7 +25,7 @@ TEST_CASE("eigs with cholmod shift-invert reproduces the FEM spectrum of spec 12
   const std::vector<double> v = parse_values(out);
   REQUIRE(v.size() == 10);
   CHECK(std::abs(v[0]) < 1e-8);
-  // spec §12.3 prints 4-6 significant digits: compare at that precision.
+  // docs/math.md §12.3 prints 4-6 significant digits: compare at that precision.
   for (int i = 1; i <= 3; ++i) CHECK(v[std::size_t(i)] == doctest::Approx(2.0177).epsilon(5e-5));
   for (int i = 4; i <= 6; ++i) CHECK(v[std::size_t(i)] == doctest::Approx(6.04467).epsilon(5e-6));
   for (int i = 7; i <= 8; ++i) CHECK(v[std::size_t(i)] == doctest::Approx(6.09828).epsilon(5e-6));

@@ -1,12 +1,11 @@
 #pragma once
-// Test-only operators for the backend tests: the flat bilinear FEM of spec §4.5 (corrected FEM
+// Test-only operators for the backend tests: the flat bilinear FEM of docs/math.md §4.5 (corrected FEM
 // with trivial normals, x = y = 0, z = 1) on a digitized sphere. L is negative semi-definite,
-// M the consistent mass (spec §4.4). Independent of the discretizations library on purpose.
+// M the consistent mass (docs/math.md §4.4). Independent of the discretizations library on purpose.
 #include <Eigen/Sparse>
-
+#include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::test {
 
@@ -22,7 +21,7 @@ inline FlatFem flat_fem_sphere(double h, double radius_scale = 1.0) {
   p.max_aabb = 2;
   FlatFem r;
   r.mesh = extract_surface(digitize(make_implicit_shape("sphere1"), p));
-  // spec §4.5: standard bilinear stiffness; spec §4.4: consistent mass h^2/36 [...].
+  // docs/math.md §4.5: standard bilinear stiffness; docs/math.md §4.4: consistent mass h^2/36 [...].
   const double K[4][4] = {{4, -1, -2, -1}, {-1, 4, -1, -2}, {-2, -1, 4, -1}, {-1, -2, -1, 4}};
   const double Mm[4][4] = {{4, 2, 1, 2}, {2, 4, 2, 1}, {1, 2, 4, 2}, {2, 1, 2, 4}};
   const double hh = h * radius_scale;

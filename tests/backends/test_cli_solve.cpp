@@ -1,11 +1,9 @@
 // CLI: corrlap backends and corrlap solve.
 #include <doctest/doctest.h>
-
-#include <nlohmann/json.hpp>
+#include <unistd.h>
 
 #include <corrlap/corrlap.hpp>
-
-#include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 
@@ -15,7 +13,8 @@ namespace {
 // parallel processes, and run_cli's per-process counter makes them share cli_out_1.txt.
 int run_cli(const std::string& args, std::string* out, std::string* err) {
   static int counter = 0;
-  const std::string stem = corrlap::test::tmp_path("backends_cli_" + std::to_string(getpid()) + "_" + std::to_string(++counter));
+  const std::string stem =
+      corrlap::test::tmp_path("backends_cli_" + std::to_string(getpid()) + "_" + std::to_string(++counter));
   const std::string cmd = std::string(CORRLAP_CLI) + " " + args + " >" + stem + ".out 2>" + stem + ".err </dev/null";
   const int status = std::system(cmd.c_str());
   *out = corrlap::test::read_text(stem + ".out");
@@ -48,7 +47,7 @@ TEST_CASE("corrlap solve rejects unknown backend keys and names before assemblin
   CHECK(err.find("eigen-ldlt") != std::string::npos);
 }
 
-TEST_CASE("corrlap solve: FEM Poisson errors of spec 12.5 with every backend and a JSON config") {
+TEST_CASE("corrlap solve: FEM Poisson errors of docs/math.md §12.5 with every backend and a JSON config") {
   if (!corrlap::discretization_registry().contains("fem")) {
     std::string out, err;
     CHECK(run_cli("solve --shape sphere1 --h 0.2 --bbox -2 2 --method fem", &out, &err) == 1);
@@ -65,10 +64,10 @@ TEST_CASE("corrlap solve: FEM Poisson errors of spec 12.5 with every backend and
     REQUIRE(run_cli("solve --shape sphere1 --h 0.2 --bbox -2 2 --method fem --normals true --rhs x2 --json " + backend,
                     &out, &err) == 0);
     const auto j = nlohmann::json::parse(out);
-    for (const char* key : {"solver", "n", "analyze_s", "factorize_s", "solve_s", "iterations", "residual",
-                            "error_linf", "error_l2"})
+    for (const char* key :
+         {"solver", "n", "analyze_s", "factorize_s", "solve_s", "iterations", "residual", "error_linf", "error_l2"})
       CHECK(j.contains(key));
-    // spec §12.5: FEM, h = 0.2, backward L2 error on x^2 = 0.0204 (3 significant digits).
+    // docs/math.md §12.5: FEM, h = 0.2, backward L2 error on x^2 = 0.0204 (3 significant digits).
     CHECK(j["error_l2"].get<double>() == doctest::Approx(0.0204).epsilon(0.005));
     CHECK(j["residual"].get<double>() < 1e-9);
     if (backend.find("cg") != std::string::npos) {
@@ -93,22 +92,26 @@ TEST_CASE("corrlap solve: --normals gives the library's fields, the same as corr
     return j["error_l2"].get<double>();
   };
   // Same operator and solver as the library: the errors agree to rounding (1e-12 relative).
-  const double fem_ii = solve_poisson(corrected_fem(mesh, ii_face_normals(grid, mesh)), mesh.positions,
-                                      test_function("x2"), *solver).errors.l2;
+  const double fem_ii =
+      solve_poisson(corrected_fem(mesh, ii_face_normals(grid, mesh)), mesh.positions, test_function("x2"), *solver)
+          .errors.l2;
   CHECK(cli_l2("--method fem --normals ii", "ii") == doctest::Approx(fem_ii).epsilon(1e-12));
-  // Vertex normals of --normals true: normalized sum of the true face normals (spec §1.5), not the
-  // exact radial ones (with those the error is spec 12.5's 0.0185; with these 0.0204).
+  // Vertex normals of --normals true: normalized sum of the true face normals (docs/math.md §1.5), not the
+  // exact radial ones (with those the error is docs/math.md §12.5's 0.0185; with these 0.0204).
   const double icc_true = solve_poisson(interpolated(mesh, true_vertex_normals_from_faces(shape, mesh)), mesh.positions,
-                                        test_function("x2"), *solver).errors.l2;
-  const double icc_exact = solve_poisson(interpolated(mesh, exact_vertex_normals(shape, mesh)), mesh.positions,
-                                         test_function("x2"), *solver).errors.l2;
+                                        test_function("x2"), *solver)
+                              .errors.l2;
+  const double icc_exact =
+      solve_poisson(interpolated(mesh, exact_vertex_normals(shape, mesh)), mesh.positions, test_function("x2"), *solver)
+          .errors.l2;
   CHECK(cli_l2("--method interpolated --normals true", "true") == doctest::Approx(icc_true).epsilon(1e-12));
   CHECK(std::abs(icc_true - icc_exact) > 0.05 * icc_exact);
   CHECK(cli_l2("--method fem --normals trivial", "trivial") > 5 * fem_ii);  // uncorrected: no convergence
   CHECK(cli_l2("--method polydec", "none") > 5 * fem_ii);
   // A surfel mesh from a file has no shape and no voxels: auto has nothing to use.
   std::string out, err;
-  CHECK(run_cli("solve --method fem --mesh " + corrlap::test::reference_dir() + "/sphere1_h0.2/mesh.obj", &out, &err) == 1);
+  CHECK(run_cli("solve --method fem --mesh " + corrlap::test::reference_dir() + "/sphere1_h0.2/mesh.obj", &out, &err) ==
+        1);
   CHECK(err.find("fem needs face normals: give --face-normals FILE or --normals true|ii|trivial") != std::string::npos);
   CHECK(run_cli("solve --method fem --shape sphere1 --h 0.2 --rhs x3", &out, &err) == 1);  // neither a name nor a file
   CHECK(err.find("x3") != std::string::npos);

@@ -1,5 +1,5 @@
-// Generalized eigen solvers (spec §10.5): shift-invert Lanczos over any LinearSolver agrees with
-// the dense solver; eigenvalues are reported as -lambda >= 0 ascending (spec §12.3).
+// Generalized eigen solvers (docs/math.md §10.5): shift-invert Lanczos over any LinearSolver agrees with
+// the dense solver; eigenvalues are reported as -lambda >= 0 ascending (docs/math.md §12.3).
 #include <doctest/doctest.h>
 
 #include <corrlap/backends/registry.hpp>

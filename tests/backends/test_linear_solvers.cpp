@@ -3,11 +3,10 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <string>
-
 #include <corrlap/backends/cholmod.hpp>
 #include <corrlap/backends/eigen_direct.hpp>
 #include <corrlap/backends/registry.hpp>
+#include <string>
 
 #include "backends/fem_fixture.hpp"
 

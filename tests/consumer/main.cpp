@@ -2,9 +2,8 @@
 // includes only the umbrella header and touches every library (core, surface, estimators,
 // discretizations, backends with CHOLMOD, io, problems) so that a static build's link dependencies
 // are all exercised.
-#include <corrlap/corrlap.hpp>
-
 #include <cmath>
+#include <corrlap/corrlap.hpp>
 #include <cstdio>
 #include <filesystem>
 
@@ -16,7 +15,7 @@ int main() {
   const auto mesh = corrlap::extract_surface(grid);
   const auto info = corrlap::compute_mesh_info(mesh);
   std::printf("V=%d F=%d E=%d\n", info.vertices, info.faces, info.edges);
-  // spec §12.1: sphere1 at h = 0.25 has V = 296, F = 294, E = 588
+  // docs/math.md §12.1: sphere1 at h = 0.25 has V = 296, F = 294, E = 588
   if (!(info.vertices == 296 && info.faces == 294 && info.edges == 588)) return 1;
 
   // Corrected FEM with true normals, then (M - L) x = M 1 with CHOLMOD: L 1 = 0, so x = 1.

@@ -1,13 +1,12 @@
-// Digitization and surface extraction (spec §1, counts of §12.1).
+// Digitization and surface extraction (docs/math.md §1, counts of §12.1).
 #include <doctest/doctest.h>
 
 #include <cmath>
-
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 #include "test_support.hpp"
 
@@ -35,7 +34,7 @@ double enclosed_volume(const SurfelMesh& m) {
 }
 }  // namespace
 
-TEST_CASE("digitization box follows spec 1.2") {
+TEST_CASE("digitization box follows docs/math.md §1.2") {
   Eigen::Vector3i lo, hi;
   DigitizationParams p;
   p.h = 0.1;
@@ -48,8 +47,11 @@ TEST_CASE("digitization box follows spec 1.2") {
   CHECK(hi == Eigen::Vector3i::Constant(10));
 }
 
-TEST_CASE("sphere1 counts equal the reference (spec 12.1)") {
-  struct Row { double h; int V, F, E; };
+TEST_CASE("sphere1 counts equal the reference (docs/math.md §12.1)") {
+  struct Row {
+    double h;
+    int V, F, E;
+  };
   for (const Row& r : {Row{2, 8, 6, -1}, Row{0.5, 80, 78, 156}, Row{0.3, 224, 222, -1}, Row{0.25, 296, 294, 588},
                        Row{0.2, 440, -1, -1}, Row{0.1, 1856, 1854, 3708}, Row{0.05, 7496, -1, -1}}) {
     CAPTURE(r.h);
@@ -64,7 +66,7 @@ TEST_CASE("sphere1 counts equal the reference (spec 12.1)") {
   }
 }
 
-TEST_CASE("uncorrected sphere area does not converge (spec 12.1)") {
+TEST_CASE("uncorrected sphere area does not converge (docs/math.md §12.1)") {
   for (auto [h, area] : {std::pair{0.5, 19.5}, std::pair{0.25, 18.375}, std::pair{0.1, 18.54}}) {
     CAPTURE(h);
     const MeshInfo info = compute_mesh_info(surface_of("sphere1", h));
@@ -72,7 +74,7 @@ TEST_CASE("uncorrected sphere area does not converge (spec 12.1)") {
   }
 }
 
-TEST_CASE("goursat and torus counts equal the reference (spec 12.1)") {
+TEST_CASE("goursat and torus counts equal the reference (docs/math.md §12.1)") {
   for (auto [h, V, F] : {std::tuple{0.5, 9512, 9510}, std::tuple{0.3, 26264, 26262}, std::tuple{2.0, 488, 486}}) {
     CAPTURE(h);
     const MeshInfo info = compute_mesh_info(surface_of("goursat", h));
@@ -90,7 +92,7 @@ TEST_CASE("goursat and torus counts equal the reference (spec 12.1)") {
   }
 }
 
-TEST_CASE("saddle crossing the box is open with boundary (spec 12.1)") {
+TEST_CASE("saddle crossing the box is open with boundary (docs/math.md §12.1)") {
   const std::string saddle = "0.1*y*y -0.1*x*x - 2.0*z";
   const MeshInfo i2 = compute_mesh_info(surface_of(saddle, 2));
   CHECK(i2.vertices == 1364);
@@ -117,7 +119,7 @@ TEST_CASE("every face is oriented along its outward trivial normal") {
     }
     CAPTURE(shape);
     CHECK(bad == 0);
-    // face normals from positions equal the trivial normals (spec 1.5)
+    // face normals from positions equal the trivial normals (docs/math.md §1.5)
     const Eigen::MatrixX3d n = m.face_normals_from_positions();
     double worst = 0;
     for (int f = 0; f < m.num_faces(); ++f)
@@ -148,7 +150,7 @@ TEST_CASE("mesh equals the reference mesh exactly (sphere1, h = 0.2, box -1.5..1
     for (int j = 0; j < 4; ++j)
       if (m.faces(f, j) != ref.faces[std::size_t(f)][std::size_t(j)]) ++differing;
   CHECK(differing == 0);
-  // Same box with -2..2 gives the same numbering (spec 1.2)
+  // Same box with -2..2 gives the same numbering (docs/math.md §1.2)
   const SurfelMesh m2 = surface_of("sphere1", 0.2, -2, 2);
   CHECK(m2.faces == m.faces);
   CHECK(m2.positions == m.positions);

@@ -1,16 +1,15 @@
 #pragma once
 // Helpers shared by the discretization tests: the reference mesh and normals, entry-wise matrix
-// comparison as /work/shared/tools/mtxdiff.py does it, and small meshes.
+// comparison as scripts/mtxdiff.py does it, and small meshes.
 #include <Eigen/Sparse>
 #include <cmath>
-#include <string>
-
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <string>
 
 #include "test_support.hpp"
 
@@ -54,7 +53,8 @@ inline MatrixDiff compare_matrices(const Eigen::SparseMatrix<double>& A, const E
   const Eigen::SparseMatrix<double> diff = A - B;
   double worst = 0.0;
   for (int c = 0; c < diff.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(diff, c); it; ++it) worst = std::max(worst, std::abs(it.value()));
+    for (Eigen::SparseMatrix<double>::InnerIterator it(diff, c); it; ++it)
+      worst = std::max(worst, std::abs(it.value()));
   d.relative = worst / scale;
   auto significant = [&](const Eigen::SparseMatrix<double>& X) {
     Eigen::SparseMatrix<double> S = X;
@@ -73,13 +73,13 @@ inline MatrixDiff compare_matrices(const Eigen::SparseMatrix<double>& A, const E
 
 }  // namespace corrlap::test
 
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 namespace corrlap::test {
 
 /// sphere1 (centre c) digitized at h in the box -2..2, with true (radial) face and vertex normals
-/// (spec §12.3: u_v = x_v/|x_v|, u_f = b_f/|b_f|).
+/// (docs/math.md §12.3: u_v = x_v/|x_v|, u_f = b_f/|b_f|).
 struct SphereCase {
   SurfelMesh mesh;
   NormalFields normals;
@@ -170,8 +170,7 @@ inline int run_cli_tagged(const std::string& tag, const std::string& args, std::
                           std::string* err = nullptr) {
   static int counter = 0;
   const std::string base = tmp_path("cli_" + tag + "_" + std::to_string(++counter));
-  const std::string cmd =
-      std::string(CORRLAP_CLI) + " " + args + " >" + base + ".out 2>" + base + ".err </dev/null";
+  const std::string cmd = std::string(CORRLAP_CLI) + " " + args + " >" + base + ".out 2>" + base + ".err </dev/null";
   const int status = std::system(cmd.c_str());
   if (out) *out = read_text(base + ".out");
   if (err) *err = read_text(base + ".err");

@@ -6,23 +6,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/threads.hpp>
+#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
+#include <corrlap/discretizations/assembly/quad_pattern.hpp>
+#include <corrlap/discretizations/quad_assembly.hpp>
+#include <corrlap/discretizations/registry.hpp>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <memory>
-#include <string>
 #include <map>
+#include <memory>
 #include <random>
-
-#include <corrlap/core/config.hpp>
-#include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
-#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
-#include <corrlap/core/threads.hpp>
-#include <corrlap/discretizations/quad_assembly.hpp>
-#include <corrlap/discretizations/assembly/detail/quad_pattern_access.hpp>
-#include <corrlap/discretizations/assembly/quad_pattern.hpp>
-#include <corrlap/discretizations/registry.hpp>
+#include <string>
 
 #include "reference_support.hpp"
 
@@ -32,7 +31,9 @@ using namespace corrlap::test;
 namespace {
 
 // The gather pattern of a QuadPattern (the internals the methods use).
-const detail::QuadVertexPattern& vertex_pattern(const QuadPattern& p) { return detail::QuadPatternAccess::impl(p).vertex; }
+const detail::QuadVertexPattern& vertex_pattern(const QuadPattern& p) {
+  return detail::QuadPatternAccess::impl(p).vertex;
+}
 
 bool same_bits(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() && a.nonZeros() == b.nonZeros() &&
@@ -141,7 +142,8 @@ TEST_CASE("advise_huge_pages keeps the contents of the buffer and of its neighbo
   // 20 MiB - 4 KiB: with glibc on Linux a 2 MiB-aligned mapping of its own, so both end blocks of
   // the sub-range lie inside it and are really collapsed (elsewhere the calls just fail).
   const std::size_t n = ((std::size_t(20) << 20) - 4096) / sizeof(double);
-  std::unique_ptr<double, decltype(&std::free)> buffer(static_cast<double*>(std::malloc(n * sizeof(double))), &std::free);
+  std::unique_ptr<double, decltype(&std::free)> buffer(static_cast<double*>(std::malloc(n * sizeof(double))),
+                                                       &std::free);
   REQUIRE(buffer);
   double* all = buffer.get();
   for (std::size_t i = 0; i < n; ++i) all[i] = double(i) * 0.5 + 1.0;
@@ -205,10 +207,17 @@ TEST_CASE("a QuadPattern refuses a mesh of another connectivity") {
 TEST_CASE("every quad method gives the same bits with and without a QuadPattern") {
   const SphereCase a = sphere_case(0.17, Eigen::Vector3d(0.013, -0.02, 0.007));
   const SphereCase b = sphere_case(0.23);
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"fem", ""},     {"fem", "mass=lumped"}, {"interpolated", ""},           {"interpolated", "assembly=local"},
-      {"polydec", ""}, {"projected-polydec", ""}, {"vrm", ""},                {"corrected-vrm", ""},
-      {"corrected-vrm", "mass=lumped"}, {"cotan", ""}, {"heat-kernel", ""}};
+  const std::vector<std::pair<std::string, std::string>> cases = {{"fem", ""},
+                                                                  {"fem", "mass=lumped"},
+                                                                  {"interpolated", ""},
+                                                                  {"interpolated", "assembly=local"},
+                                                                  {"polydec", ""},
+                                                                  {"projected-polydec", ""},
+                                                                  {"vrm", ""},
+                                                                  {"corrected-vrm", ""},
+                                                                  {"corrected-vrm", "mass=lumped"},
+                                                                  {"cotan", ""},
+                                                                  {"heat-kernel", ""}};
   for (int t : {1, 2}) {
     set_thread_count(t);
     const QuadPattern pa = QuadPattern::build(a.mesh), pb = QuadPattern::build(b.mesh);

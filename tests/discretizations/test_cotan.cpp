@@ -3,14 +3,12 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <map>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/cotan.hpp>
 #include <corrlap/discretizations/registry.hpp>
+#include <map>
 
 #include "discretizations/test_vrm_support.hpp"
-
 #include "test_support.hpp"
 
 using namespace corrlap;
@@ -80,12 +78,14 @@ TEST_CASE("cotan registry entry splits quads; flat surfel gives the 5-point-like
   CHECK((ops.L * Eigen::VectorXd::Ones(ops.L.cols())).cwiseAbs().maxCoeff() < 1e-12);
   CHECK(ops.M.sum() == doctest::Approx(sphere.num_faces() * 0.0625).epsilon(1e-12));
   const Operators one = make_discretization("cotan")->assemble(test::single_surfel(0.5), NormalFields(), Config());
-  // square split along 0-2: each side is opposite one 45 deg angle (weight cot/2 = 1/2), the diagonal two right angles (0)
+  // square split along 0-2: each side is opposite one 45 deg angle (weight cot/2 = 1/2), the diagonal two right angles
+  // (0)
   CHECK(one.L.coeff(0, 1) == doctest::Approx(0.5));
   CHECK(one.L.coeff(0, 3) == doctest::Approx(0.5));
   CHECK(std::abs(one.L.coeff(0, 2)) < 1e-15);
-  CHECK_THROWS_WITH_AS(make_discretization("cotan")->assemble(sphere, NormalFields(), Config::from_key_values({"mass=x"})),
-                       doctest::Contains("mass"), InputError);
+  CHECK_THROWS_WITH_AS(
+      make_discretization("cotan")->assemble(sphere, NormalFields(), Config::from_key_values({"mass=x"})),
+      doctest::Contains("mass"), InputError);
 }
 
 TEST_CASE("cotan rejects degenerate triangles and bad indices, naming the triangle") {

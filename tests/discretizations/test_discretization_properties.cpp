@@ -1,15 +1,14 @@
-// Property tests of spec §12.6, run over every method of the registry (methods that cannot run on
+// Property tests of docs/math.md §12.6, run over every method of the registry (methods that cannot run on
 // a surfel mesh with face and vertex normals are skipped with a message), thread-count
 // independence, and the input-validation paths of the corrected methods.
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
-#include <cstring>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/registry.hpp>
+#include <cstring>
 
 #include "reference_support.hpp"
 
@@ -72,7 +71,7 @@ TEST_CASE("the registry holds the quad methods") {
   }
 }
 
-TEST_CASE("every method: translation, 90 degree rotation and scaling (spec §12.6)") {
+TEST_CASE("every method: translation, 90 degree rotation and scaling (docs/math.md §12.6)") {
   const SphereCase& s = base_case();
   for (const auto& name : runnable_methods()) {
     INFO(name);
@@ -91,7 +90,7 @@ TEST_CASE("every method: translation, 90 degree rotation and scaling (spec §12.
       CHECK(relative_difference(ro.L, ref.L) <= 1e-12);
       CHECK(relative_difference(ro.M, ref.M) <= 1e-12);
     }
-    if (name.rfind("heat", 0) == 0) continue;  // spec §6: t is tied to h, scaling is a different operator
+    if (name.rfind("heat", 0) == 0) continue;  // docs/math.md §6: t is tied to h, scaling is a different operator
     const double sc = 2.5;
     const SphereCase big = transformed(s, sc * Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
     const Operators so = d->assemble(big.mesh, big.normals, Config{});
@@ -116,7 +115,8 @@ TEST_CASE("every method: L 1 = 0, L and M symmetric, L negative semi-definite, M
   }
 }
 
-TEST_CASE("every method: flipping face orientation and normals together changes nothing; flipping only normals is rejected") {
+TEST_CASE(
+    "every method: flipping face orientation and normals together changes nothing; flipping only normals is rejected") {
   const SphereCase& s = base_case();
   SphereCase flipped = s;
   for (int f = 0; f < s.mesh.num_faces(); ++f)
@@ -242,7 +242,7 @@ TEST_CASE("interpolated rejects a non-square face naming it; empty meshes are re
   } catch (const InputError& e) {
     CHECK(std::string(e.what()).find("face 0") != std::string::npos);
   }
-  // fem and polydec handle general planar quads (spec §4.2 frame, §2.2 polygon formulas).
+  // fem and polydec handle general planar quads (docs/math.md §4.2 frame, §2.2 polygon formulas).
   CHECK_NOTHROW(make_discretization("fem")->assemble(s.mesh, s.normals, Config{}));
   CHECK_NOTHROW(make_discretization("polydec")->assemble(s.mesh, s.normals, Config{}));
   SurfelMesh empty;

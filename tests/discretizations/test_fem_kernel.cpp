@@ -1,19 +1,18 @@
 // The fast per-face kernel of the corrected FEM (corrected_fem_fast.cpp) gives the bits of the
-// readable local operators of spec §4.2-§4.4 (corrected_fem.cpp) for every instruction set, face by
+// readable local operators of docs/math.md §4.2-§4.4 (corrected_fem.cpp) for every instruction set, face by
 // face and assembled.
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <cstring>
-#include <random>
-#include <vector>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
 #include <corrlap/discretizations/assembly/quad_pattern.hpp>
 #include <corrlap/discretizations/corrected_fem.hpp>
 #include <corrlap/discretizations/detail/fem_kernel.hpp>
+#include <cstring>
+#include <random>
+#include <vector>
 
 #include "reference_support.hpp"
 
@@ -57,7 +56,8 @@ TEST_CASE("fem face kernel on random quads: every ISA gives the scalar bits, whi
   };
   auto run = [&](detail::FaceKernelIsa isa) {
     std::vector<double> g(std::size_t(F) * detail::kFemFaceValues, -7.0);
-    detail::fem_face_range(P.data(), std::size_t(P.rows()), faces.data(), U.data(), std::size_t(F), 0, F, g.data(), isa);
+    detail::fem_face_range(P.data(), std::size_t(P.rows()), faces.data(), U.data(), std::size_t(F), 0, F, g.data(),
+                           isa);
     return g;
   };
   const std::vector<double> g0 = run(detail::FaceKernelIsa::Scalar);
@@ -69,10 +69,11 @@ TEST_CASE("fem face kernel on random quads: every ISA gives the scalar bits, whi
     CHECK(same(g, g0, 0));
     // a range that does not start on a batch boundary (TBB ranges are arbitrary)
     std::vector<double> g3(g.size(), -7.0);
-    detail::fem_face_range(P.data(), std::size_t(P.rows()), faces.data(), U.data(), std::size_t(F), 3, F, g3.data(), isa);
+    detail::fem_face_range(P.data(), std::size_t(P.rows()), faces.data(), U.data(), std::size_t(F), 3, F, g3.data(),
+                           isa);
     CHECK(same(g3, g0, 3));
   }
-  // The scalar values are the entries of the local stiffness and mass (spec §4.3, §4.4).
+  // The scalar values are the entries of the local stiffness and mass (docs/math.md §4.3, §4.4).
   for (int f = 0; f < F; ++f) {
     if (f == degenerate) continue;
     QuadCorners x;
@@ -82,13 +83,13 @@ TEST_CASE("fem face kernel on random quads: every ISA gives the scalar bits, whi
     const Eigen::Matrix4d M = corrected_fem_local_mass(fr.area, fr.u_local.z());
     const double* g = g0.data() + std::size_t(f) * detail::kFemFaceValues;
     // Bit for bit (the readable form uses the fast kernel's operation order).
-    CHECK(g[0] == K(0, 0));  // self
-    CHECK(g[1] == K(0, 1));  // o1
-    CHECK(g[2] == K(0, 3));  // o2
-    CHECK(g[3] == K(0, 2));  // o
-    CHECK(g[4] == K(1, 1));  // self - 2 eta
-    CHECK(g[5] == K(1, 3));  // o + 2 eta
-    CHECK(g[6] == M(0, 2));  // area z / 36
+    CHECK(g[0] == K(0, 0));                                                         // self
+    CHECK(g[1] == K(0, 1));                                                         // o1
+    CHECK(g[2] == K(0, 3));                                                         // o2
+    CHECK(g[3] == K(0, 2));                                                         // o
+    CHECK(g[4] == K(1, 1));                                                         // self - 2 eta
+    CHECK(g[5] == K(1, 3));                                                         // o + 2 eta
+    CHECK(g[6] == M(0, 2));                                                         // area z / 36
     CHECK(g[7] == corrected_fem_local_lumped_mass(fr.area, fr.u_local.z())(0, 0));  // area z / 4
   }
 }
@@ -114,7 +115,7 @@ TEST_CASE("fem fast face values and assembly are bitwise the readable local matr
       const int F = s.mesh.num_faces();
       REQUIRE(F > 500);
       const Eigen::MatrixX3d& U = s.normals.face;
-      // Readable local matrices of every face (spec §4.2-§4.4).
+      // Readable local matrices of every face (docs/math.md §4.2-§4.4).
       std::vector<Eigen::Matrix4d> K(std::size_t(F), Eigen::Matrix4d::Zero()), M(K), ML(K);
       for (int f = 0; f < F; ++f) {
         const FemLocalFrame fr = corrected_fem_local_frame(quad_corners(s.mesh, f), U.row(f).transpose());
@@ -142,15 +143,16 @@ TEST_CASE("fem fast face values and assembly are bitwise the readable local matr
       // documented summation order) == the method's L and M, with and without a pattern.
       const detail::VertexCorners vc = detail::vertex_corners(s.mesh);
       Eigen::SparseMatrix<double> L, Mf;
-      detail::gather_quad_rows<2>(
-          s.mesh, vc,
-          [&](int f, int i, double* rows) {
-            for (int j = 0; j < 4; ++j) rows[j] = -K[std::size_t(f)](i, j), rows[4 + j] = M[std::size_t(f)](i, j);
-          },
-          {&L, &Mf});
+      detail::gather_quad_rows<2>(s.mesh, vc,
+                                  [&](int f, int i, double* rows) {
+                                    for (int j = 0; j < 4; ++j)
+                                      rows[j] = -K[std::size_t(f)](i, j), rows[4 + j] = M[std::size_t(f)](i, j);
+                                  },
+                                  {&L, &Mf});
       const auto fem = make_corrected_fem();
       const QuadPattern pattern = QuadPattern::build(s.mesh);
-      for (const Operators& ops : {fem->assemble(s.mesh, s.normals, Config{}), fem->assemble(s.mesh, s.normals, Config{}, pattern)}) {
+      for (const Operators& ops :
+           {fem->assemble(s.mesh, s.normals, Config{}), fem->assemble(s.mesh, s.normals, Config{}, pattern)}) {
         CHECK(same_bits(ops.L, L));
         CHECK(same_bits(ops.M, Mf));
       }

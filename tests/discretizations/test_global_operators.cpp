@@ -1,8 +1,7 @@
-// Global operators on sphere1 and on a flat plane (spec §12.3).
+// Global operators on sphere1 and on a flat plane (docs/math.md §12.3).
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/discretizations/registry.hpp>
 
@@ -26,12 +25,12 @@ Config with(const std::string& key, Config::Value v) {
 // Smallest -lambda of L u = lambda M u (dense; meshes of a few hundred vertices).
 Eigen::VectorXd smallest_eigenvalues(const Operators& ops, int k) {
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(-Eigen::MatrixXd(ops.L), Eigen::MatrixXd(ops.M),
-                                                                 Eigen::EigenvaluesOnly);
+                                                               Eigen::EigenvaluesOnly);
   REQUIRE(es.info() == Eigen::Success);
   return es.eigenvalues().head(k);
 }
 
-// Distinct values (with multiplicity) of spec §12.3, to the printed digits.
+// Distinct values (with multiplicity) of docs/math.md §12.3, to the printed digits.
 void check_spectrum(const Eigen::VectorXd& mu, std::initializer_list<std::pair<double, int>> expected, double rel) {
   int i = 1;  // mu[0] ~ 0
   CHECK(std::abs(mu[0]) <= 1e-9);
@@ -44,7 +43,7 @@ void check_spectrum(const Eigen::VectorXd& mu, std::initializer_list<std::pair<d
 
 }  // namespace
 
-TEST_CASE("total mass on sphere1 with radial normals matches the reference (spec §12.3)") {
+TEST_CASE("total mass on sphere1 with radial normals matches the reference (docs/math.md §12.3)") {
   const std::vector<std::pair<double, std::pair<double, double>>> table = {
       {0.5, {11.99117174, 12.31315677}}, {0.25, {12.10987569, 12.19109343}}, {0.1, {12.45922033, 12.47193387}}};
   for (const auto& [h, sums] : table) {
@@ -66,13 +65,14 @@ TEST_CASE("sphere1 h=0.25: L1 = 0, L symmetric, largest eigenvalue of L <= 1e-14
     const double scale = max_abs(ops.L);
     INFO(method);
     CHECK((ops.L * Eigen::VectorXd::Ones(ops.L.cols())).cwiseAbs().maxCoeff() <= 1e-14 * scale);
-    CHECK(max_abs(Eigen::SparseMatrix<double>(ops.L - Eigen::SparseMatrix<double>(ops.L.transpose()))) <= 1e-15 * scale);
+    CHECK(max_abs(Eigen::SparseMatrix<double>(ops.L - Eigen::SparseMatrix<double>(ops.L.transpose()))) <=
+          1e-15 * scale);
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd(ops.L), Eigen::EigenvaluesOnly);
     CHECK(es.eigenvalues().maxCoeff() <= 1e-14 * scale);
   }
 }
 
-TEST_CASE("sphere1 h=0.25 eigenvalues of every quad method match spec §12.3") {
+TEST_CASE("sphere1 h=0.25 eigenvalues of every quad method match docs/math.md §12.3") {
   const SphereCase s = sphere_case(0.25);
   check_spectrum(smallest_eigenvalues(build("interpolated", s), 16),
                  {{2.0628, 3}, {6.1661, 3}, {6.3577, 2}, {12.4211, 1}, {12.4221, 3}, {12.9450, 3}}, 1e-4);
@@ -85,7 +85,7 @@ TEST_CASE("sphere1 h=0.25 eigenvalues of every quad method match spec §12.3") {
                  {{2.0663, 3}, {6.2039, 3}, {6.3675, 2}, {12.538, 3}}, 1e-4);
 }
 
-TEST_CASE("interpolated global and local assemblies differ by about 9% at h=0.25 (spec §3.6)") {
+TEST_CASE("interpolated global and local assemblies differ by about 9% at h=0.25 (docs/math.md §3.6)") {
   const SphereCase s = sphere_case(0.25);
   const Operators a = build("interpolated", s), b = build("interpolated", s, with("assembly", std::string("local")));
   const double rel = Eigen::SparseMatrix<double>(a.L - b.L).norm() / a.L.norm();
@@ -93,7 +93,7 @@ TEST_CASE("interpolated global and local assemblies differ by about 9% at h=0.25
   CHECK(relative_difference(a.M, b.M) == 0.0);
 }
 
-TEST_CASE("flat-plane stencils of an interior vertex (spec §12.3)") {
+TEST_CASE("flat-plane stencils of an interior vertex (docs/math.md §12.3)") {
   const int n = 6;
   const SphereCase s = flat_grid(n, 1.0);
   const int centre = 3 * (n + 1) + 3;

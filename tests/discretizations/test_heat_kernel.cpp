@@ -1,22 +1,21 @@
-// Heat-kernel Laplacian (spec §6, §12.4).
+// Heat-kernel Laplacian (docs/math.md §6, §12.4).
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <random>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
-#include <corrlap/discretizations/heat_kernel.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
+#include <corrlap/discretizations/heat_kernel.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
+#include <random>
 
 #include "discretizations/test_vrm_support.hpp"
 
 using namespace corrlap;
 
-TEST_CASE("heat-kernel sparse assembly equals the dense O(N^2) formula of spec 6") {
+TEST_CASE("heat-kernel sparse assembly equals the dense O(N^2) formula of docs/math.md §6") {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> U(-1, 1), P(0.5, 2);
   const int n = 400;
@@ -47,7 +46,7 @@ TEST_CASE("heat-kernel sparse assembly equals the dense O(N^2) formula of spec 6
   CHECK(heat_kernel_matrix(x, mu, t, K).nonZeros() == nnz + n);
 }
 
-TEST_CASE("heat kernel on x^2 at h = 0.1 with true normals: L_inf ~ 0.847, mean error ~ 0.15 (spec 12.4)") {
+TEST_CASE("heat kernel on x^2 at h = 0.1 with true normals: L_inf ~ 0.847, mean error ~ 0.15 (docs/math.md §12.4)") {
   const SurfelMesh mesh = test::sphere1_surface(0.1);
   NormalFields nf;
   nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
@@ -68,7 +67,8 @@ TEST_CASE("heat kernel on x^2 at h = 0.1 with true normals: L_inf ~ 0.847, mean 
   CHECK(e.maxCoeff() == doctest::Approx(0.847).epsilon(0.02));
   CHECK(e.mean() == doctest::Approx(0.15).epsilon(0.07));
   // the identity-mass form is the pointwise operator itself
-  const Operators pw = make_discretization("heat-kernel")->assemble(mesh, nf, Config::from_key_values({"mass=identity"}));
+  const Operators pw =
+      make_discretization("heat-kernel")->assemble(mesh, nf, Config::from_key_values({"mass=identity"}));
   CHECK((pw.L * f - Af).cwiseAbs().maxCoeff() < 1e-10);
   CHECK(pw.M.diagonal().isOnes());
 }
@@ -110,13 +110,14 @@ TEST_CASE("heat kernel input errors") {
   CHECK_THROWS_AS(d->assemble(mesh, nf, Config::from_key_values({"variant=both"})), InputError);
   CHECK_THROWS_AS(d->assemble(mesh, nf, Config::from_key_values({"t=-1"})), InputError);
   CHECK_THROWS_AS(d->assemble(mesh, nf, Config::from_key_values({"cutoff=0"})), InputError);
-  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"lambda=1"})), doctest::Contains("lambda"), InputError);
+  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"lambda=1"})), doctest::Contains("lambda"),
+                       InputError);
   nf.face(5, 0) = std::nan("");
   CHECK_THROWS_AS(d->assemble(mesh, nf, Config()), InputError);
   nf.face = test::radial(mesh.face_centroids());
   nf.face.row(3) = -nf.face.row(3);
-  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"orientation=error"})), doctest::Contains("face 3"),
-                       InputError);
+  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"orientation=error"})),
+                       doctest::Contains("face 3"), InputError);
   const Operators w = d->assemble(mesh, nf, Config());  // warn: |u.n| as the reference
   CHECK(w.warnings.size() == 1);
   const Eigen::MatrixX3d x = Eigen::MatrixX3d::Zero(3, 3);
@@ -124,7 +125,7 @@ TEST_CASE("heat kernel input errors") {
 }
 
 namespace {
-// Backward Poisson error (spec 10.4, f = x^2) of the registered heat kernel on sphere1 with true
+// Backward Poisson error (docs/math.md §10.4, f = x^2) of the registered heat kernel on sphere1 with true
 // normals and the given cut-off, k and alpha (t = k h^alpha).
 double heat_poisson_error(double h, double cutoff, double k = 0.1, double alpha = 2.0 / 3.0,
                           const std::string& distance = "euclidean") {
@@ -143,24 +144,25 @@ double heat_poisson_error(double h, double cutoff, double k = 0.1, double alpha 
 double order(double coarse, double fine) { return std::log(coarse / fine) / std::log(2.0); }
 }  // namespace
 
-// Why no order 1.5 with the surfel centres of spec 6 (measured, see docs/discretizations_extra.md):
+// Why no order 1.5 with the surfel centres of docs/math.md §6 (measured, see docs/discretizations_extra.md):
 // the backward error behaves like C1 h^2 / t + C2 t (+ the cut-off floor below).
 //  - C2 t: the smoothing bias of any heat-kernel Laplacian;
 //  - C1 h^2 / t: surfel centres lie up to ~h off the surface, which perturbs every squared
 //    distance by O(h^2) relative to the kernel width t. Projecting the centres onto the sphere
 //    removes it (last test: order 1.7 with t = h^1.75).
-// With t = k h^alpha the best order is therefore 1 (alpha = 1); the spec's alpha = 2/3 gives 2/3.
+// With t = k h^alpha the best order is therefore 1 (alpha = 1); docs/math.md's alpha = 2/3 gives 2/3.
 // The cut-off keeps only the fraction phi(K) = 1 - exp(-K^2/2)(1 + K^2/2) of the kernel's second
 // moment, so with a fixed K the operator tends to phi(K) Delta (phi(3) = 0.9389: a 6.5% floor).
-TEST_CASE("heat kernel backward Poisson (spec 10.4), default K = 3: errors decrease toward the cut-off floor") {
+TEST_CASE(
+    "heat kernel backward Poisson (docs/math.md §10.4), default K = 3: errors decrease toward the cut-off floor") {
   const double hs[3] = {0.1, 0.05, 0.025};
   double err[3];
   for (int i = 0; i < 3; ++i) err[i] = heat_poisson_error(hs[i], 3.0);
   const double phi = 1 - std::exp(-4.5) * 5.5;
   // limit: g = f / phi, error = (1/phi - 1) ||f - mean f||, ||x^2 - 1/3||_{L2, normalized} = sqrt(4/45)
   const double floor = (1 / phi - 1) * std::sqrt(4.0 / 45.0);
-  MESSAGE("heat-kernel (K = 3) backward L2 errors " << err[0] << " " << err[1] << " " << err[2]
-                                                    << ", predicted floor " << floor);
+  MESSAGE("heat-kernel (K = 3) backward L2 errors " << err[0] << " " << err[1] << " " << err[2] << ", predicted floor "
+                                                    << floor);
   CHECK(err[1] < err[0]);
   CHECK(err[2] < err[1]);
   CHECK(err[2] > floor);
@@ -178,7 +180,7 @@ TEST_CASE("heat kernel backward Poisson, t = 0.1 h, K = 5: first order, the best
   const double e1 = heat_poisson_error(0.1, 5.0, 0.1, 1.0), e2 = heat_poisson_error(0.05, 5.0, 0.1, 1.0),
                e3 = heat_poisson_error(0.025, 5.0, 0.1, 1.0);
   MESSAGE("heat-kernel (t = 0.1 h, K = 5) backward L2 errors " << e1 << " " << e2 << " " << e3 << ", orders "
-                                                                << order(e1, e2) << " " << order(e2, e3));
+                                                               << order(e1, e2) << " " << order(e2, e3));
   // measured 0.99 and 0.91: the h^2/t term is not yet fully asymptotic at h = 0.1
   CHECK(order(e1, e2) > 0.8);
   CHECK(order(e2, e3) > 0.8);
@@ -204,7 +206,7 @@ TEST_CASE("heat kernel matrix on points ON the sphere, t = h^1.75: order >= 1.5 
   };
   const double e1 = error(0.1), e2 = error(0.05), e3 = error(0.025);
   MESSAGE("heat kernel on projected points: backward L2 errors " << e1 << " " << e2 << " " << e3 << ", orders "
-                                                                  << order(e1, e2) << " " << order(e2, e3));
+                                                                 << order(e1, e2) << " " << order(e2, e3));
   CHECK(order(e1, e2) >= 1.5);  // measured 1.69
   CHECK(order(e2, e3) >= 1.5);  // measured 1.76
 }
@@ -273,7 +275,8 @@ TEST_CASE("heat kernel tangent distance: symmetric graph Laplacian, bitwise thre
         Eigen::Map<const Eigen::VectorXd>(two.L.valuePtr(), two.L.nonZeros()));
   const Eigen::SparseMatrix<double> Lt = one.L.transpose();
   CHECK((one.L - Lt).norm() == 0.0);
-  CHECK((one.L * Eigen::VectorXd::Ones(one.L.rows())).cwiseAbs().maxCoeff() < 1e-12 * one.L.diagonal().cwiseAbs().maxCoeff());
+  CHECK((one.L * Eigen::VectorXd::Ones(one.L.rows())).cwiseAbs().maxCoeff() <
+        1e-12 * one.L.diagonal().cwiseAbs().maxCoeff());
   for (int k = 0; k < one.L.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(one.L, k); it; ++it)
       if (it.row() != it.col()) CHECK(it.value() > 0.0);
@@ -281,8 +284,8 @@ TEST_CASE("heat kernel tangent distance: symmetric graph Laplacian, bitwise thre
   const Operators euclid = d->assemble(mesh, nf, Config());
   CHECK(one.L.nonZeros() == euclid.L.nonZeros());
   CHECK(-one.L.diagonal().sum() > -euclid.L.diagonal().sum());
-  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"distance=geodesic"})), doctest::Contains("geodesic"),
-                       InputError);
+  CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"distance=geodesic"})),
+                       doctest::Contains("geodesic"), InputError);
   CHECK_THROWS_WITH_AS(d->assemble(mesh, nf, Config::from_key_values({"distance=tangent", "variant=primal"})),
                        doctest::Contains("dual"), InputError);
   const Eigen::MatrixX3d x = mesh.face_centroids();

@@ -1,17 +1,16 @@
 // The fast face kernel of the interpolated corrected calculus (interpolated_corrected_fast.cpp)
 // computes M_{0,f}, D^T (S^T S / ubar^z) D and P_f D bit for bit as the readable interpolated_local()
-// (spec §3.2-§3.5), for squares of any orientation and size and on surfel meshes, for every ISA.
+// (docs/math.md §3.2-§3.5), for squares of any orientation and size and on surfel meshes, for every ISA.
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
+#include <corrlap/core/config.hpp>
+#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
+#include <corrlap/discretizations/detail/interpolated_kernel.hpp>
+#include <corrlap/discretizations/interpolated_corrected.hpp>
 #include <cstring>
 #include <random>
 #include <vector>
-
-#include <corrlap/core/config.hpp>
-#include <corrlap/discretizations/assembly/detail/quad_row_gather.hpp>
-#include <corrlap/discretizations/interpolated_corrected.hpp>
-#include <corrlap/discretizations/detail/interpolated_kernel.hpp>
 
 #include "reference_support.hpp"
 
@@ -30,7 +29,8 @@ KernelCase random_case(std::mt19937& rng, bool axis_aligned) {
   std::normal_distribution<double> g;
   const double h = std::pow(10.0, -2.5 * (uni(rng) + 1.0) / 2.0);  // 1 .. 0.003
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  if (!axis_aligned) R = Eigen::Quaterniond(Eigen::Vector4d(g(rng), g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+  if (!axis_aligned)
+    R = Eigen::Quaterniond(Eigen::Vector4d(g(rng), g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
   else {
     // a signed permutation: any of the 6 surfel orientations
     const int a = int(rng() % 3);
@@ -79,11 +79,13 @@ void unpack(const double* terms, const double* pd, Eigen::Matrix4d& M, Eigen::Ma
   }
 }
 
-bool same_bits(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 16) == 0; }
+bool same_bits(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b) {
+  return std::memcmp(a.data(), b.data(), sizeof(double) * 16) == 0;
+}
 
 }  // namespace
 
-TEST_CASE("interpolated assembly kernel on random squares: bitwise interpolated_local, which is spec §3.5") {
+TEST_CASE("interpolated assembly kernel on random squares: bitwise interpolated_local, which is docs/math.md §3.5") {
   std::mt19937 rng(11);
   const Eigen::Matrix4d& D = quad_difference();
   for (int trial = 0; trial < 400; ++trial) {
@@ -99,7 +101,7 @@ TEST_CASE("interpolated assembly kernel on random squares: bitwise interpolated_
     CHECK(same_bits(M, ref.mass));
     CHECK(same_bits(K1, ref.sharp_stiffness));
     CHECK(same_bits(PD, ref.projected_difference));
-    // The readable quantities are those of spec §3.5 written with D: D^T (S^T S / ubar^z) D, P_f D
+    // The readable quantities are those of docs/math.md §3.5 written with D: D^T (S^T S / ubar^z) D, P_f D
     // and L_f = -D^T M_{1,f} D, to round-off.
     const Eigen::Matrix4d K1_spec = D.transpose() * (ref.S.transpose() * ref.S / ref.ubar_z) * D;
     CHECK(max_abs(K1 - K1_spec) <= 1e-13 * max_abs(K1_spec));
@@ -120,34 +122,40 @@ TEST_CASE("interpolated fast face terms are bitwise the readable interpolated_lo
       const int F = s.mesh.num_faces();
       REQUIRE(F > 500);
       const Eigen::MatrixX3d& U = s.normals.vertex;
-      const double* x[3] = {s.mesh.positions.col(0).data(), s.mesh.positions.col(1).data(), s.mesh.positions.col(2).data()};
+      const double* x[3] = {s.mesh.positions.col(0).data(), s.mesh.positions.col(1).data(),
+                            s.mesh.positions.col(2).data()};
       const double* u[3] = {U.col(0).data(), U.col(1).data(), U.col(2).data()};
       for (const double kappa : {2.0, 1.0})
         for (const auto isa : isas) {
           INFO("kappa " << kappa << ", isa " << int(isa));
           std::vector<double> t(std::size_t(F) * detail::kTermsStride), p(std::size_t(F) * 16);
-          REQUIRE(detail::interpolated_face_range(s.mesh.faces.data(), 0, F, x, u, kappa, t.data(), p.data(), isa) == -1);
+          REQUIRE(detail::interpolated_face_range(s.mesh.faces.data(), 0, F, x, u, kappa, t.data(), p.data(), isa) ==
+                  -1);
           int mismatches = 0;
           for (int f = 0; f < F; ++f) {
-            const InterpolatedLocal ref = interpolated_local(quad_corners(s.mesh, f), quad_corner_rows(s.mesh, U, f), 0.1, kappa);
+            const InterpolatedLocal ref =
+                interpolated_local(quad_corners(s.mesh, f), quad_corner_rows(s.mesh, U, f), 0.1, kappa);
             Eigen::Matrix4d M, K1, PD;
             unpack(t.data() + std::size_t(f) * detail::kTermsStride, p.data() + std::size_t(f) * 16, M, K1, PD);
-            if (!same_bits(M, ref.mass) || !same_bits(K1, ref.sharp_stiffness) || !same_bits(PD, ref.projected_difference))
+            if (!same_bits(M, ref.mass) || !same_bits(K1, ref.sharp_stiffness) ||
+                !same_bits(PD, ref.projected_difference))
               ++mismatches;
           }
           CHECK(mismatches == 0);
         }
-      // Local assembly (spec §3.6b) from the readable L_f == the method's L, bit for bit.
+      // Local assembly (docs/math.md §3.6b) from the readable L_f == the method's L, bit for bit.
       const detail::VertexCorners vc = detail::vertex_corners(s.mesh);
       Eigen::SparseMatrix<double> L, M;
-      detail::gather_quad_rows<2>(
-          s.mesh, vc,
-          [&](int f, int i, double* rows) {
-            const InterpolatedLocal ref = interpolated_local(quad_corners(s.mesh, f), quad_corner_rows(s.mesh, U, f), 0.1, 2.0);
-            for (int j = 0; j < 4; ++j) rows[j] = ref.mass(i, j), rows[4 + j] = ref.laplacian(i, j);
-          },
-          {&M, &L});
-      const Operators ops = make_interpolated_corrected()->assemble(s.mesh, s.normals, Config::from_key_values({"assembly=local"}));
+      detail::gather_quad_rows<2>(s.mesh, vc,
+                                  [&](int f, int i, double* rows) {
+                                    const InterpolatedLocal ref = interpolated_local(
+                                        quad_corners(s.mesh, f), quad_corner_rows(s.mesh, U, f), 0.1, 2.0);
+                                    for (int j = 0; j < 4; ++j)
+                                      rows[j] = ref.mass(i, j), rows[4 + j] = ref.laplacian(i, j);
+                                  },
+                                  {&M, &L});
+      const Operators ops =
+          make_interpolated_corrected()->assemble(s.mesh, s.normals, Config::from_key_values({"assembly=local"}));
       CHECK(std::memcmp(ops.L.valuePtr(), L.valuePtr(), sizeof(double) * std::size_t(L.nonZeros())) == 0);
       CHECK(std::memcmp(ops.M.valuePtr(), M.valuePtr(), sizeof(double) * std::size_t(M.nonZeros())) == 0);
       CHECK(ops.L.nonZeros() == L.nonZeros());
@@ -176,7 +184,8 @@ TEST_CASE("vectorized face kernel (SSE2, AVX2) gives the scalar kernel's bits an
     const KernelCase kc = random_case(rng, f % 2 == 0);
     for (int k = 0; k < 4; ++k) {
       faces[std::size_t(4 * f + k)] = 4 * f + k;
-      for (int c = 0; c < 3; ++c) pos[c][std::size_t(4 * f + k)] = kc.x(k, c), nrm[c][std::size_t(4 * f + k)] = kc.u(k, c);
+      for (int c = 0; c < 3; ++c)
+        pos[c][std::size_t(4 * f + k)] = kc.x(k, c), nrm[c][std::size_t(4 * f + k)] = kc.u(k, c);
     }
   }
   const double* x[3] = {pos[0].data(), pos[1].data(), pos[2].data()};

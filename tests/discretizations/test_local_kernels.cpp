@@ -1,14 +1,13 @@
-// Local matrices of the quad discretizations without a mesh (spec §12.2).
+// Local matrices of the quad discretizations without a mesh (docs/math.md §12.2).
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
-#include <random>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/discretizations/corrected_fem.hpp>
 #include <corrlap/discretizations/interpolated_corrected.hpp>
 #include <corrlap/discretizations/polydec.hpp>
 #include <corrlap/discretizations/registry.hpp>
+#include <random>
 
 #include "reference_support.hpp"
 
@@ -18,7 +17,7 @@ using Eigen::Vector3d;
 
 namespace {
 
-// Unit square surfel of side h in the plane z = 0, outward +z (spec §0 corner order).
+// Unit square surfel of side h in the plane z = 0, outward +z (docs/math.md §0 corner order).
 QuadCorners flat_surfel(double h) {
   QuadCorners x;
   x << 0, 0, 0, h, 0, 0, h, h, 0, 0, h, 0;
@@ -37,7 +36,7 @@ Matrix4d bilinear_stiffness() {
   return K / 6.0;
 }
 
-// -(K0 + lambda w w^T) of spec §2.4.
+// -(K0 + lambda w w^T) of docs/math.md §2.4.
 Matrix4d polydec_closed_form(double lambda) {
   Matrix4d K0;
   K0 << 1, 0, -1, 0, 0, 1, 0, -1, -1, 0, 1, 0, 0, -1, 0, 1;
@@ -45,7 +44,7 @@ Matrix4d polydec_closed_form(double lambda) {
   return -(0.5 * K0 + lambda * w * w.transpose());
 }
 
-// Single-surfel regression case of spec §12.2 (h = 0.5, outward +x).
+// Single-surfel regression case of docs/math.md §12.2 (h = 0.5, outward +x).
 QuadCorners regression_corners() {
   const double h = 0.5;
   QuadCorners x;
@@ -98,15 +97,15 @@ TEST_CASE("fem local mass sums to h^2 z, lumped and full agree in total") {
   const FemLocalFrame fr = corrected_fem_local_frame(flat_surfel(0.2), u);
   CHECK(fr.u_local.z() == doctest::Approx(u.z()).epsilon(1e-15));
   CHECK(corrected_fem_local_mass(fr.area, fr.u_local.z()).sum() == doctest::Approx(0.04 * u.z()).epsilon(1e-14));
-  CHECK(corrected_fem_local_lumped_mass(fr.area, fr.u_local.z()).sum() ==
-        doctest::Approx(0.04 * u.z()).epsilon(1e-14));
-  // Same u, another h: stiffness identical (spec §4.3: scale invariant).
+  CHECK(corrected_fem_local_lumped_mass(fr.area, fr.u_local.z()).sum() == doctest::Approx(0.04 * u.z()).epsilon(1e-14));
+  // Same u, another h: stiffness identical (docs/math.md §4.3: scale invariant).
   const FemLocalFrame fr2 = corrected_fem_local_frame(flat_surfel(3.0), u);
-  CHECK((corrected_fem_local_stiffness(fr.u_local) - corrected_fem_local_stiffness(fr2.u_local)).cwiseAbs().maxCoeff() <=
-        1e-15);
+  CHECK(
+      (corrected_fem_local_stiffness(fr.u_local) - corrected_fem_local_stiffness(fr2.u_local)).cwiseAbs().maxCoeff() <=
+      1e-15);
 }
 
-TEST_CASE("fem local stiffness equals the paper's Fig. 2 matrix written out in spec §4.3 for unit u") {
+TEST_CASE("fem local stiffness equals the paper's Fig. 2 matrix written out in docs/math.md §4.3 for unit u") {
   std::mt19937 rng(7);
   std::normal_distribution<double> g;
   for (int trial = 0; trial < 20; ++trial) {
@@ -115,7 +114,7 @@ TEST_CASE("fem local stiffness equals the paper's Fig. 2 matrix written out in s
     const double x = u.x(), y = u.y(), z = u.z();
     Matrix4d K;
     K << 3 * x * y + 2 + 2 * z * z, 2 * y * y - 1 - x * x, -3 * x * y - 1 - z * z, 2 * x * x - 1 - y * y,  //
-        2 * y * y - 1 - x * x, -3 * x * y + 2 + 2 * z * z, 2 * x * x - 1 - y * y, 3 * x * y - 1 - z * z,    //
+        2 * y * y - 1 - x * x, -3 * x * y + 2 + 2 * z * z, 2 * x * x - 1 - y * y, 3 * x * y - 1 - z * z,   //
         -3 * x * y - 1 - z * z, 2 * x * x - 1 - y * y, 3 * x * y + 2 + 2 * z * z, 2 * y * y - 1 - x * x,   //
         2 * x * x - 1 - y * y, 3 * x * y - 1 - z * z, 2 * y * y - 1 - x * x, -3 * x * y + 2 + 2 * z * z;
     K /= 6 * z;
@@ -143,7 +142,7 @@ TEST_CASE("polydec and interpolated equal minus the FEM stiffness on a flat surf
   CHECK((polydec_local(flat_surfel(0.5), 1.0 / 6.0).laplacian + Kfem).cwiseAbs().maxCoeff() <= 1e-14);
   CHECK((interpolated_local(flat_surfel(0.5), n, 1.0 / 6.0).laplacian + Kfem).cwiseAbs().maxCoeff() <= 1e-14);
   CHECK((interpolated_local(flat_surfel(0.5), n, 0.1).laplacian + Kfem).cwiseAbs().maxCoeff() > 1e-3);
-  // lambda = 0.1: rows (-0.6, 0.1, 0.4, 0.1) cyclic (spec §12.2).
+  // lambda = 0.1: rows (-0.6, 0.1, 0.4, 0.1) cyclic (docs/math.md §12.2).
   const Matrix4d L = interpolated_local(flat_surfel(0.5), n, 0.1).laplacian;
   for (int r = 0; r < 4; ++r) {
     CHECK(L(r, r) == doctest::Approx(-0.6).epsilon(1e-14));
@@ -161,7 +160,7 @@ TEST_CASE("projected polydec: |a_f| = h^2 u.n and n_f = u on a surfel") {
   check_local_laplacian_properties(loc.laplacian);
 }
 
-TEST_CASE("interpolated: constant-u identities of spec §12.2 for kappa = 1 and 2") {
+TEST_CASE("interpolated: constant-u identities of docs/math.md §12.2 for kappa = 1 and 2") {
   const Vector3d n(0, 0, 1);
   const Vector3d u = Vector3d(0.3, -0.25, 0.9).normalized();
   for (double kappa : {1.0, 2.0}) {
@@ -170,9 +169,9 @@ TEST_CASE("interpolated: constant-u identities of spec §12.2 for kappa = 1 and 
     CHECK(loc.area == doctest::Approx(0.04 * u.z()).epsilon(1e-14));
     const Eigen::Matrix3d UV = loc.sharp * loc.flat;
     const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-    const Eigen::Matrix3d expected =
-        kappa == 1.0 ? Eigen::Matrix3d(I - u * u.transpose())
-                     : Eigen::Matrix3d(I - 2.0 * u * u.transpose() + n * u.transpose() / u.z());
+    const Eigen::Matrix3d expected = kappa == 1.0
+                                         ? Eigen::Matrix3d(I - u * u.transpose())
+                                         : Eigen::Matrix3d(I - 2.0 * u * u.transpose() + n * u.transpose() / u.z());
     CHECK((UV - expected).cwiseAbs().maxCoeff() <= 1e-13);
     // Identity on vectors orthogonal to u.
     const Vector3d g = u.cross(Vector3d(1, 2, 3)).normalized();
@@ -207,12 +206,13 @@ TEST_CASE("local laplacians of every quad method are symmetric, annihilate const
     for (int k = 0; k < 4; ++k) u.row(k) = random_normal().transpose();
     check_local_laplacian_properties(interpolated_local(flat_surfel(0.1), u, 0.1).laplacian);
     check_local_laplacian_properties(interpolated_local(flat_surfel(0.1), u, 1.0, 1.0).laplacian);
-    check_local_laplacian_properties(polydec_local(polydec_project_corners(flat_surfel(0.1), random_normal()), 1.0).laplacian);
+    check_local_laplacian_properties(
+        polydec_local(polydec_project_corners(flat_surfel(0.1), random_normal()), 1.0).laplacian);
     check_local_laplacian_properties(-corrected_fem_local_stiffness(random_normal()));
   }
 }
 
-TEST_CASE("single-surfel regression values of the reference (spec §12.2, 9 digits)") {
+TEST_CASE("single-surfel regression values of the reference (docs/math.md §12.2, 9 digits)") {
   const QuadCorners x = regression_corners();
   const QuadCorners u = regression_vertex_normals();
   const InterpolatedLocal cc = interpolated_local(x, u, 0.1, 2.0);
@@ -248,10 +248,8 @@ TEST_CASE("cyclic relabelling and reversal with negated normals give the same as
   NormalFields nf;
   nf.vertex = u;
   nf.face = regression_face_normal.transpose();
-  std::vector<std::pair<std::string, Config>> methods = {{"fem", Config{}},
-                                                         {"interpolated", Config{}},
-                                                         {"projected-polydec", Config{}},
-                                                         {"polydec", Config{}}};
+  std::vector<std::pair<std::string, Config>> methods = {
+      {"fem", Config{}}, {"interpolated", Config{}}, {"projected-polydec", Config{}}, {"polydec", Config{}}};
   Config local;
   local.set("assembly", std::string("local"));
   methods.push_back({"interpolated", local});

@@ -2,10 +2,10 @@
 // copy of the caller's normals unless they change; Discretization::assemble_into (output reuse).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <corrlap/discretizations/registry.hpp>
-#include <algorithm>
 #include <corrlap/estimators/implicit_normals.hpp>
 
 #include "discretizations/test_vrm_support.hpp"
@@ -67,7 +67,8 @@ TEST_CASE("assemble_into reuses the output storage and gives the same bits as as
            std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr()) &&
            std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr());
   };
-  for (const std::string method : {"fem", "polydec", "projected-polydec", "interpolated", "vrm", "corrected-vrm", "heat-kernel"}) {
+  for (const std::string method :
+       {"fem", "polydec", "projected-polydec", "interpolated", "vrm", "corrected-vrm", "heat-kernel"}) {
     CAPTURE(method);
     const auto d = make_discretization(method);
     const Operators fresh = d->assemble(mesh, nf, Config());

@@ -1,10 +1,9 @@
-// Backward (Poisson) evaluation of spec §10.4 on sphere1 with true normals: the corrected methods
+// Backward (Poisson) evaluation of docs/math.md §10.4 on sphere1 with true normals: the corrected methods
 // converge with observed order >= 1.5 over h = 0.1, 0.05, 0.025 (the paper reports ~h^1.9).
 #include <doctest/doctest.h>
 
 #include <Eigen/SparseCholesky>
 #include <cmath>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/discretizations/registry.hpp>
 
@@ -15,7 +14,7 @@ using namespace corrlap::test;
 
 namespace {
 
-// M-weighted L2 error of the pinned Poisson solve for f = x^2 (Delta f = 2 - 6x^2 on S^2, spec §10.2).
+// M-weighted L2 error of the pinned Poisson solve for f = x^2 (Delta f = 2 - 6x^2 on S^2, docs/math.md §10.2).
 double poisson_error(const std::string& method, const SphereCase& s) {
   const Operators ops = make_discretization(method)->assemble(s.mesh, s.normals, Config{});
   const Eigen::Index n = ops.L.rows();
@@ -28,7 +27,7 @@ double poisson_error(const std::string& method, const SphereCase& s) {
   const Eigen::VectorXd ones = Eigen::VectorXd::Ones(n);
   const Eigen::VectorXd M1 = ops.M * ones;
   const double mass = ones.dot(M1);
-  // Compatibility projection (spec §10.4): remove the M-mean of b.
+  // Compatibility projection (docs/math.md §10.4): remove the M-mean of b.
   Eigen::VectorXd b = lap.array() - M1.dot(lap) / mass;
   Eigen::VectorXd rhs = ops.M * b;
   // Pin vertex 0: g_0 = f(q_0); replace row/column 0 by the identity, move the column to the rhs.
@@ -70,7 +69,7 @@ TEST_CASE("backward Poisson error of fem, interpolated and projected-polydec con
   }
 }
 
-TEST_CASE("backward Poisson errors at h = 0.1 match the reference table of spec §12.5") {
+TEST_CASE("backward Poisson errors at h = 0.1 match the reference table of docs/math.md §12.5") {
   const SphereCase s = sphere_case(0.1);
   CHECK(poisson_error("interpolated", s) == doctest::Approx(0.00431).epsilon(0.01));
   CHECK(poisson_error("fem", s) == doctest::Approx(0.00483).epsilon(0.01));

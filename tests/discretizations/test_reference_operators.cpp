@@ -28,11 +28,15 @@ void check_against_reference(const std::string& method, const std::string& prefi
 }
 }  // namespace
 
-TEST_CASE("fem equals the reference NormalCorrectedFEM matrices on sphere1 h=0.2") { check_against_reference("fem", "fem"); }
+TEST_CASE("fem equals the reference NormalCorrectedFEM matrices on sphere1 h=0.2") {
+  check_against_reference("fem", "fem");
+}
 TEST_CASE("interpolated equals the reference InterpolatedCorrectedCalculus L0/M0 on sphere1 h=0.2") {
   check_against_reference("interpolated", "icc");
 }
-TEST_CASE("polydec equals the reference PolygonalCalculus L0/M0 on sphere1 h=0.2") { check_against_reference("polydec", "poly"); }
+TEST_CASE("polydec equals the reference PolygonalCalculus L0/M0 on sphere1 h=0.2") {
+  check_against_reference("polydec", "poly");
+}
 TEST_CASE("projected-polydec equals the reference projected PolygonalCalculus on sphere1 h=0.2") {
   check_against_reference("projected-polydec", "polyproj");
 }

@@ -1,14 +1,13 @@
-// Virtual refinement: uncorrected baseline (spec §5.1) and corrected VRM (spec §5.2, §12.2, §12.6).
+// Virtual refinement: uncorrected baseline (docs/math.md §5.1) and corrected VRM (docs/math.md §5.2, §12.2, §12.6).
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <random>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/threads.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/discretizations/virtual_refinement.hpp>
+#include <random>
 
 #include "discretizations/test_vrm_support.hpp"
 
@@ -18,7 +17,7 @@ namespace {
 
 QuadPositions surfel_corners(double h, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero()) {
   QuadPositions X;
-  X << 0, 0, 0, 0, h, 0, 0, h, h, 0, 0, h;  // outward +x (spec §12.2)
+  X << 0, 0, 0, 0, h, 0, 0, h, h, 0, 0, h;  // outward +x (docs/math.md §12.2)
   X.rowwise() += offset.transpose();
   return X;
 }
@@ -62,7 +61,7 @@ TEST_CASE("cotan triangle stiffness of an equilateral triangle is cot(60 deg)/2 
   CHECK(m2[2] == doctest::Approx(0.025).epsilon(1e-14));  // obtuse corner gets half the area
 }
 
-TEST_CASE("uncorrected VRM on a surfel gives the closed form of spec 5.1 anywhere in space") {
+TEST_CASE("uncorrected VRM on a surfel gives the closed form of docs/math.md §5.1 anywhere in space") {
   for (double h : {1.0, 0.5, 0.01})
     for (const Eigen::Vector3d& off : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10.5, -3.25, 7)}) {
       CAPTURE(h);
@@ -103,7 +102,7 @@ TEST_CASE("uncorrected VRM virtual vertex of a non-planar quad minimizes the fan
   CHECK((loc.M - Eigen::Matrix4d(loc.M.diagonal().asDiagonal())).isZero());
 }
 
-TEST_CASE("corrected VRM with u = n reproduces spec 5.2 checks: centre, I - 11^T/4, h^2/6 I + h^2/48 11^T") {
+TEST_CASE("corrected VRM with u = n reproduces docs/math.md §5.2 checks: centre, I - 11^T/4, h^2/6 I + h^2/48 11^T") {
   for (double h : {1.0, 0.5, 0.02}) {
     CAPTURE(h);
     const QuadPositions X = surfel_corners(h, Eigen::Vector3d(3, -2, 1));
@@ -132,14 +131,16 @@ TEST_CASE("corrected fan energy: analytic gradient and Hessian agree with finite
     Eigen::Matrix2d H;
     corrected_fan_energy(uz, s, t, &g, &H);
     Eigen::Vector2d gp, gm, gq, gr;
-    const double fd_s = (corrected_fan_energy(uz, s + eps, t, &gp) - corrected_fan_energy(uz, s - eps, t, &gm)) / (2 * eps);
-    const double fd_t = (corrected_fan_energy(uz, s, t + eps, &gq) - corrected_fan_energy(uz, s, t - eps, &gr)) / (2 * eps);
+    const double fd_s =
+        (corrected_fan_energy(uz, s + eps, t, &gp) - corrected_fan_energy(uz, s - eps, t, &gm)) / (2 * eps);
+    const double fd_t =
+        (corrected_fan_energy(uz, s, t + eps, &gq) - corrected_fan_energy(uz, s, t - eps, &gr)) / (2 * eps);
     CHECK(g[0] == doctest::Approx(fd_s).epsilon(1e-7));
     CHECK(g[1] == doctest::Approx(fd_t).epsilon(1e-7));
     const Eigen::Vector2d Hs = (gp - gm) / (2 * eps), Ht = (gq - gr) / (2 * eps);
     CHECK((H.col(0) - Hs).norm() < 1e-6 * (1 + H.norm()));
     CHECK((H.col(1) - Ht).norm() < 1e-6 * (1 + H.norm()));
-    // sum of the areas is the corrected area h^2 mean(uz) for every virtual point (spec §5.2)
+    // sum of the areas is the corrected area h^2 mean(uz) for every virtual point (docs/math.md §5.2)
     CHECK(corrected_fan_areas(uz, s, t).sum() == doctest::Approx(uz.mean()).epsilon(1e-14));
   }
 }
@@ -179,7 +180,7 @@ TEST_CASE("corrected VRM minimizer converges inside the surfel for random normal
   CHECK(max_iter <= 20);
 }
 
-TEST_CASE("VRM global operators on sphere1: L 1 = 0, symmetric, NSD, mass sums (spec 12.6)") {
+TEST_CASE("VRM global operators on sphere1: L 1 = 0, symmetric, NSD, mass sums (docs/math.md §12.6)") {
   const SurfelMesh mesh = test::sphere1_surface(0.2);
   NormalFields nf;
   nf.vertex = test::radial(mesh.positions);
@@ -229,7 +230,7 @@ TEST_CASE("corrected VRM is bitwise identical for 1 and 2 threads and invariant 
   const Operators c = d->assemble(moved, nf, Config());
   CHECK((c.L - a.L).norm() < 1e-12 * a.L.norm());
   CHECK((c.M - a.M).norm() < 1e-12 * a.M.norm());
-  // scaling by s: L unchanged, M times s^2 (spec §12.6)
+  // scaling by s: L unchanged, M times s^2 (docs/math.md §12.6)
   SurfelMesh scaled = mesh;
   scaled.positions *= 3.0;
   scaled.h *= 3.0;
@@ -275,7 +276,7 @@ TEST_CASE("corrected VRM reports a non-convergent minimizer (warning, or Numeric
   SurfelMesh mesh = test::single_surfel(0.5);
   NormalFields nf;
   nf.vertex.resize(4, 3);
-  nf.vertex << 1, 0.2, -0.1, 0.9, -0.3, 0.2, 1, 0.1, 0.3, 0.8, 0.4, 0.1;  // spec §12.2 regression normals
+  nf.vertex << 1, 0.2, -0.1, 0.9, -0.3, 0.2, 1, 0.1, 0.3, 0.8, 0.4, 0.1;  // docs/math.md §12.2 regression normals
   nf.vertex.rowwise().normalize();
   const auto d = make_discretization("corrected-vrm");
   const Operators ok = d->assemble(mesh, nf, Config());
@@ -313,13 +314,16 @@ TEST_CASE("VRM skips degenerate fan triangles and reports them") {
                        doctest::Contains("degenerate"), InputError);
 }
 
-TEST_CASE("corrected VRM and heat kernel: flipping face orientation and normals together changes nothing (spec 12.6)") {
+TEST_CASE(
+    "corrected VRM and heat kernel: flipping face orientation and normals together changes nothing (docs/math.md "
+    "§12.6)") {
   const SurfelMesh mesh = test::sphere1_surface(0.25);
   SurfelMesh flipped;
   flipped.positions = mesh.positions;  // no surfel data: trivial normals come from the corner order
   flipped.h = mesh.h;
   flipped.faces = mesh.faces;
-  for (int f = 0; f < mesh.num_faces(); ++f) flipped.faces.row(f) << mesh.faces(f, 0), mesh.faces(f, 3), mesh.faces(f, 2), mesh.faces(f, 1);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    flipped.faces.row(f) << mesh.faces(f, 0), mesh.faces(f, 3), mesh.faces(f, 2), mesh.faces(f, 1);
   SurfelMesh plain = mesh;
   plain.surfels.clear();
   NormalFields nf, nf_flipped;

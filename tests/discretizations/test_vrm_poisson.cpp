@@ -1,8 +1,7 @@
-// Backward Poisson convergence (spec §10.4) of corrected VRM on sphere1 with true normals.
+// Backward Poisson convergence (docs/math.md §10.4) of corrected VRM on sphere1 with true normals.
 #include <doctest/doctest.h>
 
 #include <cmath>
-
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 
@@ -10,7 +9,7 @@
 
 using namespace corrlap;
 
-TEST_CASE("corrected VRM backward Poisson error on sphere1 decreases with order >= 1.5 (spec 10.4)") {
+TEST_CASE("corrected VRM backward Poisson error on sphere1 decreases with order >= 1.5 (docs/math.md §10.4)") {
   const double hs[3] = {0.1, 0.05, 0.025};
   double err[3];
   const ImplicitShape sphere = make_implicit_shape("sphere1");

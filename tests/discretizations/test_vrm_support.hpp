@@ -1,17 +1,16 @@
 #pragma once
 // Helpers shared by the VRM / heat-kernel / cotan tests: sphere1 surfaces, the backward Poisson
-// protocol of spec §10.4, observed convergence orders.
+// protocol of docs/math.md §10.4, observed convergence orders.
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
-#include <Eigen/IterativeLinearSolvers>
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <functional>
 #include <vector>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/core/error.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::test {
 
@@ -23,7 +22,7 @@ inline SurfelMesh sphere1_surface(double h) {
   return extract_surface(digitize(make_implicit_shape("sphere1"), p));
 }
 
-/// One flat surfel: corners (0,0,0), (0,h,0), (0,h,h), (0,0,h), outward +x (spec §12.2).
+/// One flat surfel: corners (0,0,0), (0,h,0), (0,h,h), (0,0,h), outward +x (docs/math.md §12.2).
 inline SurfelMesh single_surfel(double h) {
   SurfelMesh m;
   m.positions.resize(4, 3);
@@ -34,7 +33,7 @@ inline SurfelMesh single_surfel(double h) {
   return m;
 }
 
-/// Backward Poisson test of spec §10.4 with f = x^2 on the unit sphere (Delta f = 2 - 6 x^2),
+/// Backward Poisson test of docs/math.md §10.4 with f = x^2 on the unit sphere (Delta f = 2 - 6 x^2),
 /// at points q (unit vectors, one per unknown). Returns the M-weighted L2 error
 /// sqrt(e^T M e / 1^T M 1) of g - mean(g) against f - mean(f). `iterative` uses CG (for the dense
 /// rows of the heat kernel) instead of a sparse LDL^T.
@@ -50,7 +49,7 @@ inline double backward_poisson_error(const Eigen::SparseMatrix<double>& L, const
   const Eigen::VectorXd ones = Eigen::VectorXd::Ones(n);
   const Eigen::VectorXd M1 = M * ones;
   const double area = ones.dot(M1);
-  b.array() -= M1.dot(b) / area;  // compatibility projection (spec §10.4)
+  b.array() -= M1.dot(b) / area;  // compatibility projection (docs/math.md §10.4)
   Eigen::VectorXd rhs = -(M * b);
   // pin g_0 = f_0: identity row/column 0, column moved to the right-hand side; -L is then SPD
   const double g0 = f[0];

@@ -1,15 +1,14 @@
-// Corrected curvature measures (spec §8, numbers of §12.4, reference curvature files).
+// Corrected curvature measures (docs/math.md §8, numbers of §12.4, reference curvature files).
 #include <doctest/doctest.h>
 
 #include <cmath>
-
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 #include "test_support.hpp"
 
@@ -26,7 +25,7 @@ SurfelMesh surface(const std::string& shape, double h, double lo, double hi) {
 Eigen::MatrixX3d radial(const Eigen::MatrixX3d& x) { return x.rowwise().normalized(); }
 }  // namespace
 
-TEST_CASE("curvature measures on sphere1 h=0.1 reproduce spec 12.4 totals and H statistics") {
+TEST_CASE("curvature measures on sphere1 h=0.1 reproduce docs/math.md §12.4 totals and H statistics") {
   const SurfelMesh m = surface("sphere1", 0.1, -2, 2);
   const auto cc = CorrectedCurvature::interpolated(m, radial(m.positions));
   const Eigen::Vector3d t = cc.totals();
@@ -34,7 +33,7 @@ TEST_CASE("curvature measures on sphere1 h=0.1 reproduce spec 12.4 totals and H 
   CHECK(t[1] == doctest::Approx(25.0058).epsilon(1e-5));
   CHECK(t[2] == doctest::Approx(12.5410).epsilon(1e-5));
   const CurvatureEstimates e = cc.at_vertices(0.1);
-  // The totals above and the per-face H of the reference files agree to 1e-10 or better; the spec's
+  // The totals above and the per-face H of the reference files agree to 1e-10 or better; docs/math.md's
   // mean H / mean k statistics (1.0026, 0.9995, 1.0005) depend on an unstated ball placement: we get
   // mean H 1.0018 (vertex balls) / 1.0025 (face balls), so they are checked to 1e-3 only.
   CHECK(e.H.mean() == doctest::Approx(1.0026).epsilon(1e-3));
@@ -46,7 +45,7 @@ TEST_CASE("curvature measures on sphere1 h=0.1 reproduce spec 12.4 totals and H 
   CHECK((ratio.array() - 1.0).abs().maxCoeff() < 0.1);  // G ~ k1 k2 on the sphere
 }
 
-TEST_CASE("curvature max |H-1| on sphere1 at h=0.05 reproduces spec 12.4") {
+TEST_CASE("curvature max |H-1| on sphere1 at h=0.05 reproduces docs/math.md §12.4") {
   const SurfelMesh m = surface("sphere1", 0.05, -2, 2);
   const CurvatureEstimates e = CorrectedCurvature::interpolated(m, radial(m.positions)).at_vertices(0.1);
   CHECK((e.H.array() - 1.0).abs().maxCoeff() == doctest::Approx(0.017).epsilon(0.03));

@@ -2,10 +2,9 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 #include "test_support.hpp"
 
@@ -15,8 +14,9 @@ using test::run_cli;
 TEST_CASE("cli normals --estimator ii reproduces the reference II normals (alpha 1/3)") {
   const std::string out = test::tmp_path("est_ii_h02.txt");
   std::string err;
-  REQUIRE(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --estimator ii --alpha 0.3333333333333333 --out " + out,
-                  nullptr, &err) == 0);
+  REQUIRE(
+      run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --estimator ii --alpha 0.3333333333333333 --out " + out,
+              nullptr, &err) == 0);
   const Eigen::MatrixX3d n = read_normals(out);
   const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");
   REQUIRE(n.rows() == ref.rows());
@@ -35,13 +35,18 @@ TEST_CASE("cli normals --estimator true and --at vertices match the reference tr
 TEST_CASE("cli curvature on the reference mesh reproduces mean_curvature_icnc and ccnc") {
   const std::string dir = test::reference_dir() + "/sphere1_h0.2/";
   const std::string out = test::tmp_path("est_curv_icnc");
-  REQUIRE(run_cli("curvature --mesh " + dir + "mesh.obj --vertex-normals " + dir + "vertex_normals_true.txt --radius 0.1 --out " + out) == 0);
-  CHECK((read_scalars(out + "/H_faces.txt") - read_scalars(dir + "mean_curvature_icnc.txt")).cwiseAbs().maxCoeff() < 1e-12);
+  REQUIRE(run_cli("curvature --mesh " + dir + "mesh.obj --vertex-normals " + dir +
+                  "vertex_normals_true.txt --radius 0.1 --out " + out) == 0);
+  CHECK((read_scalars(out + "/H_faces.txt") - read_scalars(dir + "mean_curvature_icnc.txt")).cwiseAbs().maxCoeff() <
+        1e-12);
   CHECK(read_scalars(out + "/H_vertices.txt").size() == 440);
   CHECK(read_normals(out + "/d1_faces.txt").rows() == 438);
   const std::string out2 = test::tmp_path("est_curv_ccnc");
-  REQUIRE(run_cli("curvature --mesh " + dir + "mesh.obj --face-normals " + dir + "face_normals_true.txt --radius 0.4472135954999579 --out " + out2) == 0);
-  CHECK((read_scalars(out2 + "/H_faces.txt") - read_scalars(dir + "mean_curvature_ccnc_rsqrth.txt")).cwiseAbs().maxCoeff() < 1e-12);
+  REQUIRE(run_cli("curvature --mesh " + dir + "mesh.obj --face-normals " + dir +
+                  "face_normals_true.txt --radius 0.4472135954999579 --out " + out2) == 0);
+  CHECK((read_scalars(out2 + "/H_faces.txt") - read_scalars(dir + "mean_curvature_ccnc_rsqrth.txt"))
+            .cwiseAbs()
+            .maxCoeff() < 1e-12);
 }
 
 TEST_CASE("cli curvature from a shape with ii normals gives H near 1 on sphere1") {
@@ -54,19 +59,27 @@ TEST_CASE("cli curvature from a shape with ii normals gives H near 1 on sphere1"
 TEST_CASE("cli estimators reject bad input with clear errors") {
   const std::string dir = test::reference_dir() + "/sphere1_h0.2/";
   std::string err;
-  CHECK(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --radius 0.01 --out " + test::tmp_path("x.txt"), nullptr, &err) == 1);
+  CHECK(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --radius 0.01 --out " + test::tmp_path("x.txt"),
+                nullptr, &err) == 1);
   CHECK(err.find("smaller than one voxel") != std::string::npos);
-  CHECK(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --radius 500 --out " + test::tmp_path("x.txt"), nullptr, &err) == 1);
+  CHECK(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --radius 500 --out " + test::tmp_path("x.txt"),
+                nullptr, &err) == 1);
   CHECK(err.find("larger than the volume") != std::string::npos);
   // empty volume: the shape lies outside the box
-  CHECK(run_cli("normals --shape sphere1 --center 50 0 0 --h 0.2 --bbox -1.5 1.5 --out " + test::tmp_path("x.txt"), nullptr, &err) == 1);
+  CHECK(run_cli("normals --shape sphere1 --center 50 0 0 --h 0.2 --bbox -1.5 1.5 --out " + test::tmp_path("x.txt"),
+                nullptr, &err) == 1);
   CHECK(err.find("empty") != std::string::npos);
-  CHECK(run_cli("curvature --mesh " + dir + "mesh.obj --vertex-normals " + dir + "face_normals_true.txt --out " + test::tmp_path("c"), nullptr, &err) == 1);
+  CHECK(run_cli("curvature --mesh " + dir + "mesh.obj --vertex-normals " + dir + "face_normals_true.txt --out " +
+                    test::tmp_path("c"),
+                nullptr, &err) == 1);
   CHECK(err.find("expected 440") != std::string::npos);
   CHECK(err.find("face_normals_true.txt") != std::string::npos);
-  CHECK(run_cli("curvature --mesh " + dir + "mesh.obj --vertex-normals " + dir + "vertex_normals_true.txt --radius 1000 --out " + test::tmp_path("c"), nullptr, &err) == 1);
+  CHECK(run_cli("curvature --mesh " + dir + "mesh.obj --vertex-normals " + dir +
+                    "vertex_normals_true.txt --radius 1000 --out " + test::tmp_path("c"),
+                nullptr, &err) == 1);
   CHECK(err.find("larger than the mesh") != std::string::npos);
-  CHECK(run_cli("normals --mesh " + dir + "mesh.obj --estimator ii --out " + test::tmp_path("x.txt"), nullptr, &err) == 1);
+  CHECK(run_cli("normals --mesh " + dir + "mesh.obj --estimator ii --out " + test::tmp_path("x.txt"), nullptr, &err) ==
+        1);
   CHECK(err.find("need voxels") != std::string::npos);
 }
 
@@ -79,10 +92,11 @@ TEST_CASE("cli normals on a volume file gives the reference II normals; empty vo
   write_volume(vol, voxels_to_volume(digitize(make_implicit_shape("sphere1"), p)));
   const std::string out = test::tmp_path("est_ii_vol.txt");
   std::string err;
-  REQUIRE(run_cli("normals --volume " + vol + " --h 0.2 --estimator ii --alpha 0.3333333333333333 --out " + out, nullptr, &err) == 0);
+  REQUIRE(run_cli("normals --volume " + vol + " --h 0.2 --estimator ii --alpha 0.3333333333333333 --out " + out,
+                  nullptr, &err) == 0);
   const Eigen::MatrixX3d n = read_normals(out);
   const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");
-  REQUIRE(n.rows() == ref.rows());  // translation keeps the face order (spec §1.4 sort key)
+  REQUIRE(n.rows() == ref.rows());  // translation keeps the face order (docs/math.md §1.4 sort key)
   CHECK((n - ref).cwiseAbs().maxCoeff() < 1e-12);
   Volume empty;
   empty.size = Eigen::Vector3i(8, 8, 8);

@@ -1,12 +1,11 @@
-// True normals (spec §1.5): damped Newton projection and the reference's true normals.
+// True normals (docs/math.md §1.5): damped Newton projection and the reference's true normals.
 #include <doctest/doctest.h>
 
 #include <cmath>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 #include "test_support.hpp"
 

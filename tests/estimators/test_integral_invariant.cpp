@@ -1,13 +1,12 @@
-// Integral-invariant normals (spec §7, numbers of §12.4, reference data of sphere1 h = 0.2).
+// Integral-invariant normals (docs/math.md §7, numbers of §12.4, reference data of sphere1 h = 0.2).
 #include <doctest/doctest.h>
 
 #include <cmath>
-
-#include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 
 #include "test_support.hpp"
 
@@ -49,8 +48,8 @@ constexpr double deg = 180.0 / M_PI;
 
 TEST_CASE("ii fast moments equal brute-force moments exactly, also near the box boundary") {
   // Torus at h = 0.5 crossing the box (open surface, balls clipped by the box) and goursat.
-  for (const auto& [shape, h, lo, hi] : {std::tuple<std::string, double, double, double>{"torus", 0.5, -8, 4},
-                                         {"goursat", 0.6, -10, 10}}) {
+  for (const auto& [shape, h, lo, hi] :
+       {std::tuple<std::string, double, double, double>{"torus", 0.5, -8, 4}, {"goursat", 0.6, -10, 10}}) {
     const Digital d = digital(shape, h, lo, hi);
     std::vector<Eigen::Vector3i> centres;
     for (std::size_t f = 0; f < d.mesh.surfels.size(); f += 7) {
@@ -95,8 +94,8 @@ TEST_CASE("ii normals match the reference on sphere1 h=0.2 (alpha = 1/3)") {
   CHECK(max_angle <= 1e-6);
 }
 
-TEST_CASE("ii angle statistics on sphere1 reproduce spec 12.4") {
-  // Default box of the reference (-10..10) gives the same surface; -2..2 is faster (spec §1.2).
+TEST_CASE("ii angle statistics on sphere1 reproduce docs/math.md §12.4") {
+  // Default box of the reference (-10..10) gives the same surface; -2..2 is faster (docs/math.md §1.2).
   const Digital d25 = digital("sphere1", 0.25, -2, 2);
   const auto a25 = radial_angles(d25.mesh, ii_face_normals(d25.grid, d25.mesh));
   CHECK(mean(a25) * deg == doctest::Approx(5.227).epsilon(5e-4));

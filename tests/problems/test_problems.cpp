@@ -1,8 +1,8 @@
-// Dirichlet and pure-Neumann Poisson helpers (spec §10.4) with every backend.
+// Dirichlet and pure-Neumann Poisson helpers (docs/math.md §10.4) with every backend.
 #include <doctest/doctest.h>
 
-#include <corrlap/problems/problems.hpp>
 #include <corrlap/backends/registry.hpp>
+#include <corrlap/problems/problems.hpp>
 
 #include "backends/fem_fixture.hpp"
 
@@ -15,7 +15,8 @@ const test::FlatFem& sphere() {
   return op;
 }
 std::unique_ptr<LinearSolver> solver(const std::string& name) {
-  return make_linear_solver(Config::from_key_values({"solver=" + name, name == "cg" ? "tolerance=1e-13" : "check_symmetry=true"}));
+  return make_linear_solver(
+      Config::from_key_values({"solver=" + name, name == "cg" ? "tolerance=1e-13" : "check_symmetry=true"}));
 }
 const char* kNames[] = {"eigen-ldlt", "eigen-llt", "cholmod", "cg"};
 }  // namespace
@@ -42,7 +43,8 @@ TEST_CASE("Dirichlet: free rows satisfy L u = M f and fixed values are exact") {
   CHECK_THROWS_AS(solve_dirichlet(op.L, op.M, f, {int(n)}, Eigen::VectorXd::Ones(1), *s), InputError);
   CHECK_THROWS_AS(solve_dirichlet(op.L, op.M, f, {1}, Eigen::VectorXd::Ones(2), *s), InputError);
   // No fixed vertex: -L is singular (L 1 = 0); refused instead of trusting a rounding-level pivot.
-  CHECK_THROWS_WITH_AS(solve_dirichlet(op.L, op.M, f, {}, Eigen::VectorXd(), *s), doctest::Contains("singular"), InputError);
+  CHECK_THROWS_WITH_AS(solve_dirichlet(op.L, op.M, f, {}, Eigen::VectorXd(), *s), doctest::Contains("singular"),
+                       InputError);
 }
 
 TEST_CASE("Neumann Poisson recovers a solution up to a constant and projects incompatible data") {
@@ -61,7 +63,7 @@ TEST_CASE("Neumann Poisson recovers a solution up to a constant and projects inc
     const PoissonErrors e = poisson_errors(op.M, g, gstar);
     CHECK(e.linf < 1e-8);
     CHECK(e.l2 < 1e-8);
-    // b + 5 is incompatible; the projection of spec §10.4 removes the constant.
+    // b + 5 is incompatible; the projection of docs/math.md §10.4 removes the constant.
     const Eigen::VectorXd g2 = solve_neumann_poisson(op.L, op.M, (b.array() + 5.0).matrix(), *s, gstar[0]);
     CHECK((g2 - gstar).lpNorm<Eigen::Infinity>() < 1e-8);
   }

@@ -1,4 +1,4 @@
-// Test functions of spec §10.2 and the Poisson / forward evaluations of spec §10.3-§10.4 built on them.
+// Test functions of docs/math.md §10.2 and the Poisson / forward evaluations of docs/math.md §10.3-§10.4 built on them.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -28,7 +28,7 @@ TEST_CASE("test functions: names, exact values at points, errors listing the nam
   CHECK(names == std::vector<std::string>{"x2", "expx", "p6"});
   const Eigen::Vector3d ex(1, 0, 0), ez(0, 0, 1);
   const Eigen::Vector3d d = Eigen::Vector3d(1, 2, 2) / 3.0;
-  // Delta(x^2) = 2 - 6x^2 exactly (spec §10.2).
+  // Delta(x^2) = 2 - 6x^2 exactly (docs/math.md §10.2).
   CHECK(test_function("x2").laplacian(ex) == -4.0);
   CHECK(test_function("x2").laplacian(ez) == 2.0);
   CHECK(test_function("x2").laplacian(d) == doctest::Approx(2.0 - 6.0 / 9.0).epsilon(1e-15));
@@ -79,7 +79,7 @@ TEST_CASE("sample_on_unit_sphere projects radially from the centre") {
 namespace {
 struct Case {
   SurfelMesh mesh;
-  NormalFields radial;  // spec §12.3/§12.5: u_v = x_v/|x_v|, u_f = b_f/|b_f|
+  NormalFields radial;  // docs/math.md §12.3/§12.5: u_v = x_v/|x_v|, u_f = b_f/|b_f|
 };
 Case sphere(double h) {
   const ImplicitShape shape = make_implicit_shape("sphere1");
@@ -91,7 +91,7 @@ Case sphere(double h) {
 }
 }  // namespace
 
-TEST_CASE("solve_poisson and forward_error reproduce the evaluation table of spec 12.5") {
+TEST_CASE("solve_poisson and forward_error reproduce the evaluation table of docs/math.md §12.5") {
   const Case c2 = sphere(0.2), c1 = sphere(0.1);
   auto solver = make_linear_solver();
   // The table prints 3 significant digits: compare at half a unit of the third digit (0.5 %).
@@ -99,7 +99,7 @@ TEST_CASE("solve_poisson and forward_error reproduce the evaluation table of spe
   const Operators fem2 = corrected_fem(c2.mesh, c2.radial.face), fem1 = corrected_fem(c1.mesh, c1.radial.face);
   const Operators cc2 = interpolated(c2.mesh, c2.radial.vertex), cc1 = interpolated(c1.mesh, c1.radial.vertex);
   const TestFunction &x2 = test_function("x2"), &expx = test_function("expx"), &p6 = test_function("p6");
-  // Backward L2 (spec §10.4).
+  // Backward L2 (docs/math.md §10.4).
   const PoissonResult r = solve_poisson(fem2, c2.mesh.positions, x2, *solver);
   CHECK(r.errors.l2 == doctest::Approx(0.0204).epsilon(tol));
   CHECK(r.residual < 1e-12);
@@ -108,7 +108,7 @@ TEST_CASE("solve_poisson and forward_error reproduce the evaluation table of spe
   CHECK(solve_poisson(cc2, c2.mesh.positions, x2, *solver).errors.l2 == doctest::Approx(0.0185).epsilon(tol));
   CHECK(solve_poisson(cc2, c2.mesh.positions, expx, *solver).errors.l2 == doctest::Approx(0.0317).epsilon(tol));
   CHECK(solve_poisson(cc2, c2.mesh.positions, p6, *solver).errors.l2 == doctest::Approx(0.0762).epsilon(tol));
-  // Forward L_inf (spec §10.3): naive (dt = 0) and diffused (dt = 0.035 h).
+  // Forward L_inf (docs/math.md §10.3): naive (dt = 0) and diffused (dt = 0.035 h).
   CHECK(forward_error(fem2, c2.mesh.positions, x2, *solver).linf == doctest::Approx(2.93).epsilon(tol));
   CHECK(forward_error(cc2, c2.mesh.positions, x2, *solver, 0.035 * 0.2).linf == doctest::Approx(0.371).epsilon(tol));
   CHECK(forward_error(cc2, c2.mesh.positions, expx, *solver, 0.035 * 0.2).linf == doctest::Approx(0.409).epsilon(tol));

@@ -2,18 +2,16 @@
 // without a pattern and through one QuadPattern per mesh shared by all tasks (its lazy parts and
 // scratch pool are then used concurrently): every result must equal the serial one bit for bit.
 #include <doctest/doctest.h>
-
 #include <tbb/parallel_for.h>
 
 #include <atomic>
-#include <vector>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/discretizations/assembly/quad_pattern.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <vector>
 
 using namespace corrlap;
 
@@ -54,7 +52,8 @@ TEST_CASE("concurrent assembly of every method equals the serial result bitwise"
   // Serial results first.
   std::vector<std::vector<Operators>> expected(methods.size());
   for (std::size_t m = 0; m < methods.size(); ++m)
-    for (const Case& c : cases) expected[m].push_back(make_discretization(methods[m])->assemble(c.mesh, c.normals, Config()));
+    for (const Case& c : cases)
+      expected[m].push_back(make_discretization(methods[m])->assemble(c.mesh, c.normals, Config()));
   constexpr int kRounds = 24;
   std::atomic<int> mismatches{0}, runs{0};
   tbb::parallel_for(0, int(methods.size()) * kRounds, [&](int task) {
@@ -71,7 +70,8 @@ TEST_CASE("concurrent assembly of every method equals the serial result bitwise"
 TEST_CASE("concurrent assemblies sharing one QuadPattern equal the serial result bitwise") {
   const std::vector<Case> cases = {make_case(0.1, Eigen::Vector3d(0.01, 0.02, -0.03)),
                                    make_case(0.125, Eigen::Vector3d(-0.02, 0.0, 0.04))};
-  const std::vector<std::string> methods = {"fem", "interpolated", "polydec", "projected-polydec", "vrm", "corrected-vrm"};
+  const std::vector<std::string> methods = {"fem", "interpolated", "polydec", "projected-polydec",
+                                            "vrm", "corrected-vrm"};
   const std::vector<Config> params = {Config(), Config::from_key_values({"mass=lumped"}),
                                       Config::from_key_values({"assembly=local"})};
   auto config_for = [&](std::size_t m, std::size_t variant) {
@@ -84,7 +84,8 @@ TEST_CASE("concurrent assemblies sharing one QuadPattern equal the serial result
     for (std::size_t variant = 0; variant < 2; ++variant) {
       expected[m].emplace_back();
       for (const Case& c : cases)
-        expected[m][variant].push_back(make_discretization(methods[m])->assemble(c.mesh, c.normals, config_for(m, variant)));
+        expected[m][variant].push_back(
+            make_discretization(methods[m])->assemble(c.mesh, c.normals, config_for(m, variant)));
     }
   // Fresh patterns: the first concurrent users race to build the lazy projection pattern.
   const std::vector<QuadPattern> patterns = {QuadPattern::build(cases[0].mesh), QuadPattern::build(cases[1].mesh)};

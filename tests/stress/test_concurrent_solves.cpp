@@ -4,22 +4,20 @@
 // Run it under ThreadSanitizer with -DCORRLAP_TSAN=ON (docs/backends.md).
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
-
-#include <atomic>
-#include <cmath>
-#include <mutex>
-#include <string>
-#include <vector>
-
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <corrlap/surface/extract_surface.hpp>
+#include <atomic>
+#include <cmath>
 #include <corrlap/backends/registry.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <mutex>
+#include <string>
+#include <vector>
 
 using namespace corrlap;
 using SpMat = Eigen::SparseMatrix<double>;
@@ -53,7 +51,7 @@ struct Fixture {
     mesh = extract_surface(digitize(make_implicit_shape("sphere1"), p));
     plan = AssemblyPlan(mesh.faces.data(), std::size_t(mesh.num_faces()), 4, mesh.num_vertices());
   }
-  /// System s: sum_f w_f(s) K_f + c(s) M_f (spec §4.5 flat stiffness, §4.4 mass), SPD, same pattern
+  /// System s: sum_f w_f(s) K_f + c(s) M_f (docs/math.md §4.5 flat stiffness, §4.4 mass), SPD, same pattern
   /// for every s; the face weights make the systems genuinely different.
   SpMat system(int s) const {
     const double K[16] = {4, -1, -2, -1, -1, 4, -1, -2, -2, -1, 4, -1, -1, -2, -1, 4};

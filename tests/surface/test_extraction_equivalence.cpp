@@ -1,23 +1,22 @@
 // The fast digitization / surface extraction / edge numbering (block culling, row evaluation,
-// slab-parallel numbering) must give exactly the result of the plain definitions of spec §1.2-§1.4
+// slab-parallel numbering) must give exactly the result of the plain definitions of docs/math.md §1.2-§1.4
 // and §0. This file holds those plain definitions (voxel by voxel, std::map numbering) and compares.
 #include <doctest/doctest.h>
 
 #include <array>
+#include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/threads.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
 #include <map>
 #include <random>
 #include <tuple>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
-#include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/threads.hpp>
 
 using namespace corrlap;
 
 namespace {
 
-// spec §1.2, literally: voxel z is inside iff P(h z - c) <= 0, evaluated point by point.
+// docs/math.md §1.2, literally: voxel z is inside iff P(h z - c) <= 0, evaluated point by point.
 VoxelGrid reference_digitize(const ImplicitShape& shape, const DigitizationParams& p) {
   Eigen::Vector3i lo, hi;
   digitization_box(p, lo, hi);
@@ -35,7 +34,7 @@ struct RefMesh {
   std::vector<std::tuple<int, int, int, int, int>> surfels;  // lower voxel, axis, outward
 };
 
-// spec §1.3-§1.4, literally: surfels between voxel pairs of the box, sorted by
+// docs/math.md §1.3-§1.4, literally: surfels between voxel pairs of the box, sorted by
 // (positive, kc_x, kc_y, kc_z); corners in base order B (reversed if negative); pointels numbered
 // by first appearance through a std::map.
 RefMesh reference_extract(const VoxelGrid& g) {
@@ -116,7 +115,7 @@ void check_same_mesh(const SurfelMesh& fast, const RefMesh& ref) {
   CHECK(bad_positions == 0);
 }
 
-// spec §0: edges (min, max) numbered by lexicographic rank; sign +1 iff v_i < v_{i+1}.
+// docs/math.md §0: edges (min, max) numbered by lexicographic rank; sign +1 iff v_i < v_{i+1}.
 void check_edges(const SurfelMesh& m) {
   std::map<std::pair<int, int>, int> rank, count;
   for (int f = 0; f < m.num_faces(); ++f)
@@ -184,7 +183,7 @@ TEST_CASE("fast extraction equals the plain definition on random voxel sets (non
   // a vertex and surfels on the box boundary. Box widths around 64 exercise the row padding.
   std::mt19937 rng(12345);
   for (const Eigen::Vector3i& size : {Eigen::Vector3i(5, 7, 3), Eigen::Vector3i(63, 4, 5), Eigen::Vector3i(64, 3, 6),
-                                     Eigen::Vector3i(65, 6, 4), Eigen::Vector3i(130, 9, 8)}) {
+                                      Eigen::Vector3i(65, 6, 4), Eigen::Vector3i(130, 9, 8)}) {
     for (double density : {0.1, 0.5, 0.9}) {
       CAPTURE(size.transpose());
       CAPTURE(density);

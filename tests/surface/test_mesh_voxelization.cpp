@@ -1,21 +1,19 @@
 // Mesh voxelization: exact counts on boxes, agreement with the generalized winding number
 // (solid angles) on spheres, robustness to soups, flips, holes and overlaps; the bunny.
 #include <doctest/doctest.h>
-
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/mesh_voxelization.hpp>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <random>
-
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/core/error.hpp>
-#include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/surface/mesh_voxelization.hpp>
-#include <corrlap/core/surfel_mesh.hpp>
-#include <corrlap/io/mesh_io.hpp>
 
 #include "test_support.hpp"
 
@@ -60,7 +58,8 @@ double mesh_area(const PolygonMesh& m) {
 double winding_number(const PolygonMesh& m, const Eigen::Vector3d& p) {
   double w = 0;
   for (const auto& f : m.faces) {
-    const Eigen::Vector3d a = Eigen::Vector3d(m.positions.row(f[0])) - p, b = Eigen::Vector3d(m.positions.row(f[1])) - p,
+    const Eigen::Vector3d a = Eigen::Vector3d(m.positions.row(f[0])) - p,
+                          b = Eigen::Vector3d(m.positions.row(f[1])) - p,
                           c = Eigen::Vector3d(m.positions.row(f[2])) - p;
     const double la = a.norm(), lb = b.norm(), lc = c.norm();
     w += 2 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
@@ -69,7 +68,8 @@ double winding_number(const PolygonMesh& m, const Eigen::Vector3d& p) {
 }
 
 PolygonMesh transformed(PolygonMesh m, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  for (Eigen::Index i = 0; i < m.positions.rows(); ++i) m.positions.row(i) = (R * m.positions.row(i).transpose() + t).transpose();
+  for (Eigen::Index i = 0; i < m.positions.rows(); ++i)
+    m.positions.row(i) = (R * m.positions.row(i).transpose() + t).transpose();
   return m;
 }
 
@@ -128,7 +128,8 @@ TEST_CASE("voxelized box has exactly the grid centres of the half-open box (edge
 
 TEST_CASE("inside test equals the generalized winding number (solid angles) on a rotated sphere") {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
-  const PolygonMesh m = transformed(test::icosphere(3, 1.0, Eigen::Vector3d::Zero()), R, Eigen::Vector3d(0.31, -0.12, 0.05));
+  const PolygonMesh m =
+      transformed(test::icosphere(3, 1.0, Eigen::Vector3d::Zero()), R, Eigen::Vector3d(0.31, -0.12, 0.05));
   MeshVoxelizationParams p;
   p.resolution = 14;
   MeshVoxelizationReport r;
@@ -160,7 +161,8 @@ TEST_CASE("voxel volume of a sphere converges to the polyhedron volume") {
     // Bound: a tenth of the boundary layer (area * h); an inside test wrong on a whole layer of
     // voxels or a whole row would exceed it.
     CHECK(std::abs(vox - V) < 0.1 * A * h);
-    MESSAGE("h = " << h << ": voxel volume " << vox << ", polyhedron " << V << ", rel. error " << std::abs(vox - V) / V);
+    MESSAGE("h = " << h << ": voxel volume " << vox << ", polyhedron " << V << ", rel. error "
+                   << std::abs(vox - V) / V);
   }
 }
 
@@ -285,18 +287,20 @@ TEST_CASE("voxelization input errors are clear") {
   m.faces[5] = {0, 1, 9};
   CHECK_THROWS_WITH_AS(voxelize_mesh(m, p), doctest::Contains("face 5 refers to vertex 9"), InputError);
   m = box_mesh({0, 0, 0}, {1, 1, 1});
-  CHECK_THROWS_WITH_AS(voxelize_mesh(m, MeshVoxelizationParams{}), doctest::Contains("give a resolution > 0 or a grid step"), InputError);
+  CHECK_THROWS_WITH_AS(voxelize_mesh(m, MeshVoxelizationParams{}),
+                       doctest::Contains("give a resolution > 0 or a grid step"), InputError);
   MeshVoxelizationParams tiny;
   tiny.h = 1e-9;
   CHECK_THROWS_AS(voxelize_mesh(m, tiny), InputError);  // absurd grid
   MeshVoxelizationParams coarse;
   coarse.h = 10;
-  CHECK_THROWS_WITH_AS(voxelize_mesh(box_mesh({0.1, 0.1, 0.1}, {1, 1, 1}), coarse), doctest::Contains("no voxel centre lies inside"),
-                       InputError);
+  CHECK_THROWS_WITH_AS(voxelize_mesh(box_mesh({0.1, 0.1, 0.1}, {1, 1, 1}), coarse),
+                       doctest::Contains("no voxel centre lies inside"), InputError);
 }
 
 TEST_CASE("CLI digitize --mesh-file with --resolution or --h") {
-  const std::string obj = corrlap::test::tmp_path("cube_for_cli.obj"), out = corrlap::test::tmp_path("cube_digital.obj");
+  const std::string obj = corrlap::test::tmp_path("cube_for_cli.obj"),
+                    out = corrlap::test::tmp_path("cube_digital.obj");
   write_mesh(obj, box_mesh({-1, -1, -1}, {1, 1, 1}));
   std::string err;
   REQUIRE(corrlap::test::run_cli("digitize --mesh-file " + obj + " --resolution 16 --out " + out, nullptr, &err) == 0);
@@ -340,6 +344,6 @@ TEST_CASE("Stanford bunny (npm bunny@1.0.1) voxelizes at resolution 128 [needs s
   const SurfelMesh s = extract_surface(g);
   const MeshInfo info = compute_mesh_info(s);
   CHECK(info.boundary_edges == 0);
-  MESSAGE("bunny: " << m.faces.size() << " triangles, h = " << g.h() << ", " << g.count() << " voxels, " << s.num_faces()
-                    << " surfels, volume " << vox << " vs mesh " << V);
+  MESSAGE("bunny: " << m.faces.size() << " triangles, h = " << g.h() << ", " << g.count() << " voxels, "
+                    << s.num_faces() << " surfels, volume " << vox << " vs mesh " << V);
 }

@@ -1,4 +1,4 @@
-// Polynomial parser and named shapes (spec §1.1).
+// Polynomial parser and named shapes (docs/math.md §1.1).
 #include <doctest/doctest.h>
 
 #include <corrlap/core/error.hpp>

@@ -11,7 +11,7 @@ namespace corrlap::detail {
 
 namespace {
 
-// Elements of the global-projection Laplacian (spec §3.6a): one per edge, on the union of the
+// Elements of the global-projection Laplacian (docs/math.md §3.6a): one per edge, on the union of the
 // vertices of the edge's faces (6 for an interior manifold edge), padded to a common size.
 struct EdgeElements {
   int k = 0;                           // padded element size
@@ -162,7 +162,7 @@ std::unique_ptr<ProjectionPattern> build_projection_pattern(const int* faces, in
       for (int a = a0; a < a1; ++a) {
         const int f = el.inc_face[std::size_t(a)], i = el.inc_local[std::size_t(a)];
         p->inc_row[std::size_t(a)] = 4 * f + i;
-        // spec §0 edge sign: +1 if v_i < v_{i+1}.
+        // docs/math.md §0 edge sign: +1 if v_i < v_{i+1}.
         p->inc_coef[std::size_t(a)] = (faces[4 * f + i] < faces[4 * f + ((i + 1) & 3)] ? 1.0 : -1.0) * inv;
         for (int j = 0; j < 4; ++j)
           p->inc_slot[std::size_t(a) * 4 + std::size_t(j)] =

@@ -1,5 +1,5 @@
 #pragma once
-// Connectivity-only structure of the interpolated global-projection Laplacian (spec §3.6a).
+// Connectivity-only structure of the interpolated global-projection Laplacian (docs/math.md §3.6a).
 // Internal header.
 #include <cstddef>
 #include <cstdint>
@@ -10,7 +10,7 @@
 
 namespace corrlap::detail {
 
-// Connectivity-only part of the global-projection Laplacian (spec §3.6a), everything the value
+// Connectivity-only part of the global-projection Laplacian (docs/math.md §3.6a), everything the value
 // passes need so that they only stream numbers: per edge its incidences (with the factor
 // s_{f,i} / n_e) and their element slots; per column its sorted rows, the positions of the corners
 // of each incident face, and its edges (ascending) with the positions of their element vertices.
@@ -21,7 +21,7 @@ struct ProjectionPattern {
   std::vector<std::uint8_t> size;
   std::vector<int> inc_start;          // #E + 1
   std::vector<int> inc_row;            // 4 f + i: row i of P_f D
-  std::vector<double> inc_coef;        // s_{f,i} / n_e (spec §0 sign, flat averaged over n_e faces)
+  std::vector<double> inc_coef;        // s_{f,i} / n_e (docs/math.md §0 sign, flat averaged over n_e faces)
   std::vector<std::uint8_t> inc_slot;  // 4 per incidence: element slot of corner j
   // Columns of L.
   std::vector<int> outer, inner;

@@ -18,7 +18,7 @@ namespace corrlap {
 struct QuadPattern::Impl {
   std::vector<int> faces;  // the connectivity it was built from (validity check, not a cache key)
   detail::QuadVertexPattern vertex;
-  // Interpolated global projection (spec §3.6a), built on first use.
+  // Interpolated global projection (docs/math.md §3.6a), built on first use.
   std::once_flag projection_once;
   std::unique_ptr<detail::ProjectionPattern> projection;
   std::atomic<bool> projection_ready{false};  // for memory_bytes, which must not build it

@@ -1,25 +1,25 @@
 #pragma once
-// Vertex-row gather for vertex-based 4x4 face matrices (spec §0 assembly A[v_i,v_j] += A_f[i,j]):
+// Vertex-row gather for vertex-based 4x4 face matrices (docs/math.md §0 assembly A[v_i,v_j] += A_f[i,j]):
 // every matrix entry is written once, by the task that owns its column, summing the incident
 // faces in ascending order, so the result is deterministic and bitwise identical for any thread
 // count. No sorting of contributions and no per-face heap allocation: this is the fast path used
 // by the quad discretizations (the generic AssemblyPlan sorts every contribution). Internal header.
-#include <Eigen/Sparse>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <array>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
-#include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include "huge_pages.hpp"
 #include "storage.hpp"
-#include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap::detail {
 
@@ -329,14 +329,18 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
 template <int Count, class RowKernel>
 void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out) {
-  if (pat) gather_quad_rows<Count>(*pat, kernel, out);
-  else gather_quad_rows<Count>(mesh, vc, kernel, out);
+  if (pat)
+    gather_quad_rows<Count>(*pat, kernel, out);
+  else
+    gather_quad_rows<Count>(mesh, vc, kernel, out);
 }
 template <int Count, class RowKernel, class ColumnFinish>
 void gather_quad_rows(const SurfelMesh& mesh, const QuadVertexPattern* pat, const VertexCorners& vc, RowKernel&& kernel,
                       const std::array<Eigen::SparseMatrix<double>*, Count>& out, ColumnFinish&& finish) {
-  if (pat) gather_quad_rows<Count>(*pat, kernel, out, finish);
-  else gather_quad_rows<Count>(mesh, vc, kernel, out, finish);
+  if (pat)
+    gather_quad_rows<Count>(*pat, kernel, out, finish);
+  else
+    gather_quad_rows<Count>(mesh, vc, kernel, out, finish);
 }
 
 /// Diagonal n x n matrix with entry r = diagonal_value(r), the entries computed in parallel.
@@ -378,7 +382,8 @@ inline Eigen::SparseMatrix<double> row_sum_diagonal_symmetric(const Eigen::Spars
 
 /// Diagonal matrix with entry v = sum over the corners (f, i) at v, ascending f, of value(f, i).
 template <class CornerValue>
-Eigen::SparseMatrix<double> gather_corner_diagonal(const SurfelMesh& mesh, const VertexCorners& vc, CornerValue&& value) {
+Eigen::SparseMatrix<double> gather_corner_diagonal(const SurfelMesh& mesh, const VertexCorners& vc,
+                                                   CornerValue&& value) {
   return parallel_diagonal(mesh.num_vertices(), [&](int v) {
     double s = 0.0;
     for (int a = vc.start[std::size_t(v)]; a < vc.start[std::size_t(v) + 1]; ++a) {
