@@ -1,10 +1,9 @@
 #include "config.hpp"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "error.hpp"
@@ -80,8 +79,8 @@ class FlatObjectSax {
   }
   bool scalar_error(const char* what) {
     if (depth_ == 0) throw InputError(std::string(origin_) + ": expected a JSON object {\"key\": value, ...}");
-    throw InputError(std::string(origin_) + ": value of key '" + key_ + "' must be a string, a number or a boolean, not " +
-                     what);
+    throw InputError(std::string(origin_) + ": value of key '" + key_ +
+                     "' must be a string, a number or a boolean, not " + what);
   }
 
   std::string_view text_, origin_;
@@ -118,8 +117,7 @@ Config Config::from_key_values(const std::vector<std::string>& items) {
   Config c;
   for (const auto& item : items) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError("config item '" + item + "': expected key=value");
+    if (eq == std::string::npos || eq == 0) throw InputError("config item '" + item + "': expected key=value");
     const std::string key = item.substr(0, eq), text = item.substr(eq + 1);
     if (text == "true" || text == "false") {
       c.values_[key] = (text == "true");

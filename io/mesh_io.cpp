@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cctype>
-
 #include <corrlap/core/error.hpp>
 
 namespace corrlap {

@@ -3,11 +3,10 @@
 // (binary little-endian write with per-vertex/per-face scalars and normals; ASCII and binary
 // little-endian read), .off (read). See docs/io.md for the table of supported formats.
 #include <Eigen/Core>
-#include <map>
-#include <string>
-
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <map>
+#include <string>
 
 namespace corrlap {
 

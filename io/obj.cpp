@@ -1,14 +1,13 @@
 // Wavefront OBJ reader and writer.
 #include <cerrno>
-#include <cstring>
 #include <charconv>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 #include "mesh_io.hpp"
 
@@ -95,7 +94,8 @@ PolygonMesh read_obj(const std::string& path) {
 void write_obj(const std::string& path, const PolygonMesh& mesh) {
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
   if (!f) throw IoError("OBJ file '" + path + "': cannot open for writing: " + std::strerror(errno));
-  std::fprintf(f.get(), "# corrlap mesh: %lld vertices, %zu faces\n", (long long)mesh.positions.rows(), mesh.faces.size());
+  std::fprintf(f.get(), "# corrlap mesh: %lld vertices, %zu faces\n", (long long)mesh.positions.rows(),
+               mesh.faces.size());
   for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
     std::fprintf(f.get(), "v %.17g %.17g %.17g\n", mesh.positions(v, 0), mesh.positions(v, 1), mesh.positions(v, 2));
   for (const auto& face : mesh.faces) {

@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/checked.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -13,9 +15,6 @@
 #include <memory>
 #include <sstream>
 #include <vector>
-
-#include <corrlap/core/error.hpp>
-#include <corrlap/io/detail/checked.hpp>
 
 #include "mesh_io.hpp"
 
@@ -43,9 +42,9 @@ struct TypeInfo {
   int bytes;
 };
 constexpr TypeInfo kTypes[] = {
-    {{"char", "int8"}, Kind::Int8, 1},       {{"uchar", "uint8"}, Kind::UInt8, 1},
-    {{"short", "int16"}, Kind::Int16, 2},    {{"ushort", "uint16"}, Kind::UInt16, 2},
-    {{"int", "int32"}, Kind::Int32, 4},      {{"uint", "uint32"}, Kind::UInt32, 4},
+    {{"char", "int8"}, Kind::Int8, 1},        {{"uchar", "uint8"}, Kind::UInt8, 1},
+    {{"short", "int16"}, Kind::Int16, 2},     {{"ushort", "uint16"}, Kind::UInt16, 2},
+    {{"int", "int32"}, Kind::Int32, 4},       {{"uint", "uint32"}, Kind::UInt32, 4},
     {{"float", "float32"}, Kind::Float32, 4}, {{"double", "float64"}, Kind::Float64, 8},
 };
 
@@ -111,11 +110,11 @@ class BodyReader {
     double v = 0;
     auto [ptr, ec] = std::from_chars(b, end, v);
     if (ec != std::errc() || ptr != end)
-      fail(path_, "line " + std::to_string(line_) + ": malformed number '" + std::string(b, std::min<std::size_t>(end - b, 40)) +
-                      "' in " + context);
+      fail(path_, "line " + std::to_string(line_) + ": malformed number '" +
+                      std::string(b, std::min<std::size_t>(end - b, 40)) + "' in " + context);
     if (is_integer(t.kind) && !(std::isfinite(v) && v == std::floor(v)))
-      fail(path_, "line " + std::to_string(line_) + ": non-integer value '" + std::string(b, std::min<std::size_t>(end - b, 40)) +
-                      "' for an integer property in " + context);
+      fail(path_, "line " + std::to_string(line_) + ": non-integer value '" +
+                      std::string(b, std::min<std::size_t>(end - b, 40)) + "' for an integer property in " + context);
     pos_ = e;
     return v;
   }
@@ -125,14 +124,46 @@ class BodyReader {
     const char* p = data_.data() + pos_;
     pos_ += std::size_t(t.bytes);
     switch (t.kind) {
-      case Kind::Int8: { std::int8_t v; std::memcpy(&v, p, 1); return v; }
-      case Kind::UInt8: { std::uint8_t v; std::memcpy(&v, p, 1); return v; }
-      case Kind::Int16: { std::int16_t v; std::memcpy(&v, p, 2); return v; }
-      case Kind::UInt16: { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
-      case Kind::Int32: { std::int32_t v; std::memcpy(&v, p, 4); return v; }
-      case Kind::UInt32: { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
-      case Kind::Float32: { float v; std::memcpy(&v, p, 4); return v; }
-      case Kind::Float64: { double v; std::memcpy(&v, p, 8); return v; }
+      case Kind::Int8: {
+        std::int8_t v;
+        std::memcpy(&v, p, 1);
+        return v;
+      }
+      case Kind::UInt8: {
+        std::uint8_t v;
+        std::memcpy(&v, p, 1);
+        return v;
+      }
+      case Kind::Int16: {
+        std::int16_t v;
+        std::memcpy(&v, p, 2);
+        return v;
+      }
+      case Kind::UInt16: {
+        std::uint16_t v;
+        std::memcpy(&v, p, 2);
+        return v;
+      }
+      case Kind::Int32: {
+        std::int32_t v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      case Kind::UInt32: {
+        std::uint32_t v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      case Kind::Float32: {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      case Kind::Float64: {
+        double v;
+        std::memcpy(&v, p, 8);
+        return v;
+      }
     }
     return 0;
   }
@@ -196,10 +227,14 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
     if (kw == "format") {
       std::string fmt, version;
       ls >> fmt >> version;
-      if (fmt == "ascii") binary = false;
-      else if (fmt == "binary_little_endian") binary = true;
-      else if (fmt == "binary_big_endian") fail(path, at + "unsupported format binary_big_endian (supported: ascii, binary_little_endian)");
-      else fail(path, at + "unknown format '" + fmt + "'");
+      if (fmt == "ascii")
+        binary = false;
+      else if (fmt == "binary_little_endian")
+        binary = true;
+      else if (fmt == "binary_big_endian")
+        fail(path, at + "unsupported format binary_big_endian (supported: ascii, binary_little_endian)");
+      else
+        fail(path, at + "unknown format '" + fmt + "'");
       if (version != "1.0") fail(path, at + "unsupported PLY version '" + version + "'");
       have_format = true;
     } else if (kw == "element") {
@@ -303,7 +338,8 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
         if (!pr.count_type) {
           const double v = body.read(*pr.type, e.name.c_str());
           if (is_v) {
-            if (!std::isfinite(v)) fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + pr.name + "'");
+            if (!std::isfinite(v))
+              fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + pr.name + "'");
             vprops[p][Eigen::Index(i)] = v;
           } else if (is_f) {
             fprops[p][Eigen::Index(i)] = v;
@@ -313,22 +349,24 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
         const double cnt = body.read(*pr.count_type, e.name.c_str());
         const std::size_t most = body.max_values(*pr.type);
         const auto len = io_detail::checked_integer(cnt, 0, std::int64_t(kMaxCount));
-        const std::string list_at = ctx_base + std::to_string(i) + ", property '" + pr.name + "' (" + body.where() + "): ";
+        const std::string list_at =
+            ctx_base + std::to_string(i) + ", property '" + pr.name + "' (" + body.where() + "): ";
         if (!len) fail(path, list_at + "invalid list length " + io_detail::readable_number(cnt));
         if (std::uint64_t(*len) > most)
-          fail(path, list_at + "truncated data: list length " + io_detail::readable_count(std::uint64_t(*len)) + ", the rest of the file holds at most " +
-                         io_detail::readable_count(most) + " values");
+          fail(path, list_at + "truncated data: list length " + io_detail::readable_count(std::uint64_t(*len)) +
+                         ", the rest of the file holds at most " + io_detail::readable_count(most) + " values");
         const std::size_t n = std::size_t(*len);
         if (is_f && int(p) == face_list) {
-          if (n < 3) fail(path, "face " + std::to_string(i) + " has " + std::to_string(n) + " corners (at least 3 needed)");
+          if (n < 3)
+            fail(path, "face " + std::to_string(i) + " has " + std::to_string(n) + " corners (at least 3 needed)");
           std::vector<int> ids(n);
           for (std::size_t k = 0; k < n; ++k) {
             const double id = body.read(*pr.type, "face");
             const auto checked = io_detail::checked_integer(id, 0, std::int64_t(nv) - 1);
             if (!checked)
               fail(path, "face " + std::to_string(i) + ", property '" + pr.name + "': vertex index " +
-                             io_detail::readable_number(id) + " out of range (" + io_detail::readable_count(std::uint64_t(nv)) +
-                             " vertices)");
+                             io_detail::readable_number(id) + " out of range (" +
+                             io_detail::readable_count(std::uint64_t(nv)) + " vertices)");
             ids[k] = int(*checked);
           }
           mesh.faces.push_back(std::move(ids));
@@ -339,22 +377,28 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
     }
   }
   if (!body.only_whitespace_left() && binary)
-    fail(path, "trailing data after the last element (" + std::to_string(body.remaining()) + " bytes): header counts do not match the data");
-  if (!body.only_whitespace_left()) fail(path, "trailing data after the last element (" + body.where() + "): header counts do not match the data");
+    fail(path, "trailing data after the last element (" + std::to_string(body.remaining()) +
+                   " bytes): header counts do not match the data");
+  if (!body.only_whitespace_left())
+    fail(path, "trailing data after the last element (" + body.where() + "): header counts do not match the data");
 
   for (int a = 0; a < 3; ++a) mesh.positions.col(a) = vprops[std::size_t(xyz[a])];
   if (attributes) {
     *attributes = MeshAttributes{};
-    auto collect = [](const Element& e, const std::vector<Eigen::VectorXd>& props, std::map<std::string, Eigen::VectorXd>& scalars,
-                      Eigen::MatrixX3d& normals, bool is_vertex) {
+    auto collect = [](const Element& e, const std::vector<Eigen::VectorXd>& props,
+                      std::map<std::string, Eigen::VectorXd>& scalars, Eigen::MatrixX3d& normals, bool is_vertex) {
       int n[3] = {-1, -1, -1};
       for (std::size_t p = 0; p < e.properties.size(); ++p) {
         const auto& pr = e.properties[p];
         if (pr.count_type) continue;
-        if (pr.name == "nx") n[0] = int(p);
-        else if (pr.name == "ny") n[1] = int(p);
-        else if (pr.name == "nz") n[2] = int(p);
-        else if (!(is_vertex && (pr.name == "x" || pr.name == "y" || pr.name == "z"))) scalars[pr.name] = props[p];
+        if (pr.name == "nx")
+          n[0] = int(p);
+        else if (pr.name == "ny")
+          n[1] = int(p);
+        else if (pr.name == "nz")
+          n[2] = int(p);
+        else if (!(is_vertex && (pr.name == "x" || pr.name == "y" || pr.name == "z")))
+          scalars[pr.name] = props[p];
       }
       if (n[0] >= 0 && n[1] >= 0 && n[2] >= 0) {
         normals.resize(Eigen::Index(e.count), 3);
@@ -381,8 +425,8 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   if (a.face_normals.rows() != 0) check_rows(a.face_normals.rows(), nf, "face normals");
   auto check_scalars = [&](const std::map<std::string, Eigen::VectorXd>& s, Eigen::Index expected, const char* kind) {
     for (const auto& [name, v] : s) {
-      if (!is_identifier(name) || name == "x" || name == "y" || name == "z" || name == "nx" || name == "ny" || name == "nz" ||
-          name == "vertex_indices" || name == "vertex_index")
+      if (!is_identifier(name) || name == "x" || name == "y" || name == "z" || name == "nx" || name == "ny" ||
+          name == "nz" || name == "vertex_indices" || name == "vertex_index")
         fail(path, std::string(kind) + " scalar name '" + name + "' is not a valid, unreserved PLY property name");
       check_rows(v.size(), expected, std::string(kind) + " scalar '" + name + "'");
     }
@@ -393,7 +437,8 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     max_degree = std::max(max_degree, mesh.faces[f].size());
     for (int id : mesh.faces[f])
-      if (id < 0 || id >= nv) fail(path, "face " + std::to_string(f) + " refers to vertex " + std::to_string(id) + " (out of range)");
+      if (id < 0 || id >= nv)
+        fail(path, "face " + std::to_string(f) + " refers to vertex " + std::to_string(id) + " (out of range)");
   }
   const bool wide = max_degree > 255;
 
@@ -417,8 +462,10 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   }
   for (Eigen::Index f = 0; f < nf; ++f) {
     const auto& face = mesh.faces[std::size_t(f)];
-    if (wide) put(std::uint32_t(face.size()));
-    else put(std::uint8_t(face.size()));
+    if (wide)
+      put(std::uint32_t(face.size()));
+    else
+      put(std::uint8_t(face.size()));
     for (int id : face) put(std::int32_t(id));
     if (a.face_normals.rows())
       for (int c = 0; c < 3; ++c) put(double(a.face_normals(f, c)));

@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/checked.hpp>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -12,9 +14,6 @@
 #include <memory>
 #include <sstream>
 #include <vector>
-
-#include <corrlap/core/error.hpp>
-#include <corrlap/io/detail/checked.hpp>
 
 namespace corrlap {
 
@@ -46,7 +45,8 @@ std::vector<double> read_rows(const std::string& path, int cols, const char* wha
       auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
       if (ec != std::errc() || p != tok.data() + tok.size() || !std::isfinite(v)) {
         std::ostringstream os;
-        os << what << " file '" << path << "', line " << lineno << ": malformed or non-finite number '" << tok.substr(0, 40) << "'";
+        os << what << " file '" << path << "', line " << lineno << ": malformed or non-finite number '"
+           << tok.substr(0, 40) << "'";
         throw IoError(os.str());
       }
       values.push_back(v);
@@ -128,7 +128,8 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
     }
   }
   const std::string shown = header.substr(0, 80);
-  if (banner.empty() || banner[0] != "%%matrixmarket") fail("missing %%MatrixMarket header (first line '" + shown + "')");
+  if (banner.empty() || banner[0] != "%%matrixmarket")
+    fail("missing %%MatrixMarket header (first line '" + shown + "')");
   if (banner.size() != 5 || banner[1] != "matrix")
     fail("malformed header '" + shown + "' (expected '%%MatrixMarket matrix coordinate real general')");
   if (banner[2] != "coordinate" || (banner[3] != "real" && banner[3] != "integer" && banner[3] != "pattern"))
@@ -149,19 +150,20 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
   }
   long long r = 0, c = 0, nnz = 0;
   if (!have_size || !parse_numbers(line, r, c, nnz) || r <= 0 || c <= 0 || nnz < 0)
-    fail("line " + std::to_string(lineno) + ": malformed size line '" + line.substr(0, 80) + "' (expected 'rows columns entries')");
+    fail("line " + std::to_string(lineno) + ": malformed size line '" + line.substr(0, 80) +
+         "' (expected 'rows columns entries')");
   const std::string size_at = "line " + std::to_string(lineno) + ": ";
   if (symmetric && r != c)
-    fail(size_at + "a symmetric matrix must be square, the size line declares " + readable_count(std::uint64_t(r)) + " x " +
-         readable_count(std::uint64_t(c)));
+    fail(size_at + "a symmetric matrix must be square, the size line declares " + readable_count(std::uint64_t(r)) +
+         " x " + readable_count(std::uint64_t(c)));
   // Budget before allocating: every entry needs a line of at least "i j v\n" (6 bytes, 4 for
   // pattern), and Eigen allocates O(rows + columns) index arrays however few the entries, so
   // each dimension is bounded by max(2^20, 4 * entries) (every row and column of the operators
   // holds an entry) and by the int indices Eigen uses.
   const std::uint64_t min_line = pattern ? 4 : 6;
   if (double(nnz) > double(r) * double(c))
-    fail(size_at + "absurd size line: " + readable_count(std::uint64_t(nnz)) + " entries in a " + readable_count(std::uint64_t(r)) +
-         " x " + readable_count(std::uint64_t(c)) + " matrix");
+    fail(size_at + "absurd size line: " + readable_count(std::uint64_t(nnz)) + " entries in a " +
+         readable_count(std::uint64_t(r)) + " x " + readable_count(std::uint64_t(c)) + " matrix");
   if (std::uint64_t(nnz) > file_bytes / min_line)
     fail(size_at + "absurd size line: " + readable_count(std::uint64_t(nnz)) + " entries need at least " +
          io_detail::readable_bytes(double(nnz) * double(min_line)) + ", more than the " +
@@ -169,7 +171,8 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
   const long long dim_limit = std::min<long long>(std::numeric_limits<int>::max() - 1, std::max(1LL << 20, 4 * nnz));
   if (r > dim_limit || c > dim_limit)
     fail(size_at + "absurd size line: " + readable_count(std::uint64_t(r)) + " x " + readable_count(std::uint64_t(c)) +
-         " for " + readable_count(std::uint64_t(nnz)) + " entries (each dimension is limited to max(1 048 576, 4 x entries) = " +
+         " for " + readable_count(std::uint64_t(nnz)) +
+         " entries (each dimension is limited to max(1 048 576, 4 x entries) = " +
          readable_count(std::uint64_t(dim_limit)) + ")");
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(std::size_t(nnz) * (symmetric ? 2 : 1));
@@ -191,20 +194,24 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
     } else {
       ok = parse_numbers(line, i, j, v);
     }
-    if (!ok) fail(entry + ": malformed entry '" + line.substr(0, 80) + "' (expected '" + (pattern ? "row column" : "row column value") + "')");
+    if (!ok)
+      fail(entry + ": malformed entry '" + line.substr(0, 80) + "' (expected '" +
+           (pattern ? "row column" : "row column value") + "')");
     if (i < 1 || i > r || j < 1 || j > c)
-      fail(entry + ": index (" + std::to_string(i) + ", " + std::to_string(j) + ") out of range for a " + readable_count(std::uint64_t(r)) +
-           " x " + readable_count(std::uint64_t(c)) + " matrix");
+      fail(entry + ": index (" + std::to_string(i) + ", " + std::to_string(j) + ") out of range for a " +
+           readable_count(std::uint64_t(r)) + " x " + readable_count(std::uint64_t(c)) + " matrix");
     if (!std::isfinite(v)) fail(entry + ": value not finite");
     if (symmetric && j > i)
-      fail(entry + ": (" + std::to_string(i) + ", " + std::to_string(j) + ") is above the diagonal; a symmetric file stores the lower triangle");
+      fail(entry + ": (" + std::to_string(i) + ", " + std::to_string(j) +
+           ") is above the diagonal; a symmetric file stores the lower triangle");
     t.emplace_back(int(i - 1), int(j - 1), v);
     if (symmetric && i != j) t.emplace_back(int(j - 1), int(i - 1), v);
   }
   while (std::getline(in, line)) {
     ++lineno;
     if (line.find_first_not_of(" \t\r") != std::string::npos)
-      fail("line " + std::to_string(lineno) + ": more entries than the " + readable_count(std::uint64_t(nnz)) + " declared");
+      fail("line " + std::to_string(lineno) + ": more entries than the " + readable_count(std::uint64_t(nnz)) +
+           " declared");
   }
   Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
   A.setFromTriplets(t.begin(), t.end());

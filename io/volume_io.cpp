@@ -2,16 +2,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/checked.hpp>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
-
-#include <corrlap/io/detail/checked.hpp>
 
 #ifdef CORRLAP_HAVE_ZLIB
 #include <zlib.h>
@@ -115,7 +113,8 @@ Volume read_vol(const std::string& path) {
     if (it == fields.end()) fail(path, std::string("header has no '") + keys[a] + "' field");
     char* end = nullptr;
     const long d = std::strtol(it->second.c_str(), &end, 10);
-    if (*end != '\0' || d <= 0 || d > 1000000) fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
+    if (*end != '\0' || d <= 0 || d > 1000000)
+      fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
     s[a] = int(d);
   }
   checked_voxels(path, s);
@@ -206,7 +205,8 @@ void gunzip_payload(const std::string& path, const std::string& compressed, std:
     rc = inflate(&s.zs, Z_NO_FLUSH);
     produced += room - s.zs.avail_out;
     v.values.resize(produced);
-    if (produced > n) fail(path, "gzip data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
+    if (produced > n)
+      fail(path, "gzip data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
     if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
     if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
       fail(path, std::string("corrupt gzip data") + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
@@ -259,12 +259,14 @@ Volume read_nrrd(const std::string& path) {
     std::string extra;
     if (!(ss >> d[0] >> d[1] >> d[2]) || (ss >> extra)) fail(path, "malformed 'sizes' field (expected three integers)");
     for (int a = 0; a < 3; ++a) {
-      if (d[a] <= 0 || d[a] > 1000000) fail(path, "invalid size " + std::to_string(d[a]) + " on axis " + std::to_string(a));
+      if (d[a] <= 0 || d[a] > 1000000)
+        fail(path, "invalid size " + std::to_string(d[a]) + " on axis " + std::to_string(a));
       s[a] = int(d[a]);
     }
   }
   const std::size_t n = checked_voxels(path, s);
-  if (auto it = fields.find("endian"); it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
+  if (auto it = fields.find("endian");
+      it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
     fail(path, "invalid endian '" + it->second + "' (little or big)");  // irrelevant for 1-byte types
   const std::string encoding = lower(field("encoding"));
   if (!ended) fail(path, "header not terminated by a blank line (truncated file?)");
@@ -280,7 +282,8 @@ Volume read_nrrd(const std::string& path) {
     for (std::size_t i = 0; i < n; ++i) {
       long long x = 0;
       if (!(in >> x)) fail(path, "truncated or malformed ascii data at value " + std::to_string(i));
-      if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255)) fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
+      if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255))
+        fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
       v.values[i] = std::uint8_t(x);
     }
     std::string extra;
@@ -291,7 +294,8 @@ Volume read_nrrd(const std::string& path) {
     const auto most = io_detail::checked_mul(compressed, kMaxDeflateRatio);
     if (most && n > *most + 1024)
       fail(path, describe(s) + " need " + io_detail::readable_bytes(double(n)) + ", more than the " +
-                     io_detail::readable_bytes(double(*most + 1024)) + " that " + io_detail::readable_bytes(double(compressed)) +
+                     io_detail::readable_bytes(double(*most + 1024)) + " that " +
+                     io_detail::readable_bytes(double(compressed)) +
                      " of gzip data can hold (deflate expands at most " + std::to_string(kMaxDeflateRatio) + " times)");
     std::ostringstream ss;
     ss << in.rdbuf();
@@ -352,7 +356,8 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
   // A hand-built Volume whose values do not match its size would be read out of bounds below.
   const auto n = voxel_count(s);
   if (!n || volume.values.size() != *n)
-    throw InputError("volume: " + io_detail::readable_count(volume.values.size()) + " values do not match its " + describe(s));
+    throw InputError("volume: " + io_detail::readable_count(volume.values.size()) + " values do not match its " +
+                     describe(s));
   VoxelGrid grid(Eigen::Vector3i::Constant(-1), s, h);
   std::size_t inside = 0;
   for (int z = 0; z < s.z(); ++z)
@@ -362,7 +367,9 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
           grid.set(x, y, z, true);
           ++inside;
         }
-  if (inside == 0) throw InputError("volume: no voxel above the threshold " + io_detail::readable_number(threshold) + " (empty volume)");
+  if (inside == 0)
+    throw InputError("volume: no voxel above the threshold " + io_detail::readable_number(threshold) +
+                     " (empty volume)");
   return grid;
 }
 
@@ -379,7 +386,8 @@ Volume voxels_to_volume(const VoxelGrid& grid) {
     for (int y = 0; y < v.size.y(); ++y)
       for (int x = 0; x < v.size.x(); ++x)
         if (grid.get(x + lo.x(), y + lo.y(), z + lo.z()))
-          v.values[(std::size_t(z) * std::size_t(v.size.y()) + std::size_t(y)) * std::size_t(v.size.x()) + std::size_t(x)] = 255;
+          v.values[(std::size_t(z) * std::size_t(v.size.y()) + std::size_t(y)) * std::size_t(v.size.x()) +
+                   std::size_t(x)] = 255;
   return v;
 }
 

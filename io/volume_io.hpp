@@ -3,12 +3,11 @@
 // Formats: DGtal .vol (read/write), raw uint8 with given dimensions (.raw), NRRD (.nrrd: 3D uint8
 // with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
 #include <Eigen/Core>
+#include <corrlap/core/voxel_grid.hpp>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <corrlap/core/voxel_grid.hpp>
 
 namespace corrlap {
 
@@ -22,8 +21,8 @@ struct Volume {
 };
 
 struct VolumeReadOptions {
-  double threshold = 0.0;   ///< inside iff value > threshold
-  double h = 1.0;           ///< grid step given to the voxel grid
+  double threshold = 0.0;                         ///< inside iff value > threshold
+  double h = 1.0;                                 ///< grid step given to the voxel grid
   std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
 };
 

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <limits>
 #include <sstream>
-
-#include <corrlap/core/error.hpp>
 
 namespace corrlap {
 
@@ -25,8 +24,7 @@ void Polynomial::resize(int dx, int dy, int dz) {
   std::vector<double> c(std::size_t(dx + 1) * (dy + 1) * (dz + 1), 0.0);
   for (int i = 0; i <= std::min(dx, deg_[0]); ++i)
     for (int j = 0; j <= std::min(dy, deg_[1]); ++j)
-      for (int k = 0; k <= std::min(dz, deg_[2]); ++k)
-        c[(std::size_t(i) * (dy + 1) + j) * (dz + 1) + k] = at(i, j, k);
+      for (int k = 0; k <= std::min(dz, deg_[2]); ++k) c[(std::size_t(i) * (dy + 1) + j) * (dz + 1) + k] = at(i, j, k);
   c_.swap(c);
   deg_[0] = dx;
   deg_[1] = dy;
@@ -224,8 +222,10 @@ std::string Polynomial::to_string() const {
       for (int k = deg_[2]; k >= 0; --k) {
         const double c = at(i, j, k);
         if (c == 0.0) continue;
-        if (!first) os << (c < 0 ? " - " : " + ");
-        else if (c < 0) os << "-";
+        if (!first)
+          os << (c < 0 ? " - " : " + ");
+        else if (c < 0)
+          os << "-";
         first = false;
         const double a = std::abs(c);
         const int e[3] = {i, j, k};
@@ -306,14 +306,16 @@ class Parser {
     const int total = p.total_degree() + q.total_degree();
     if (total > Polynomial::kMaxParseDegree) {
       pos_ = at;
-      fail("total degree " + std::to_string(total) + " exceeds the limit " + std::to_string(Polynomial::kMaxParseDegree));
+      fail("total degree " + std::to_string(total) + " exceeds the limit " +
+           std::to_string(Polynomial::kMaxParseDegree));
     }
     const int d[3] = {p.degree(0) + q.degree(0), p.degree(1) + q.degree(1), p.degree(2) + q.degree(2)};
     charge(double(p.term_count()) * double(q.dense_size()) + dense_size(d), at);
     return p * q;
   }
   Polynomial add(const Polynomial& p, const Polynomial& q, bool subtract, std::size_t at) {
-    const int d[3] = {std::max(p.degree(0), q.degree(0)), std::max(p.degree(1), q.degree(1)), std::max(p.degree(2), q.degree(2))};
+    const int d[3] = {std::max(p.degree(0), q.degree(0)), std::max(p.degree(1), q.degree(1)),
+                      std::max(p.degree(2), q.degree(2))};
     charge(2 * dense_size(d), at);
     return subtract ? p - q : p + q;
   }
@@ -321,9 +323,12 @@ class Parser {
     Polynomial p = term();
     for (;;) {
       const std::size_t at = pos_;
-      if (accept('+')) p = add(p, term(), false, at);
-      else if (accept('-')) p = add(p, term(), true, at);
-      else return p;
+      if (accept('+'))
+        p = add(p, term(), false, at);
+      else if (accept('-'))
+        p = add(p, term(), true, at);
+      else
+        return p;
     }
   }
   Polynomial term() {
@@ -356,9 +361,12 @@ class Parser {
     if (++depth_ > Polynomial::kMaxParseDepth)
       fail("nesting deeper than " + std::to_string(Polynomial::kMaxParseDepth) + " levels (parentheses and signs)");
     Polynomial p;
-    if (accept('-')) p = -unary();
-    else if (accept('+')) p = unary();
-    else p = power();
+    if (accept('-'))
+      p = -unary();
+    else if (accept('+'))
+      p = unary();
+    else
+      p = power();
     --depth_;
     return p;
   }
@@ -376,8 +384,8 @@ class Parser {
       for (char ch : digits) e = std::min<long>(10 * e + (ch - '0'), 1000000);
       if (e > Polynomial::kMaxParseDegree) {
         pos_ = start;
-        fail("exponent " + std::string(digits.substr(0, 20)) + (digits.size() > 20 ? "..." : "") + " exceeds the limit " +
-             std::to_string(Polynomial::kMaxParseDegree));
+        fail("exponent " + std::string(digits.substr(0, 20)) + (digits.size() > 20 ? "..." : "") +
+             " exceeds the limit " + std::to_string(Polynomial::kMaxParseDegree));
       }
       const long total = e * base.total_degree();
       if (total > Polynomial::kMaxParseDegree) {
@@ -407,8 +415,7 @@ class Parser {
     if (c == 'z' || c == 'Z') return ++pos_, Polynomial::variable(2);
     if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
       const std::size_t start = pos_;
-      while (pos_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.'))
-        ++pos_;
+      while (pos_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.')) ++pos_;
       if (pos_ < s_.size() && (s_[pos_] == 'e' || s_[pos_] == 'E')) {
         std::size_t q = pos_ + 1;
         if (q < s_.size() && (s_[q] == '+' || s_[q] == '-')) ++q;

@@ -21,9 +21,9 @@ class Polynomial {
 
   /// Limits of parse(): far above what the named shapes need (total degree 6, depth 3), low
   /// enough that a short hostile string cannot expand for seconds or overflow the stack.
-  static constexpr int kMaxParseDegree = 64;         ///< total degree of every intermediate result
-  static constexpr int kMaxParseDepth = 200;         ///< nested parentheses and unary signs
-  static constexpr double kMaxParseWork = 2e7;       ///< coefficient operations of the whole expansion
+  static constexpr int kMaxParseDegree = 64;    ///< total degree of every intermediate result
+  static constexpr int kMaxParseDepth = 200;    ///< nested parentheses and unary signs
+  static constexpr double kMaxParseWork = 2e7;  ///< coefficient operations of the whole expansion
 
   /// Parses + - * / ^ (non-negative integer exponent), numbers (1, 2.5, 1e-3), x y z (also X Y Z)
   /// and parentheses. Division is allowed by constants only. Throws InputError naming the
@@ -39,8 +39,7 @@ class Polynomial {
 
   /// Conservative range of P over the box lo..hi (interval arithmetic on the monomials),
   /// widened by a relative rounding margin so that "hi < 0" really means P < 0 everywhere.
-  void bounds(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double& min_value,
-              double& max_value) const;
+  void bounds(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double& min_value, double& max_value) const;
 
   int degree(int axis) const { return deg_[axis]; }
   int total_degree() const;

@@ -3,11 +3,10 @@
 // {"tolerance": 1e999} used to escape as out_of_range, reported as an internal error).
 #include <doctest/doctest.h>
 
-#include <stdexcept>
-#include <string>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
+#include <stdexcept>
+#include <string>
 
 #include "test_support.hpp"
 

@@ -5,14 +5,13 @@
 #include <doctest/doctest.h>
 
 #include <chrono>
-#include <cstdint>
-#include <cstring>
-#include <limits>
-
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 
 #include "test_support.hpp"
 
@@ -56,9 +55,10 @@ void append(std::string& s, T v) {
 TEST_CASE("NRRD sizes whose voxel count wraps 32 bits are rejected before reading (ascii, gzip)") {
   // 65536 x 65537 x 1 = 2^32 + 2^16 voxels: the old int product wrapped to 65536, the buffer was
   // allocated that small and the reads ran past it (SIGSEGV in Release).
-  expect_error([] { read_volume(bad_input("nrrd_sizes_wrap_ascii.nrrd")); },
-               {"nrrd_sizes_wrap_ascii.nrrd",
-                "sizes 65536 x 65537 x 1 = 4 295 032 832 voxels need at least 8.0 GiB, more than the 8 B the file holds"});
+  expect_error(
+      [] { read_volume(bad_input("nrrd_sizes_wrap_ascii.nrrd")); },
+      {"nrrd_sizes_wrap_ascii.nrrd",
+       "sizes 65536 x 65537 x 1 = 4 295 032 832 voxels need at least 8.0 GiB, more than the 8 B the file holds"});
   if (nrrd_gzip_supported())
     expect_error([] { read_volume(bad_input("nrrd_sizes_wrap_gzip.nrrd")); },
                  {"nrrd_sizes_wrap_gzip.nrrd", "sizes 65536 x 65537 x 1 = 4 295 032 832 voxels need 4.0 GiB",
@@ -67,10 +67,10 @@ TEST_CASE("NRRD sizes whose voxel count wraps 32 bits are rejected before readin
   Volume v;
   v.size = Eigen::Vector3i(65536, 65537, 1);
   v.values.assign(65536, 1);
-  CHECK_THROWS_WITH_AS(threshold_volume(v, 0.5, 1.0), doctest::Contains("65 536 values do not match its sizes 65536 x 65537 x 1"),
-                       InputError);
-  CHECK_THROWS_WITH_AS(write_volume(tmp_path("mismatch.vol"), v), doctest::Contains("does not match its sizes 65536 x 65537 x 1"),
-                       IoError);
+  CHECK_THROWS_WITH_AS(threshold_volume(v, 0.5, 1.0),
+                       doctest::Contains("65 536 values do not match its sizes 65536 x 65537 x 1"), InputError);
+  CHECK_THROWS_WITH_AS(write_volume(tmp_path("mismatch.vol"), v),
+                       doctest::Contains("does not match its sizes 65536 x 65537 x 1"), IoError);
   // Raw dimensions from the command line whose product does not even fit in 64 bits.
   VolumeReadOptions huge;
   const int m = std::numeric_limits<int>::max();
@@ -88,10 +88,12 @@ TEST_CASE("NRRD gzip: announced sizes bounded by what the compressed bytes can h
   // 1 GiB announced with 24 bytes of gzip data (at most 24 * 1032 + 1024 bytes): the old reader
   // allocated the whole gigabyte before inflating.
   const double s = expect_error([] { read_volume(bad_input("nrrd_gzip_1gib.nrrd")); },
-                                {"sizes 1024 x 1024 x 1024 = 1 073 741 824 voxels need 1.0 GiB, more than the 25.2 KiB that 24 B of gzip data can hold"});
+                                {"sizes 1024 x 1024 x 1024 = 1 073 741 824 voxels need 1.0 GiB, more than the 25.2 KiB "
+                                 "that 24 B of gzip data can hold"});
   CHECK(s < 1.0);
   // 4 MiB of zeros announced as 2 x 2 x 2: rejected as soon as the 9th byte comes out.
-  expect_error([] { read_volume(bad_input("nrrd_gzip_bomb.nrrd")); }, {"gzip data holds more bytes than the sizes announce (8)"});
+  expect_error([] { read_volume(bad_input("nrrd_gzip_bomb.nrrd")); },
+               {"gzip data holds more bytes than the sizes announce (8)"});
 }
 
 TEST_CASE("Matrix Market: banner fields parsed exactly, every index checked, entries counted") {
@@ -103,16 +105,21 @@ TEST_CASE("Matrix Market: banner fields parsed exactly, every index checked, ent
   };
   // "symmetric" with a non-square size used to be mirrored into out-of-range triplets (heap
   // overflow in setFromTriplets).
-  bad("%%MatrixMarket matrix coordinate real symmetric\n2 5 1\n1 4 1\n", "a symmetric matrix must be square, the size line declares 2 x 5");
+  bad("%%MatrixMarket matrix coordinate real symmetric\n2 5 1\n1 4 1\n",
+      "a symmetric matrix must be square, the size line declares 2 x 5");
   // The word anywhere in the line was taken as the symmetry field.
   bad("%%MatrixMarket matrix coordinate real nonsymmetric\n2 2 1\n1 1 1\n", "unsupported symmetry 'nonsymmetric'");
   bad("%%MatrixMarket matrix coordinate real general % symmetric\n2 2 1\n1 1 1\n", "malformed header");
   bad("%%MatrixMarket matrix coordinate real skew-symmetric\n2 2 1\n2 1 1\n", "unsupported symmetry 'skew-symmetric'");
-  bad("%%MatrixMarket matrix coordinate real symmetric\n3 3 1\n1 3 1\n", "line 3, entry 1: (1, 3) is above the diagonal");
-  bad("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 3 1\n", "entry 1: index (1, 3) out of range for a 2 x 2 matrix");
+  bad("%%MatrixMarket matrix coordinate real symmetric\n3 3 1\n1 3 1\n",
+      "line 3, entry 1: (1, 3) is above the diagonal");
+  bad("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 3 1\n",
+      "entry 1: index (1, 3) out of range for a 2 x 2 matrix");
   bad("%%MatrixMarket matrix coordinate real general\n2 2 1\n0 1 1\n", "index (0, 1) out of range");
-  bad("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1\n2 2 2\n", "line 4: more entries than the 1 declared");
-  bad("%%MatrixMarket matrix coordinate pattern general\n2 2 1\n1 1 1\n", "malformed entry '1 1 1' (expected 'row column')");
+  bad("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1\n2 2 2\n",
+      "line 4: more entries than the 1 declared");
+  bad("%%MatrixMarket matrix coordinate pattern general\n2 2 1\n1 1 1\n",
+      "malformed entry '1 1 1' (expected 'row column')");
   // 70 bytes declaring 2^27 columns: Eigen's outer index alone would take 512 MiB (2 GB with the
   // temporaries of setFromTriplets).
   const double t = expect_error(
@@ -161,7 +168,8 @@ TEST_CASE("PLY: huge, NaN and infinite counts and indices are named errors, not 
   bad(head + "3 0 1 -1\n", "vertex index -1 out of range");
   // Binary float indices: NaN and 3e9 (beyond int) are out of range, never cast.
   std::string bin =
-      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double "
+      "z\n"
       "element face 1\nproperty list uint float vertex_indices\nend_header\n";
   for (double d : {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0}) append(bin, d);
   std::string nan_id = bin, big_id = bin, big_len = bin;
@@ -183,19 +191,22 @@ TEST_CASE("PLY: elements without properties cost nothing, counts are bounded by 
   std::string junk;
   for (int i = 0; i < 2000; ++i) junk += "element empty" + std::to_string(i) + " 2147483648\n";
   const std::string p = tmp_path("ply_empty_elements.ply");
-  write_text(p, "ply\nformat ascii 1.0\n" + junk +
-                    "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  write_text(p,
+             "ply\nformat ascii 1.0\n" + junk +
+                 "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   const auto t0 = std::chrono::steady_clock::now();
   const PolygonMesh mesh = read_ply(p);
   CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 1.0);
   CHECK(mesh.positions.rows() == 3);
   CHECK(mesh.faces.size() == 1);
   // An element with one property needs at least one byte (binary) or two characters per entry.
-  write_text(p, "ply\nformat binary_little_endian 1.0\nelement junk 2147483648\nproperty uchar a\n"
-                "element vertex 1\nproperty double x\nproperty double y\nproperty double z\nelement face 1\n"
-                "property list uchar int vertex_indices\nend_header\n0123456789");
-  expect_error([&] { read_ply(p); }, {"element 'junk' announces 2 147 483 648 entries", "need at least 2.0 GiB, more than the 10 B"});
+  write_text(p,
+             "ply\nformat binary_little_endian 1.0\nelement junk 2147483648\nproperty uchar a\n"
+             "element vertex 1\nproperty double x\nproperty double y\nproperty double z\nelement face 1\n"
+             "property list uchar int vertex_indices\nend_header\n0123456789");
+  expect_error([&] { read_ply(p); },
+               {"element 'junk' announces 2 147 483 648 entries", "need at least 2.0 GiB, more than the 10 B"});
   std::string comments;
   for (int i = 0; i < 10001; ++i) comments += "comment x\n";
   write_text(p, "ply\nformat ascii 1.0\n" + comments + "end_header\n");
@@ -205,8 +216,9 @@ TEST_CASE("PLY: elements without properties cost nothing, counts are bounded by 
 TEST_CASE("OFF: counts bounded by the file size before reserving") {
   const std::string p = tmp_path("off_counts.off");
   write_text(p, "OFF\n2147483648 2147483648 0\n0 0 0\n");
-  expect_error([&] { read_off(p); }, {"counts announce 2 147 483 648 vertices and 2 147 483 648 faces, which need at least 28.0 GiB",
-                                      "more than the 34 B the file holds"});
+  expect_error([&] { read_off(p); },
+               {"counts announce 2 147 483 648 vertices and 2 147 483 648 faces, which need at least 28.0 GiB",
+                "more than the 34 B the file holds"});
   write_text(p, "OFF\n2147483649 1 0\n");
   expect_error([&] { read_off(p); }, {"absurd counts 2147483649 1 (limit 2 147 483 648)"});
 }

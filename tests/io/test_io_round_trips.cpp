@@ -2,13 +2,12 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
-#include <random>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <random>
 
 #include "test_support.hpp"
 
@@ -124,15 +123,17 @@ TEST_CASE("ASCII PLY with other types, extra elements and vertex_index is read")
 
 TEST_CASE("smallest ASCII PLY without a final newline is read") {
   const std::string p = tmp_path("ascii_min.ply");
-  write_text(p, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
+  write_text(p,
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
   CHECK(read_ply(p).faces == std::vector<std::vector<int>>{{0, 1, 2}});
 }
 
 TEST_CASE("OFF files are read (comments, counts on the header line, colours ignored)") {
   const std::string p = tmp_path("tet.off");
-  write_text(p, "OFF # a tetrahedron\n# comment\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1 0.5 0.5 0.5 1\n"
-                "3 0 2 1\n3 0 1 3\n3 1 2 3 255 0 0\n3 0 3 2\n");
+  write_text(p,
+             "OFF # a tetrahedron\n# comment\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1 0.5 0.5 0.5 1\n"
+             "3 0 2 1\n3 0 1 3\n3 1 2 3 255 0 0\n3 0 3 2\n");
   const PolygonMesh m = read_mesh(p);
   CHECK(m.positions.rows() == 4);
   CHECK(m.positions(3, 2) == 1.0);
@@ -158,8 +159,9 @@ TEST_CASE("volume round trips are exact for .vol, .raw and .nrrd") {
 
 TEST_CASE("NRRD: ascii encoding, aliases of uint8, comments and key/value pairs") {
   const std::string p = tmp_path("ascii.nrrd");
-  write_text(p, "NRRD0005\n# comment\ntype: unsigned char\ndimension: 3\nsizes: 2 2 1\nspacings: 1 1 1\n"
-                "endian: big\nkey:=value: with colon\nencoding: ascii\n\n0 10\n200 255\n");
+  write_text(p,
+             "NRRD0005\n# comment\ntype: unsigned char\ndimension: 3\nsizes: 2 2 1\nspacings: 1 1 1\n"
+             "endian: big\nkey:=value: with colon\nencoding: ascii\n\n0 10\n200 255\n");
   const Volume v = read_volume(p);
   CHECK(v.size == Eigen::Vector3i(2, 2, 1));
   CHECK(v.values == std::vector<std::uint8_t>{0, 10, 200, 255});
@@ -183,9 +185,11 @@ TEST_CASE("NRRD gzip encoding is read when built with zlib, else a clear error")
     const Volume w = read_volume(p);
     CHECK(w.values == v.values);
     // Announcing more voxels than the stream holds is a truncation error.
-    write_text(p, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 5\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
+    write_text(p,
+               "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 5\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
     CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("truncated gzip data"), IoError);
-    write_text(p, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 3\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
+    write_text(p,
+               "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 3\nencoding: gzip\n\n" + corrlap::test::read_text(gz));
     CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("more bytes than the sizes"), IoError);
   } else {
     CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("gzip"), IoError);
@@ -198,7 +202,7 @@ TEST_CASE("threshold turns grey levels into voxels (strictly above)") {
   v.values = {0, 50, 100, 150, 200, 250, 10, 20, 30, 40, 100, 101};
   const VoxelGrid g = threshold_volume(v, 100, 0.5);
   CHECK(g.count() == 4);  // 150 200 250 101; the two values equal to 100 are outside
-  CHECK(g.get(0, 1, 0));   // 150
+  CHECK(g.get(0, 1, 0));  // 150
   CHECK(g.get(2, 1, 1));
   CHECK_FALSE(g.get(2, 0, 0));
   CHECK(g.h() == 0.5);
@@ -247,7 +251,8 @@ TEST_CASE("CLI digitizes every volume format with --threshold") {
     write_volume(p, v);
     std::string err;
     const std::string extra = std::string(ext) == "raw" ? " --raw-dimensions 7 7 7" : "";
-    REQUIRE(corrlap::test::run_cli("digitize --volume " + p + " --threshold 100" + extra + " --out " + out, nullptr, &err) == 0);
+    REQUIRE(corrlap::test::run_cli("digitize --volume " + p + " --threshold 100" + extra + " --out " + out, nullptr,
+                                   &err) == 0);
     const PolygonMesh m = read_mesh(out);
     CHECK(m.faces.size() == 54);      // 6 sides of a 3x3x3 cube, 9 surfels each
     CHECK(m.positions.rows() == 56);  // 6*16 - 12*4 + 8 pointels of the cube surface

@@ -3,14 +3,13 @@
 // byte flips of valid files never crash nor throw anything but InputError.
 #include <doctest/doctest.h>
 
-#include <functional>
-#include <random>
-
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <functional>
+#include <random>
 
 #include "test_support.hpp"
 
@@ -66,7 +65,8 @@ void fuzz(const char* format, const std::string& ext, const Reader& read, const 
       CHECK(std::string(e.what()).find(path) != std::string::npos);
     }
   };
-  for (std::size_t n = 0; n < valid.size(); n += std::max<std::size_t>(1, valid.size() / 60)) attempt(valid.substr(0, n));
+  for (std::size_t n = 0; n < valid.size(); n += std::max<std::size_t>(1, valid.size() / 60))
+    attempt(valid.substr(0, n));
   const char* junk = "\0\n -9e9x.#/\xff";
   for (int k = 0; k < 150; ++k) {
     std::string s = valid;
@@ -103,7 +103,8 @@ TEST_CASE("OBJ reader rejects bad files, naming file and problem") {
              {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", "malformed face index"}});
   CHECK_THROWS_WITH_AS(read_mesh(tmp_path("does_not_exist.obj")), doctest::Contains("cannot open"), IoError);
   CHECK_THROWS_WITH_AS(read_mesh(tmp_path("mesh.stl")), doctest::Contains("unsupported extension 'stl'"), IoError);
-  fuzz("obj", "obj", [](const std::string& p) { read_mesh(p); }, kTet, 1);
+  fuzz(
+      "obj", "obj", [](const std::string& p) { read_mesh(p); }, kTet, 1);
 }
 
 TEST_CASE("PLY reader rejects bad files, naming file and problem") {
@@ -119,43 +120,48 @@ TEST_CASE("PLY reader rejects bad files, naming file and problem") {
   bad_id[bad_id.size() - 4] = char(7);  // last index 7 (3 vertices)
   std::string huge_count = bin;
   huge_count[bin_faceless.size()] = char(250);  // 250 corners announced, 3 present
-  check_bad("ply", "ply", [](const std::string& p) { read_ply(p); },
-            {{"", "empty file"},
-             {"plx\n", "not a PLY file"},
-             {"ply\nformat ascii 1.0\nelement vertex 3\n", "not terminated by end_header"},
-             {"ply\nelement vertex 1\nend_header\n", "no format line"},
-             {"ply\nformat binary_big_endian 1.0\nend_header\n", "unsupported format binary_big_endian"},
-             {"ply\nformat ascii 2.0\nend_header\n", "unsupported PLY version"},
-             {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "property before any element"},
-             {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n", "unknown property type 'quad'"},
-             {"ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n", "absurd element count 99999999999"},
-             {"ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "malformed element count '-1'"},
-             {"ply\nformat ascii 1.0\nwhatever\nend_header\n", "unknown header keyword 'whatever'"},
-             {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n",
-              "no 'face' element"},
-             {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nelement face 1\n"
-              "property list uchar int vertex_indices\nend_header\n0 0\n3 0 0 0\n",
-              "no scalar property 'z'"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n", "truncated data"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1\n", "truncated data"},
-             {ascii_head + "0 0 0\n1 0 zz\n0 1 0\n3 0 1 2\n", "malformed number 'zz'"},
-             {ascii_head + "0 0 0\n1 0 nan\n0 1 0\n3 0 1 2\n", "vertex 1: non-finite value of 'z'"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "face 0, property 'vertex_indices': vertex index 3 out of range (3 vertices)"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face 0 has 2 corners"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", "non-integer value '2.5'"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4 4 4\n", "trailing data"},
-             {binary_ply_header(100000000, 200000000) + "abc", "element 'vertex' announces 100 000 000 entries"},
-             {bin_faceless, "truncated"},
-             {bin.substr(0, bin.size() - 2), "truncated data: list length 3, the rest of the file holds at most 2 values"},
-             {bad_id, "vertex index 7 out of range"},
-             {huge_count, "truncated data: list length 250"},
-             {bin + "xx", "trailing data"}});
+  check_bad(
+      "ply", "ply", [](const std::string& p) { read_ply(p); },
+      {{"", "empty file"},
+       {"plx\n", "not a PLY file"},
+       {"ply\nformat ascii 1.0\nelement vertex 3\n", "not terminated by end_header"},
+       {"ply\nelement vertex 1\nend_header\n", "no format line"},
+       {"ply\nformat binary_big_endian 1.0\nend_header\n", "unsupported format binary_big_endian"},
+       {"ply\nformat ascii 2.0\nend_header\n", "unsupported PLY version"},
+       {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "property before any element"},
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n", "unknown property type 'quad'"},
+       {"ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n", "absurd element count 99999999999"},
+       {"ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "malformed element count '-1'"},
+       {"ply\nformat ascii 1.0\nwhatever\nend_header\n", "unknown header keyword 'whatever'"},
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 "
+        "0 0\n",
+        "no 'face' element"},
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nelement face 1\n"
+        "property list uchar int vertex_indices\nend_header\n0 0\n3 0 0 0\n",
+        "no scalar property 'z'"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n", "truncated data"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1\n", "truncated data"},
+       {ascii_head + "0 0 0\n1 0 zz\n0 1 0\n3 0 1 2\n", "malformed number 'zz'"},
+       {ascii_head + "0 0 0\n1 0 nan\n0 1 0\n3 0 1 2\n", "vertex 1: non-finite value of 'z'"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
+        "face 0, property 'vertex_indices': vertex index 3 out of range (3 vertices)"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face 0 has 2 corners"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", "non-integer value '2.5'"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4 4 4\n", "trailing data"},
+       {binary_ply_header(100000000, 200000000) + "abc", "element 'vertex' announces 100 000 000 entries"},
+       {bin_faceless, "truncated"},
+       {bin.substr(0, bin.size() - 2), "truncated data: list length 3, the rest of the file holds at most 2 values"},
+       {bad_id, "vertex index 7 out of range"},
+       {huge_count, "truncated data: list length 250"},
+       {bin + "xx", "trailing data"}});
   // the fuzz base is a valid file
   const std::string valid = tmp_path("valid_bin.ply");
   write_text(valid, bin);
   CHECK(read_ply(valid).faces.size() == 1);
-  fuzz("ply-binary", "ply", [](const std::string& p) { read_ply(p); }, bin, 2);
-  fuzz("ply-ascii", "ply", [](const std::string& p) { read_ply(p); }, ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", 3);
+  fuzz(
+      "ply-binary", "ply", [](const std::string& p) { read_ply(p); }, bin, 2);
+  fuzz(
+      "ply-ascii", "ply", [](const std::string& p) { read_ply(p); }, ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", 3);
 }
 
 TEST_CASE("OFF reader rejects bad files, naming file and problem") {
@@ -180,7 +186,9 @@ TEST_CASE("OFF reader rejects bad files, naming file and problem") {
              {"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "face 0: vertex index 3 out of range (3 vertices)"},
              {"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n", "vertex index -1 out of range"},
              {"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 b\n", "malformed index 'b'"}});
-  fuzz("off", "off", [](const std::string& p) { read_off(p); }, "OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n", 4);
+  fuzz(
+      "off", "off", [](const std::string& p) { read_off(p); },
+      "OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n", 4);
 }
 
 TEST_CASE("volume readers reject bad files, naming file and problem") {
@@ -195,40 +203,48 @@ TEST_CASE("volume readers reject bad files, naming file and problem") {
              {"X: 2\nY: -2\nZ: 2\n.\n", "invalid dimension Y: '-2'"},
              {"X: 2\nY: two\nZ: 2\n.\n", "invalid dimension Y: 'two'"},
              {"X: 1000000\nY: 1000000\nZ: 1000000\n.\n", "absurdly large"},
-             {"X: 2000\nY: 2000\nZ: 2000\n.\n", "truncated data: sizes 2000 x 2000 x 2000 = 8 000 000 000 voxels need 7.5 GiB, more than the 0 B the file holds"},
+             {"X: 2000\nY: 2000\nZ: 2000\n.\n",
+              "truncated data: sizes 2000 x 2000 x 2000 = 8 000 000 000 voxels need 7.5 GiB, more than the 0 B the "
+              "file holds"},
              {vol_head + "1234567", "truncated data"}});
   check_bad("raw", "raw", [&](const std::string& p) { read_volume(p, raw_opts); },
-            {{"", "truncated data"}, {"1234567", "sizes 2 x 2 x 2 = 8 voxels need 8 B, more than the 7 B the file holds"}, {"123456789", "larger than the given dimensions"}});
+            {{"", "truncated data"},
+             {"1234567", "sizes 2 x 2 x 2 = 8 voxels need 8 B, more than the 7 B the file holds"},
+             {"123456789", "larger than the given dimensions"}});
   check_bad("raw-nodims", "raw", [](const std::string& p) { read_volume(p); }, {{"12345678", "need their dimensions"}});
   VolumeReadOptions absurd;
   absurd.raw_dimensions = Eigen::Vector3i(1 << 20, 1 << 20, 1 << 20);
-  check_bad("raw-absurd", "raw", [&](const std::string& p) { read_volume(p, absurd); }, {{"12345678", "absurdly large"}});
+  check_bad("raw-absurd", "raw", [&](const std::string& p) { read_volume(p, absurd); },
+            {{"12345678", "absurdly large"}});
   const std::string nh = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\n";
-  check_bad("nrrd", "nrrd", [](const std::string& p) { read_volume(p); },
-            {{"", "empty file"},
-             {"P5\n2 2\n", "not a NRRD file"},
-             {nh + "encoding: raw\n", "header not terminated by a blank line"},
-             {"NRRD0004\ntype: uint8\nsizes: 2 2 2\nencoding: raw\n\n12345678", "no 'dimension' field"},
-             {"NRRD0004\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n12345678", "no 'type' field"},
-             {nh + "\n12345678", "no 'encoding' field"},
-             {"NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n12345678", "unsupported type 'float'"},
-             {"NRRD0004\ntype: uint8\ndimension: 2\nsizes: 2 2\nencoding: raw\n\n1234", "dimension must be 3, got '2'"},
-             {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2\nencoding: raw\n\n1234", "malformed 'sizes' field"},
-             {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 0 2\nencoding: raw\n\n", "invalid size 0 on axis 1"},
-             {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 100000 100000 100000\nencoding: raw\n\n", "absurdly large"},
-             {nh + "encoding: bzip2\n\n12345678", "unsupported encoding 'bzip2'"},
-             {nh + "encoding: raw\nendian: middle\n\n12345678", "invalid endian 'middle'"},
-             {nh + "encoding: raw\n\n1234567", "truncated data"},
-             {nh + "encoding: raw\n\n123456789", "larger than the announced sizes"},
-             {nh + "data file: x.raw\nencoding: raw\n\n", "detached data"},
-             {nh + "encoding: ascii\n\n1 2 3 4 5 6 7 8 9", "more ascii values"},
-             {nh + "encoding: ascii\n\n1 2 3 4 5 6 7 300", "ascii value 300 out of range"},
-             {nh + "encoding: ascii\n\n1 2 3 x 5 6 7 8", "malformed ascii data at value 3"},
-             {nh + "encoding: ascii\n\n1 2", "need at least 15 B, more than the 3 B the file holds"},
-             {nh + "encoding: gzip\n\nnot gzip at all", "gzip"},
-             {nh + "type 2\nencoding: raw\n\n12345678", "malformed header line 'type 2'"}});
-  fuzz("vol", "vol", [](const std::string& p) { read_volume(p); }, vol_head + "12345678", 5);
-  fuzz("nrrd", "nrrd", [](const std::string& p) { read_volume(p); }, nh + "encoding: raw\n\n12345678", 6);
+  check_bad(
+      "nrrd", "nrrd", [](const std::string& p) { read_volume(p); },
+      {{"", "empty file"},
+       {"P5\n2 2\n", "not a NRRD file"},
+       {nh + "encoding: raw\n", "header not terminated by a blank line"},
+       {"NRRD0004\ntype: uint8\nsizes: 2 2 2\nencoding: raw\n\n12345678", "no 'dimension' field"},
+       {"NRRD0004\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n12345678", "no 'type' field"},
+       {nh + "\n12345678", "no 'encoding' field"},
+       {"NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n12345678", "unsupported type 'float'"},
+       {"NRRD0004\ntype: uint8\ndimension: 2\nsizes: 2 2\nencoding: raw\n\n1234", "dimension must be 3, got '2'"},
+       {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2\nencoding: raw\n\n1234", "malformed 'sizes' field"},
+       {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 0 2\nencoding: raw\n\n", "invalid size 0 on axis 1"},
+       {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 100000 100000 100000\nencoding: raw\n\n", "absurdly large"},
+       {nh + "encoding: bzip2\n\n12345678", "unsupported encoding 'bzip2'"},
+       {nh + "encoding: raw\nendian: middle\n\n12345678", "invalid endian 'middle'"},
+       {nh + "encoding: raw\n\n1234567", "truncated data"},
+       {nh + "encoding: raw\n\n123456789", "larger than the announced sizes"},
+       {nh + "data file: x.raw\nencoding: raw\n\n", "detached data"},
+       {nh + "encoding: ascii\n\n1 2 3 4 5 6 7 8 9", "more ascii values"},
+       {nh + "encoding: ascii\n\n1 2 3 4 5 6 7 300", "ascii value 300 out of range"},
+       {nh + "encoding: ascii\n\n1 2 3 x 5 6 7 8", "malformed ascii data at value 3"},
+       {nh + "encoding: ascii\n\n1 2", "need at least 15 B, more than the 3 B the file holds"},
+       {nh + "encoding: gzip\n\nnot gzip at all", "gzip"},
+       {nh + "type 2\nencoding: raw\n\n12345678", "malformed header line 'type 2'"}});
+  fuzz(
+      "vol", "vol", [](const std::string& p) { read_volume(p); }, vol_head + "12345678", 5);
+  fuzz(
+      "nrrd", "nrrd", [](const std::string& p) { read_volume(p); }, nh + "encoding: raw\n\n12345678", 6);
 }
 
 TEST_CASE("text readers (normals, scalars, Matrix Market, config) reject bad files") {
@@ -239,8 +255,9 @@ TEST_CASE("text readers (normals, scalars, Matrix Market, config) reject bad fil
              {"1 0 0\n0 1 0 0\n", "line 2: expected 3 numbers, got 4"},
              {"1 0 x\n", "line 1: malformed or non-finite number 'x'"},
              {"1 0 inf\n", "non-finite number 'inf'"}});
-  check_bad("scalars", "txt", [](const std::string& p) { read_scalars(p); },
-            {{"", "no data"}, {"1\n2 3\n", "line 2: expected 1 numbers, got 2"}, {"1e999\n", "malformed or non-finite"}});
+  check_bad(
+      "scalars", "txt", [](const std::string& p) { read_scalars(p); },
+      {{"", "no data"}, {"1\n2 3\n", "line 2: expected 1 numbers, got 2"}, {"1e999\n", "malformed or non-finite"}});
   check_bad("mm", "mtx", [](const std::string& p) { read_matrix_market(p); },
             {{"", "missing %%MatrixMarket header"},
              {"hello\n", "missing %%MatrixMarket header"},
@@ -252,9 +269,12 @@ TEST_CASE("text readers (normals, scalars, Matrix Market, config) reject bad fil
              {"%%MatrixMarket matrix coordinate real general\n-2 2 1\n", "malformed size line"},
              {"%%MatrixMarket matrix coordinate real general\n3000000000 3000000000 1\n1 1 1\n", "absurd size line"},
              {"%%MatrixMarket matrix coordinate real general\n2 2 5\n1 1 1\n", "absurd size line"},
-             {"%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n", "line 4, entry 2: truncated: end of file after 1 of 2 declared entries"},
-             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0abc\n", "line 3, entry 1: malformed entry '1 1 1.0abc'"},
-             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1\n", "entry 1: index (3, 1) out of range for a 2 x 2 matrix"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n",
+              "line 4, entry 2: truncated: end of file after 1 of 2 declared entries"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0abc\n",
+              "line 3, entry 1: malformed entry '1 1 1.0abc'"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1\n",
+              "entry 1: index (3, 1) out of range for a 2 x 2 matrix"},
              {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 nan\n", "line 3, entry 1: value not finite"}});
   check_bad("config", "json", [](const std::string& p) { Config::from_json_file(p); },
             {{"", "empty file"},
@@ -264,7 +284,11 @@ TEST_CASE("text readers (normals, scalars, Matrix Market, config) reject bad fil
              {"{\"a\": [1]}", "value of key 'a' must be a string, a number or a boolean"},
              {"{\"a\": {\"b\": 1}}", "value of key 'a'"}});
   std::string mm = "%%MatrixMarket matrix coordinate real general\n3 3 3\n1 1 1.5\n2 3 -2\n3 3 4e-3\n";
-  fuzz("matrix-market", "mtx", [](const std::string& p) { read_matrix_market(p); }, mm, 7);
-  fuzz("normals", "txt", [](const std::string& p) { read_normals(p); }, "1 0 0\n0 1 0\n0 0.6 0.8\n", 8);
-  fuzz("config", "json", [](const std::string& p) { Config::from_json_file(p); }, "{\"solver\": \"cholmod\", \"t\": 0.5, \"x\": true}", 9);
+  fuzz(
+      "matrix-market", "mtx", [](const std::string& p) { read_matrix_market(p); }, mm, 7);
+  fuzz(
+      "normals", "txt", [](const std::string& p) { read_normals(p); }, "1 0 0\n0 1 0\n0 0.6 0.8\n", 8);
+  fuzz(
+      "config", "json", [](const std::string& p) { Config::from_json_file(p); },
+      "{\"solver\": \"cholmod\", \"t\": 0.5, \"x\": true}", 9);
 }
