@@ -181,9 +181,9 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
     double v = 1.0;
     std::string extra;
     ++lineno;
-    const std::string entry = "line " + std::to_string(lineno) + ", entry " + std::to_string(k + 1);
+    auto entry = [&] { return "line " + std::to_string(lineno) + ", entry " + std::to_string(k + 1); };
     if (!std::getline(in, line))
-      fail(entry + ": truncated: end of file after " + readable_count(std::uint64_t(k)) + " of " +
+      fail(entry() + ": truncated: end of file after " + readable_count(std::uint64_t(k)) + " of " +
            readable_count(std::uint64_t(nnz)) + " declared entries");
     if (!line.empty() && line.back() == '\r') line.pop_back();
     bool ok = true;
@@ -195,14 +195,14 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
       ok = parse_numbers(line, i, j, v);
     }
     if (!ok)
-      fail(entry + ": malformed entry '" + line.substr(0, 80) + "' (expected '" +
+      fail(entry() + ": malformed entry '" + line.substr(0, 80) + "' (expected '" +
            (pattern ? "row column" : "row column value") + "')");
     if (i < 1 || i > r || j < 1 || j > c)
-      fail(entry + ": index (" + std::to_string(i) + ", " + std::to_string(j) + ") out of range for a " +
+      fail(entry() + ": index (" + std::to_string(i) + ", " + std::to_string(j) + ") out of range for a " +
            readable_count(std::uint64_t(r)) + " x " + readable_count(std::uint64_t(c)) + " matrix");
-    if (!std::isfinite(v)) fail(entry + ": value not finite");
+    if (!std::isfinite(v)) fail(entry() + ": value not finite");
     if (symmetric && j > i)
-      fail(entry + ": (" + std::to_string(i) + ", " + std::to_string(j) +
+      fail(entry() + ": (" + std::to_string(i) + ", " + std::to_string(j) +
            ") is above the diagonal; a symmetric file stores the lower triangle");
     t.emplace_back(int(i - 1), int(j - 1), v);
     if (symmetric && i != j) t.emplace_back(int(j - 1), int(i - 1), v);
