@@ -274,8 +274,8 @@ class Parser {
   [[noreturn]] void fail(const std::string& what) const {
     std::ostringstream os;
     // Long inputs are shown by their beginning: the position locates the problem.
-    os << "polynomial \"" << (s_.size() <= 80 ? s_ : std::string(s_.substr(0, 80)) + "...") << "\": " << what
-       << " at position " << pos_ + 1;
+    os << "polynomial \"" << (s_.size() <= 80 ? std::string(s_) : std::string(s_.substr(0, 80)) + "...")
+       << "\": " << what << " at position " << pos_ + 1;
     throw InputError(os.str());
   }
   void skip() {
