@@ -159,7 +159,9 @@ MeshInfo compute_mesh_info(const SurfelMesh& mesh, const EdgeTopology& t) {
   for (int f = 0; f < F; ++f)
     for (int i = 0; i < 4; ++i) ++start[std::size_t(mesh.faces(f, i)) + 1];
   for (int v = 0; v < V; ++v) start[std::size_t(v) + 1] += start[std::size_t(v)];
-  std::vector<int> incident(std::size_t(start[std::size_t(V)])), fill(start.begin(), start.end() - 1);
+  // static_cast, not std::size_t(...): clang parses "incident(std::size_t(start[n]))" as a function
+  // declaration (most vexing parse); braces would pick the initializer-list constructor.
+  std::vector<int> incident(static_cast<std::size_t>(start[std::size_t(V)])), fill(start.begin(), start.end() - 1);
   for (int f = 0; f < F; ++f)
     for (int i = 0; i < 4; ++i) incident[std::size_t(fill[std::size_t(mesh.faces(f, i))]++)] = 4 * f + i;
   for (int v = 0; v < V; ++v) {

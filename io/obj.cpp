@@ -49,7 +49,7 @@ PolygonMesh read_obj(const std::string& path) {
         const char* b = tok.data();
         auto [ptr, ec] = std::from_chars(b, b + tok.size(), c);
         if (ec != std::errc() || ptr != b + tok.size() || !std::isfinite(c))
-          fail(path, lineno, "malformed or non-finite coordinate '" + tok + "'");
+          fail(path, lineno, "malformed or non-finite coordinate '" + tok.substr(0, 40) + "'");
       }
       xyz.insert(xyz.end(), p, p + 3);
       if (xyz.size() / 3 > kMaxElements) fail(path, lineno, "too many vertices");
@@ -61,7 +61,7 @@ PolygonMesh read_obj(const std::string& path) {
         long id = 0;
         auto [ptr, ec] = std::from_chars(first.data(), first.data() + first.size(), id);
         if (ec != std::errc() || ptr != first.data() + first.size() || id == 0)
-          fail(path, lineno, "malformed face index '" + tok + "'");
+          fail(path, lineno, "malformed face index '" + tok.substr(0, 40) + "'");
         ids.push_back(id);
       }
       if (ids.size() < 3) fail(path, lineno, "face with fewer than 3 corners");

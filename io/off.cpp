@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/checked.hpp>
 #include <cstdint>
 #include <fstream>
 #include <sstream>
@@ -77,13 +78,26 @@ PolygonMesh read_off(const std::string& path) {
   long long nv = 0, nf = 0;
   if (counts.size() < 2 || !parse(counts[0], nv) || !parse(counts[1], nf) || nv < 0 || nf < 0)
     fail(path, tk.line(), "malformed counts line (expected 'nvertices nfaces nedges')");
-  if (nv > kMaxCount || nf > kMaxCount) fail(path, tk.line(), "absurd counts " + counts[0] + " " + counts[1]);
+  if (nv > kMaxCount || nf > kMaxCount)
+    fail(path, tk.line(),
+         "absurd counts " + counts[0].substr(0, 40) + " " + counts[1].substr(0, 40) + " (limit " +
+             io_detail::readable_count(kMaxCount) + ")");
   if (nv == 0) fail(path, tk.line(), "no vertex");
   if (nf == 0) fail(path, tk.line(), "no face");
+  // Every vertex needs a line "x y z" (at least 6 bytes), every face "3 a b c" (8 bytes): counts
+  // the file cannot hold are rejected before anything is reserved.
+  const std::uint64_t file_bytes = io_detail::file_size(path);
+  const double needed = 6.0 * double(nv) + 8.0 * double(nf);
+  if (needed > double(file_bytes))
+    fail(path, tk.line(),
+         "counts announce " + io_detail::readable_count(std::uint64_t(nv)) + " vertices and " +
+             io_detail::readable_count(std::uint64_t(nf)) + " faces, which need at least " +
+             io_detail::readable_bytes(needed) + ", more than the " + io_detail::readable_bytes(double(file_bytes)) +
+             " the file holds (truncated file?)");
 
   // Rows are added as they are read: a wrong count cannot make us allocate more than the file holds.
   std::vector<double> xyz;
-  xyz.reserve(std::size_t(std::min<long long>(nv, 1 << 20)) * 3);
+  xyz.reserve(std::size_t(nv) * 3);
   for (long long v = 0; v < nv; ++v) {
     if (!tk.next_line(t))
       fail(path, tk.line(), "truncated: expected " + std::to_string(nv) + " vertices, got " + std::to_string(v));
@@ -100,7 +114,7 @@ PolygonMesh read_off(const std::string& path) {
   PolygonMesh mesh;
   mesh.positions =
       Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), Eigen::Index(nv), 3);
-  mesh.faces.reserve(std::size_t(std::min<long long>(nf, 1 << 20)));
+  mesh.faces.reserve(std::size_t(nf));
   for (long long f = 0; f < nf; ++f) {
     if (!tk.next_line(t))
       fail(path, tk.line(), "truncated: expected " + std::to_string(nf) + " faces, got " + std::to_string(f));

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/checked.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -30,6 +31,8 @@ namespace {
 
 // More elements than this is certainly a corrupt header (ids are stored as int).
 constexpr std::uint64_t kMaxCount = std::uint64_t{1} << 31;
+// Real headers have a few dozen lines; the bound keeps a header of junk lines cheap to reject.
+constexpr std::size_t kMaxHeaderLines = 10000;
 
 enum class Kind { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
 
@@ -75,6 +78,10 @@ class BodyReader {
     return binary_ ? read_binary(t, context) : read_ascii(t, context);
   }
   std::size_t remaining() const { return data_.size() - pos_; }
+  /// Most values of type t that the rest of the body can hold (ASCII: a digit and a separator each).
+  std::size_t max_values(const TypeInfo& t) const {
+    return binary_ ? remaining() / std::size_t(t.bytes) : (remaining() + 1) / 2;
+  }
   bool binary() const { return binary_; }
   std::string where() const {
     if (binary_) return "byte " + std::to_string(pos_);
@@ -105,9 +112,9 @@ class BodyReader {
     if (ec != std::errc() || ptr != end)
       fail(path_, "line " + std::to_string(line_) + ": malformed number '" +
                       std::string(b, std::min<std::size_t>(end - b, 40)) + "' in " + context);
-    if (is_integer(t.kind) && v != std::floor(v))
-      fail(path_, "line " + std::to_string(line_) + ": non-integer value '" + std::string(b, end) +
-                      "' for an integer property in " + context);
+    if (is_integer(t.kind) && !(std::isfinite(v) && v == std::floor(v)))
+      fail(path_, "line " + std::to_string(line_) + ": non-integer value '" +
+                      std::string(b, std::min<std::size_t>(end - b, 40)) + "' for an integer property in " + context);
     pos_ = e;
     return v;
   }
@@ -206,7 +213,8 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
   bool binary = false, have_format = false, ended = false;
   std::vector<Element> elements;
   while (next_line(line)) {
-    if (lineno > 100000) fail(path, "header too long (missing end_header?)");
+    if (lineno > kMaxHeaderLines)
+      fail(path, "header longer than " + std::to_string(kMaxHeaderLines) + " lines (missing end_header?)");
     std::istringstream ls(line);
     std::string kw;
     if (!(ls >> kw)) continue;
@@ -236,9 +244,10 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
       std::uint64_t c = 0;
       auto [p, ec] = std::from_chars(count.data(), count.data() + count.size(), c);
       if (ec == std::errc::result_out_of_range || (ec == std::errc() && c > kMaxCount))
-        fail(path, at + "absurd element count " + count + " for '" + e.name + "'");
+        fail(path, at + "absurd element count " + count.substr(0, 40) + " for '" + e.name + "' (limit " +
+                       io_detail::readable_count(kMaxCount) + ")");
       if (ec != std::errc() || p != count.data() + count.size())
-        fail(path, at + "malformed element count '" + count + "'");
+        fail(path, at + "malformed element count '" + count.substr(0, 40) + "'");
       e.count = c;
       elements.push_back(std::move(e));
     } else if (kw == "property") {
@@ -294,19 +303,21 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
   if (face_list < 0) fail(path, "face element has no list property 'vertex_indices' or 'vertex_index'");
 
   BodyReader body(path, data, pos, binary, lineno);
-  // Reject absurd counts before allocating: every element needs at least this many bytes (binary)
-  // or characters (ASCII: one digit and one separator per value).
+  // Reject absurd counts before allocating or looping: every entry of an element needs at least
+  // the bytes of its properties (binary; a list its count) or one digit and one separator per
+  // property (ASCII). Elements without properties occupy no bytes and are skipped without a loop.
   {
     double needed = 0;
     for (const auto& e : elements) {
       double per = 0;
       for (const auto& pr : e.properties) per += binary ? (pr.count_type ? pr.count_type->bytes : pr.type->bytes) : 2;
       needed += per * double(e.count);
+      if (needed - (binary ? 0 : 1) > double(body.remaining()))
+        fail(path, "truncated data: element '" + e.name + "' announces " + io_detail::readable_count(e.count) +
+                       " entries; with the elements before it they need at least " +
+                       io_detail::readable_bytes(needed - (binary ? 0 : 1)) + ", more than the " +
+                       io_detail::readable_bytes(double(body.remaining())) + " the file holds after the header");
     }
-    if (!binary) needed -= 1;  // N ASCII values need at least 2N - 1 characters
-    if (needed > double(body.remaining()))
-      fail(path, "truncated data: the header announces " + std::to_string(vertex_el->count) + " vertices and " +
-                     std::to_string(face_el->count) + " faces, more than the file holds");
   }
 
   PolygonMesh mesh;
@@ -320,6 +331,7 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
   for (const auto& e : elements) {
     const bool is_v = &e == vertex_el, is_f = &e == face_el;
     const std::string ctx_base = "element '" + e.name + "' #";
+    if (e.properties.empty()) continue;  // no bytes to read: no loop over an announced 2^31 entries
     for (std::uint64_t i = 0; i < e.count; ++i) {
       for (std::size_t p = 0; p < e.properties.size(); ++p) {
         const Property& pr = e.properties[p];
@@ -335,20 +347,27 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
           continue;
         }
         const double cnt = body.read(*pr.count_type, e.name.c_str());
-        if (cnt < 0 || cnt > double(body.remaining()))
-          fail(path, ctx_base + std::to_string(i) + ": invalid list length " + std::to_string((long long)cnt) + " (" +
-                         body.where() + ")");
-        const std::size_t n = std::size_t(cnt);
+        const std::size_t most = body.max_values(*pr.type);
+        const auto len = io_detail::checked_integer(cnt, 0, std::int64_t(kMaxCount));
+        const std::string list_at =
+            ctx_base + std::to_string(i) + ", property '" + pr.name + "' (" + body.where() + "): ";
+        if (!len) fail(path, list_at + "invalid list length " + io_detail::readable_number(cnt));
+        if (std::uint64_t(*len) > most)
+          fail(path, list_at + "truncated data: list length " + io_detail::readable_count(std::uint64_t(*len)) +
+                         ", the rest of the file holds at most " + io_detail::readable_count(most) + " values");
+        const std::size_t n = std::size_t(*len);
         if (is_f && int(p) == face_list) {
           if (n < 3)
             fail(path, "face " + std::to_string(i) + " has " + std::to_string(n) + " corners (at least 3 needed)");
           std::vector<int> ids(n);
           for (std::size_t k = 0; k < n; ++k) {
             const double id = body.read(*pr.type, "face");
-            if (!(id >= 0 && id < double(nv)) || id != std::floor(id))
-              fail(path, "face " + std::to_string(i) + ": vertex index " + std::to_string((long long)id) +
-                             " out of range (" + std::to_string(nv) + " vertices)");
-            ids[k] = int(id);
+            const auto checked = io_detail::checked_integer(id, 0, std::int64_t(nv) - 1);
+            if (!checked)
+              fail(path, "face " + std::to_string(i) + ", property '" + pr.name + "': vertex index " +
+                             io_detail::readable_number(id) + " out of range (" +
+                             io_detail::readable_count(std::uint64_t(nv)) + " vertices)");
+            ids[k] = int(*checked);
           }
           mesh.faces.push_back(std::move(ids));
         } else {

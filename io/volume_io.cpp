@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cctype>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/checked.hpp>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #ifdef CORRLAP_HAVE_ZLIB
@@ -17,8 +19,12 @@ namespace corrlap {
 
 namespace {
 
-// 2^34 voxels (16 GiB) is beyond any volume this tool is meant for: reject before allocating.
-constexpr double kMaxVoxels = 17179869184.0;
+// Memory budget for one volume: 2^34 voxels (16 GiB) is beyond any volume this tool is meant for.
+// Sizes are checked against it, and against what the file can hold, before anything is allocated.
+constexpr std::uint64_t kMaxVoxels = std::uint64_t{1} << 34;
+// Deflate cannot expand one compressed byte into more than 1032 bytes (a 258-byte match costs at
+// least two bits); the constant covers the gzip header and a final partial block.
+constexpr std::uint64_t kMaxDeflateRatio = 1032;
 
 std::string extension_of(const std::string& path) {
   const auto slash = path.find_last_of('/');
@@ -33,37 +39,49 @@ std::string extension_of(const std::string& path) {
   throw IoError("volume file '" + path + "': " + what);
 }
 
-void check_size(const std::string& path, const Eigen::Vector3i& s) {
-  if ((s.array() <= 0).any()) fail(path, "dimensions must be positive");
-  if (double(s.x()) * s.y() * s.z() > kMaxVoxels) fail(path, "dimensions are absurdly large");
+// Voxel count in 64 bits, or nullopt when it does not even fit there.
+std::optional<std::uint64_t> voxel_count(const Eigen::Vector3i& s) {
+  if ((s.array() <= 0).any()) return std::nullopt;
+  const auto xy = io_detail::checked_mul(std::uint64_t(s.x()), std::uint64_t(s.y()));
+  return xy ? io_detail::checked_mul(*xy, std::uint64_t(s.z())) : std::nullopt;
 }
 
-// Bytes left in the stream (without consuming them).
-std::size_t bytes_left(std::istream& in) {
-  const auto here = in.tellg();
-  if (here < 0) return 0;
-  in.seekg(0, std::ios::end);
-  const auto end = in.tellg();
-  in.seekg(here);
-  return end > here ? std::size_t(end - here) : 0;
+// "sizes 65536 x 65537 x 1 = 4 294 967 296 voxels"
+std::string describe(const Eigen::Vector3i& s) {
+  std::ostringstream os;
+  os << "sizes " << s.x() << " x " << s.y() << " x " << s.z();
+  if (const auto n = voxel_count(s)) os << " = " << io_detail::readable_count(*n) << " voxels";
+  return os.str();
+}
+
+// Positive sizes within the memory budget; returns the voxel count (= bytes of uint8 data).
+std::size_t checked_voxels(const std::string& path, const Eigen::Vector3i& s) {
+  if ((s.array() <= 0).any()) fail(path, describe(s) + ": dimensions must be positive");
+  const auto n = voxel_count(s);
+  if (!n || *n > kMaxVoxels)
+    fail(path, describe(s) + (n ? " need " + io_detail::readable_bytes(double(*n)) : std::string(" overflow 64 bits")) +
+                   ", more than the memory budget of " + io_detail::readable_bytes(double(kMaxVoxels)) +
+                   " (dimensions are absurdly large)");
+  return std::size_t(*n);
+}
+
+// The announced sizes need `needed` bytes of the file, which holds `available` after the header.
+void check_holds(const std::string& path, const Eigen::Vector3i& s, std::uint64_t needed, std::uint64_t available,
+                 const std::string& what) {
+  if (needed <= available) return;
+  fail(path, "truncated data: " + describe(s) + " need " + what + io_detail::readable_bytes(double(needed)) +
+                 ", more than the " + io_detail::readable_bytes(double(available)) + " the file holds");
 }
 
 void read_payload(std::istream& in, const std::string& path, Volume& v) {
-  const std::size_t n = std::size_t(v.size.x()) * std::size_t(v.size.y()) * std::size_t(v.size.z());
+  const std::size_t n = checked_voxels(path, v.size);
   // Checked before allocating, so that a corrupt header cannot make us allocate gigabytes.
-  if (const std::size_t left = bytes_left(in); left < n) {
-    std::ostringstream os;
-    os << "truncated data: dimensions " << v.size.x() << "x" << v.size.y() << "x" << v.size.z() << " need " << n
-       << " bytes, the file holds " << left;
-    fail(path, os.str());
-  }
+  check_holds(path, v.size, n, io_detail::bytes_left(in), "");
   v.values.resize(n);
   in.read(reinterpret_cast<char*>(v.values.data()), std::streamsize(n));
-  if (std::size_t(in.gcount()) != n) {
-    std::ostringstream os;
-    os << "truncated data: expected " << n << " bytes, got " << in.gcount();
-    fail(path, os.str());
-  }
+  if (std::size_t(in.gcount()) != n)
+    fail(path, "truncated data: expected " + io_detail::readable_count(n) + " bytes, got " +
+                   io_detail::readable_count(std::uint64_t(in.gcount())));
 }
 
 // DGtal .vol: "Key: value" lines ended by a line "."; then X*Y*Z bytes.
@@ -99,7 +117,7 @@ Volume read_vol(const std::string& path) {
       fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
     s[a] = int(d);
   }
-  check_size(path, s);
+  checked_voxels(path, s);
   Volume v;
   v.size = s;
   read_payload(in, path, v);
@@ -118,7 +136,7 @@ void write_vol(const std::string& path, const Volume& v) {
 
 Volume read_raw(const std::string& path, const VolumeReadOptions& options) {
   if (!options.raw_dimensions) fail(path, "raw volumes need their dimensions (--raw-dimensions NX NY NZ)");
-  check_size(path, *options.raw_dimensions);
+  checked_voxels(path, *options.raw_dimensions);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
   Volume v;
@@ -152,44 +170,50 @@ std::string lower(std::string s) {
 }
 
 #ifdef CORRLAP_HAVE_ZLIB
-void gunzip_payload(const std::string& path, const std::string& compressed, Volume& v) {
-  const std::size_t n = v.values.size();
-  z_stream zs{};
+// Inflates exactly n bytes into v.values. The output buffer grows with what inflate really
+// produces (chunks of at most 1 MiB), so that the announced size alone never allocates memory;
+// producing more than n bytes is an error as soon as it happens.
+void gunzip_payload(const std::string& path, const std::string& compressed, std::size_t n, Volume& v) {
+  // RAII so that every fail() below releases zlib's state.
+  struct Stream {
+    z_stream zs{};
+    bool live = false;
+    ~Stream() {
+      if (live) inflateEnd(&zs);
+    }
+  } s;
   // 15 + 32: accept gzip and zlib headers (NRRD "gzip" files are gzip streams).
-  if (inflateInit2(&zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
-  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data()));
-  zs.avail_in = uInt(std::min<std::size_t>(compressed.size(), std::numeric_limits<uInt>::max()));
-  std::size_t produced = 0;
+  if (inflateInit2(&s.zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
+  s.live = true;
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  constexpr std::size_t kMaxIn = std::numeric_limits<uInt>::max();
+  std::size_t fed = 0, produced = 0;
+  v.values.clear();
   int rc = Z_OK;
-  unsigned char overflow[1];
-  while (rc == Z_OK) {
-    if (produced < n) {
-      zs.next_out = v.values.data() + produced;
-      zs.avail_out = uInt(std::min<std::size_t>(n - produced, std::numeric_limits<uInt>::max()));
-    } else {
-      zs.next_out = overflow;  // probe: more data than the sizes announce?
-      zs.avail_out = 1;
+  while (rc != Z_STREAM_END) {
+    if (s.zs.avail_in == 0 && fed < compressed.size()) {
+      const std::size_t k = std::min(compressed.size() - fed, kMaxIn);
+      s.zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data() + fed));
+      s.zs.avail_in = uInt(k);
+      fed += k;
     }
-    const std::size_t before = zs.avail_out;
-    rc = inflate(&zs, Z_NO_FLUSH);
-    const std::size_t got = before - zs.avail_out;
-    if (produced >= n && got > 0) {
-      inflateEnd(&zs);
-      fail(path, "gzip data holds more bytes than the sizes announce");
-    }
-    produced += got;
-    if (rc == Z_BUF_ERROR && zs.avail_in == 0) break;
-    if (rc == Z_BUF_ERROR) rc = Z_OK;
+    // One byte of room beyond n detects a stream longer than the sizes announce.
+    const std::size_t room = std::min(kChunk, n + 1 - produced);
+    v.values.resize(produced + room);
+    s.zs.next_out = v.values.data() + produced;
+    s.zs.avail_out = uInt(room);
+    rc = inflate(&s.zs, Z_NO_FLUSH);
+    produced += room - s.zs.avail_out;
+    v.values.resize(produced);
+    if (produced > n)
+      fail(path, "gzip data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
+    if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
+    if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
+      fail(path, std::string("corrupt gzip data") + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
   }
-  const bool ok = rc == Z_STREAM_END;
-  const std::string msg = zs.msg ? zs.msg : "";
-  inflateEnd(&zs);
-  if (!ok && rc != Z_BUF_ERROR) fail(path, "corrupt gzip data" + (msg.empty() ? std::string() : ": " + msg));
-  if (produced != n) {
-    std::ostringstream os;
-    os << "truncated gzip data: expected " << n << " bytes, got " << produced;
-    fail(path, os.str());
-  }
+  if (produced != n)
+    fail(path, "truncated gzip data: expected " + io_detail::readable_count(n) + " bytes, got " +
+                   io_detail::readable_count(produced));
 }
 #endif
 
@@ -240,7 +264,7 @@ Volume read_nrrd(const std::string& path) {
       s[a] = int(d[a]);
     }
   }
-  check_size(path, s);
+  const std::size_t n = checked_voxels(path, s);
   if (auto it = fields.find("endian");
       it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
     fail(path, "invalid endian '" + it->second + "' (little or big)");  // irrelevant for 1-byte types
@@ -252,9 +276,8 @@ Volume read_nrrd(const std::string& path) {
     read_payload(in, path, v);
     if (in.peek() != std::char_traits<char>::eof()) fail(path, "file is larger than the announced sizes");
   } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
-    const std::size_t n = std::size_t(s.prod());
-    if (bytes_left(in) < 2 * n - 1)
-      fail(path, "truncated ascii data: fewer characters than " + std::to_string(n) + " values need");
+    // n values need at least n digits and n - 1 separators.
+    check_holds(path, s, 2 * std::uint64_t(n) - 1, io_detail::bytes_left(in), "at least ");
     v.values.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       long long x = 0;
@@ -267,10 +290,16 @@ Volume read_nrrd(const std::string& path) {
     if (in >> extra) fail(path, "more ascii values than the announced sizes");
   } else if (encoding == "gzip" || encoding == "gz") {
 #ifdef CORRLAP_HAVE_ZLIB
+    const std::uint64_t compressed = io_detail::bytes_left(in);
+    const auto most = io_detail::checked_mul(compressed, kMaxDeflateRatio);
+    if (most && n > *most + 1024)
+      fail(path, describe(s) + " need " + io_detail::readable_bytes(double(n)) + ", more than the " +
+                     io_detail::readable_bytes(double(*most + 1024)) + " that " +
+                     io_detail::readable_bytes(double(compressed)) +
+                     " of gzip data can hold (deflate expands at most " + std::to_string(kMaxDeflateRatio) + " times)");
     std::ostringstream ss;
     ss << in.rdbuf();
-    v.values.resize(std::size_t(s.prod()));
-    gunzip_payload(path, ss.str(), v);
+    gunzip_payload(path, ss.str(), n, v);
 #else
     fail(path, "encoding 'gzip' needs corrlap built with zlib (zlib1g-dev); re-save with encoding raw");
 #endif
@@ -312,7 +341,10 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
 
 void write_volume(const std::string& path, const Volume& volume) {
   const std::string ext = extension_of(path);
-  if (volume.values.size() != std::size_t(volume.size.prod())) fail(path, "volume data does not match its size");
+  const auto n = voxel_count(volume.size);
+  if (!n || volume.values.size() != *n)
+    fail(path, "volume data (" + io_detail::readable_count(volume.values.size()) + " values) does not match its " +
+                   describe(volume.size));
   if (ext == "vol") return write_vol(path, volume);
   if (ext == "raw") return write_raw(path, volume);
   if (ext == "nrrd") return write_nrrd(path, volume);
@@ -321,6 +353,11 @@ void write_volume(const std::string& path, const Volume& volume) {
 
 VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
   const Eigen::Vector3i s = volume.size;
+  // A hand-built Volume whose values do not match its size would be read out of bounds below.
+  const auto n = voxel_count(s);
+  if (!n || volume.values.size() != *n)
+    throw InputError("volume: " + io_detail::readable_count(volume.values.size()) + " values do not match its " +
+                     describe(s));
   VoxelGrid grid(Eigen::Vector3i::Constant(-1), s, h);
   std::size_t inside = 0;
   for (int z = 0; z < s.z(); ++z)
@@ -331,7 +368,8 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
           ++inside;
         }
   if (inside == 0)
-    throw InputError("volume: no voxel above the threshold " + std::to_string(threshold) + " (empty volume)");
+    throw InputError("volume: no voxel above the threshold " + io_detail::readable_number(threshold) +
+                     " (empty volume)");
   return grid;
 }
 
@@ -342,13 +380,14 @@ VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions
 Volume voxels_to_volume(const VoxelGrid& grid) {
   Volume v;
   v.size = grid.size();
-  v.values.assign(std::size_t(v.size.prod()), 0);
+  v.values.assign(checked_voxels("(voxel grid)", v.size), 0);
   const Eigen::Vector3i lo = grid.lower();
   for (int z = 0; z < v.size.z(); ++z)
     for (int y = 0; y < v.size.y(); ++y)
       for (int x = 0; x < v.size.x(); ++x)
         if (grid.get(x + lo.x(), y + lo.y(), z + lo.z()))
-          v.values[(std::size_t(z) * v.size.y() + y) * v.size.x() + x] = 255;
+          v.values[(std::size_t(z) * std::size_t(v.size.y()) + std::size_t(y)) * std::size_t(v.size.x()) +
+                   std::size_t(x)] = 255;
   return v;
 }
 

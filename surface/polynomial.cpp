@@ -58,6 +58,10 @@ int Polynomial::total_degree() const {
   return d;
 }
 
+std::size_t Polynomial::term_count() const {
+  return std::size_t(std::count_if(c_.begin(), c_.end(), [](double v) { return v != 0.0; }));
+}
+
 bool Polynomial::is_zero() const {
   return std::all_of(c_.begin(), c_.end(), [](double v) { return v == 0.0; });
 }
@@ -255,13 +259,23 @@ class Parser {
     Polynomial p = expr();
     skip();
     if (pos_ < s_.size()) fail(std::string("unexpected character '") + s_[pos_] + "'");
+    // Products of large finite coefficients (1e200*1e200) or a division by a tiny constant.
+    for (int i = 0; i <= p.degree(0); ++i)
+      for (int j = 0; j <= p.degree(1); ++j)
+        for (int k = 0; k <= p.degree(2); ++k)
+          if (!std::isfinite(p.coefficient(i, j, k))) {
+            pos_ = 0;
+            fail("non-finite coefficient after expansion (overflow)");
+          }
     return p;
   }
 
  private:
   [[noreturn]] void fail(const std::string& what) const {
     std::ostringstream os;
-    os << "polynomial \"" << s_ << "\": " << what << " at position " << pos_ + 1;
+    // Long inputs are shown by their beginning: the position locates the problem.
+    os << "polynomial \"" << (s_.size() <= 80 ? std::string(s_) : std::string(s_.substr(0, 80)) + "...")
+       << "\": " << what << " at position " << pos_ + 1;
     throw InputError(os.str());
   }
   void skip() {
@@ -275,13 +289,44 @@ class Parser {
     }
     return false;
   }
+  // Charges `work` coefficient operations to the budget of the whole parse, before doing them.
+  void charge(double work, std::size_t at) {
+    work_ += work;
+    if (work_ > Polynomial::kMaxParseWork) {
+      pos_ = at;
+      std::ostringstream os;
+      os << "expansion too large (more than " << Polynomial::kMaxParseWork << " coefficient operations)";
+      fail(os.str());
+    }
+  }
+  static double dense_size(const int d[3]) { return double(d[0] + 1) * double(d[1] + 1) * double(d[2] + 1); }
+  // p * q with the degree and work limits checked before expanding (operator* costs terms(p) x
+  // dense(q) multiply-adds plus the dense result).
+  Polynomial multiply(const Polynomial& p, const Polynomial& q, std::size_t at) {
+    const int total = p.total_degree() + q.total_degree();
+    if (total > Polynomial::kMaxParseDegree) {
+      pos_ = at;
+      fail("total degree " + std::to_string(total) + " exceeds the limit " +
+           std::to_string(Polynomial::kMaxParseDegree));
+    }
+    const int d[3] = {p.degree(0) + q.degree(0), p.degree(1) + q.degree(1), p.degree(2) + q.degree(2)};
+    charge(double(p.term_count()) * double(q.dense_size()) + dense_size(d), at);
+    return p * q;
+  }
+  Polynomial add(const Polynomial& p, const Polynomial& q, bool subtract, std::size_t at) {
+    const int d[3] = {std::max(p.degree(0), q.degree(0)), std::max(p.degree(1), q.degree(1)),
+                      std::max(p.degree(2), q.degree(2))};
+    charge(2 * dense_size(d), at);
+    return subtract ? p - q : p + q;
+  }
   Polynomial expr() {
     Polynomial p = term();
     for (;;) {
+      const std::size_t at = pos_;
       if (accept('+'))
-        p = p + term();
+        p = add(p, term(), false, at);
       else if (accept('-'))
-        p = p - term();
+        p = add(p, term(), true, at);
       else
         return p;
     }
@@ -289,8 +334,9 @@ class Parser {
   Polynomial term() {
     Polynomial p = unary();
     for (;;) {
+      const std::size_t op = pos_;
       if (accept('*')) {
-        p = p * unary();
+        p = multiply(p, unary(), op);
       } else if (accept('/')) {
         const std::size_t at = pos_;
         Polynomial q = unary();
@@ -303,27 +349,54 @@ class Parser {
           pos_ = at;
           fail("division by zero");
         }
-        p = p * Polynomial(1.0 / c);
+        p = multiply(p, Polynomial(1.0 / c), op);
       } else {
         return p;
       }
     }
   }
+  // Every level of nesting, "(" or a unary sign, passes here: the depth bound keeps the recursion
+  // far from the stack limit (30 000 parentheses used to overflow it).
   Polynomial unary() {
-    if (accept('-')) return -unary();
-    if (accept('+')) return unary();
-    return power();
+    if (++depth_ > Polynomial::kMaxParseDepth)
+      fail("nesting deeper than " + std::to_string(Polynomial::kMaxParseDepth) + " levels (parentheses and signs)");
+    Polynomial p;
+    if (accept('-'))
+      p = -unary();
+    else if (accept('+'))
+      p = unary();
+    else
+      p = power();
+    --depth_;
+    return p;
   }
   Polynomial power() {
     Polynomial base = primary();
+    const std::size_t op = pos_;
     if (accept('^')) {
       skip();
       const std::size_t start = pos_;
       while (pos_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[pos_]))) ++pos_;
       if (start == pos_) fail("expected a non-negative integer exponent after '^'");
-      const long e = std::stol(std::string(s_.substr(start, pos_ - start)));
-      if (e > 64) fail("exponent too large (max 64)");
-      return base.pow(int(e));
+      // Digits are accumulated with a cap (no std::stol, whose out_of_range would escape).
+      const std::string_view digits = s_.substr(start, pos_ - start);
+      long e = 0;
+      for (char ch : digits) e = std::min<long>(10 * e + (ch - '0'), 1000000);
+      if (e > Polynomial::kMaxParseDegree) {
+        pos_ = start;
+        fail("exponent " + std::string(digits.substr(0, 20)) + (digits.size() > 20 ? "..." : "") +
+             " exceeds the limit " + std::to_string(Polynomial::kMaxParseDegree));
+      }
+      const long total = e * base.total_degree();
+      if (total > Polynomial::kMaxParseDegree) {
+        pos_ = op;
+        fail("total degree " + std::to_string(total) + " of the power exceeds the limit " +
+             std::to_string(Polynomial::kMaxParseDegree));
+      }
+      // Same arithmetic as Polynomial::pow (r = r * base, e times), with the work charged per step.
+      Polynomial r(1.0);
+      for (long i = 0; i < e; ++i) r = multiply(r, base, op);
+      return r;
     }
     return base;
   }
@@ -356,7 +429,11 @@ class Parser {
       const double v = std::strtod(num.c_str(), &end);
       if (end != num.c_str() + num.size()) {
         pos_ = start;
-        fail("malformed number '" + num + "'");
+        fail("malformed number '" + num.substr(0, 40) + "'");
+      }
+      if (!std::isfinite(v)) {  // strtod turns 1e999 into inf
+        pos_ = start;
+        fail("non-finite coefficient '" + num.substr(0, 40) + "' (out of the range of double)");
       }
       return Polynomial(v);
     }
@@ -365,6 +442,8 @@ class Parser {
 
   std::string_view s_;
   std::size_t pos_ = 0;
+  int depth_ = 0;
+  double work_ = 0;
 };
 
 }  // namespace

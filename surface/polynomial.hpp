@@ -1,6 +1,7 @@
 #pragma once
 // Trivariate polynomials P(x, y, z) with a parser for strings such as "x^2+y^2+z^2-1" (docs/math.md §1.1).
 #include <Eigen/Core>
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,9 +19,16 @@ class Polynomial {
   /// The monomial x (axis 0), y (axis 1) or z (axis 2).
   static Polynomial variable(int axis);
 
+  /// Limits of parse(): far above what the named shapes need (total degree 6, depth 3), low
+  /// enough that a short hostile string cannot expand for seconds or overflow the stack.
+  static constexpr int kMaxParseDegree = 64;    ///< total degree of every intermediate result
+  static constexpr int kMaxParseDepth = 200;    ///< nested parentheses and unary signs
+  static constexpr double kMaxParseWork = 2e7;  ///< coefficient operations of the whole expansion
+
   /// Parses + - * / ^ (non-negative integer exponent), numbers (1, 2.5, 1e-3), x y z (also X Y Z)
   /// and parentheses. Division is allowed by constants only. Throws InputError naming the
-  /// position and the problem.
+  /// position and the problem: syntax, a non-finite coefficient, or a limit above exceeded
+  /// (checked before each product is expanded).
   static Polynomial parse(std::string_view text);
 
   double operator()(double x, double y, double z) const;
@@ -35,6 +43,10 @@ class Polynomial {
 
   int degree(int axis) const { return deg_[axis]; }
   int total_degree() const;
+  /// Number of nonzero coefficients.
+  std::size_t term_count() const;
+  /// Number of stored coefficients, (deg_x + 1)(deg_y + 1)(deg_z + 1).
+  std::size_t dense_size() const { return c_.size(); }
   bool is_zero() const;
   double coefficient(int i, int j, int k) const;
   std::string to_string() const;

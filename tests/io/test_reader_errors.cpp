@@ -120,38 +120,40 @@ TEST_CASE("PLY reader rejects bad files, naming file and problem") {
   bad_id[bad_id.size() - 4] = char(7);  // last index 7 (3 vertices)
   std::string huge_count = bin;
   huge_count[bin_faceless.size()] = char(250);  // 250 corners announced, 3 present
-  check_bad("ply", "ply", [](const std::string& p) { read_ply(p); },
-            {{"", "empty file"},
-             {"plx\n", "not a PLY file"},
-             {"ply\nformat ascii 1.0\nelement vertex 3\n", "not terminated by end_header"},
-             {"ply\nelement vertex 1\nend_header\n", "no format line"},
-             {"ply\nformat binary_big_endian 1.0\nend_header\n", "unsupported format binary_big_endian"},
-             {"ply\nformat ascii 2.0\nend_header\n", "unsupported PLY version"},
-             {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "property before any element"},
-             {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n", "unknown property type 'quad'"},
-             {"ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n", "absurd element count 99999999999"},
-             {"ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "malformed element count '-1'"},
-             {"ply\nformat ascii 1.0\nwhatever\nend_header\n", "unknown header keyword 'whatever'"},
-             {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float "
-              "z\nend_header\n0 0 0\n",
-              "no 'face' element"},
-             {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nelement face 1\n"
-              "property list uchar int vertex_indices\nend_header\n0 0\n3 0 0 0\n",
-              "no scalar property 'z'"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n", "truncated data"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1\n", "truncated data"},
-             {ascii_head + "0 0 0\n1 0 zz\n0 1 0\n3 0 1 2\n", "malformed number 'zz'"},
-             {ascii_head + "0 0 0\n1 0 nan\n0 1 0\n3 0 1 2\n", "vertex 1: non-finite value of 'z'"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "face 0: vertex index 3 out of range (3 vertices)"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face 0 has 2 corners"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", "non-integer value '2.5'"},
-             {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4 4 4\n", "trailing data"},
-             {binary_ply_header(100000000, 200000000) + "abc", "more than the file holds"},
-             {bin_faceless, "truncated"},
-             {bin.substr(0, bin.size() - 2), "truncated binary data"},
-             {bad_id, "vertex index 7 out of range"},
-             {huge_count, "invalid list length 250"},
-             {bin + "xx", "trailing data"}});
+  check_bad(
+      "ply", "ply", [](const std::string& p) { read_ply(p); },
+      {{"", "empty file"},
+       {"plx\n", "not a PLY file"},
+       {"ply\nformat ascii 1.0\nelement vertex 3\n", "not terminated by end_header"},
+       {"ply\nelement vertex 1\nend_header\n", "no format line"},
+       {"ply\nformat binary_big_endian 1.0\nend_header\n", "unsupported format binary_big_endian"},
+       {"ply\nformat ascii 2.0\nend_header\n", "unsupported PLY version"},
+       {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "property before any element"},
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n", "unknown property type 'quad'"},
+       {"ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n", "absurd element count 99999999999"},
+       {"ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "malformed element count '-1'"},
+       {"ply\nformat ascii 1.0\nwhatever\nend_header\n", "unknown header keyword 'whatever'"},
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 "
+        "0 0\n",
+        "no 'face' element"},
+       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nelement face 1\n"
+        "property list uchar int vertex_indices\nend_header\n0 0\n3 0 0 0\n",
+        "no scalar property 'z'"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n", "truncated data"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1\n", "truncated data"},
+       {ascii_head + "0 0 0\n1 0 zz\n0 1 0\n3 0 1 2\n", "malformed number 'zz'"},
+       {ascii_head + "0 0 0\n1 0 nan\n0 1 0\n3 0 1 2\n", "vertex 1: non-finite value of 'z'"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
+        "face 0, property 'vertex_indices': vertex index 3 out of range (3 vertices)"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face 0 has 2 corners"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", "non-integer value '2.5'"},
+       {ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4 4 4\n", "trailing data"},
+       {binary_ply_header(100000000, 200000000) + "abc", "element 'vertex' announces 100 000 000 entries"},
+       {bin_faceless, "truncated"},
+       {bin.substr(0, bin.size() - 2), "truncated data: list length 3, the rest of the file holds at most 2 values"},
+       {bad_id, "vertex index 7 out of range"},
+       {huge_count, "truncated data: list length 250"},
+       {bin + "xx", "trailing data"}});
   // the fuzz base is a valid file
   const std::string valid = tmp_path("valid_bin.ply");
   write_text(valid, bin);
@@ -174,7 +176,8 @@ TEST_CASE("OFF reader rejects bad files, naming file and problem") {
              {"OFF\n99999999999 1 0\n", "absurd counts"},
              {"OFF\n0 1 0\n", "no vertex"},
              {"OFF\n3 0 0\n0 0 0\n", "no face"},
-             {"OFF\n3 1 0\n0 0 0\n1 0 0\n", "truncated: expected 3 vertices, got 2"},
+             {"OFF\n3 1 0\n0 0 0\n1 0 0\n", "need at least 26 B, more than the 22 B the file holds"},
+             {"OFF\n3 1 0\n0 0 0\n1 0 0\n\n\n\n\n\n", "truncated: expected 3 vertices, got 2"},
              {"OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n", "vertex 1 has fewer than 3 coordinates"},
              {"OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n", "vertex 1: malformed or non-finite coordinate 'inf'"},
              {"OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "truncated: expected 2 faces, got 1"},
@@ -201,11 +204,12 @@ TEST_CASE("volume readers reject bad files, naming file and problem") {
              {"X: 2\nY: two\nZ: 2\n.\n", "invalid dimension Y: 'two'"},
              {"X: 1000000\nY: 1000000\nZ: 1000000\n.\n", "absurdly large"},
              {"X: 2000\nY: 2000\nZ: 2000\n.\n",
-              "truncated data: dimensions 2000x2000x2000 need 8000000000 bytes, the file holds 0"},
+              "truncated data: sizes 2000 x 2000 x 2000 = 8 000 000 000 voxels need 7.5 GiB, more than the 0 B the "
+              "file holds"},
              {vol_head + "1234567", "truncated data"}});
   check_bad("raw", "raw", [&](const std::string& p) { read_volume(p, raw_opts); },
             {{"", "truncated data"},
-             {"1234567", "need 8 bytes, the file holds 7"},
+             {"1234567", "sizes 2 x 2 x 2 = 8 voxels need 8 B, more than the 7 B the file holds"},
              {"123456789", "larger than the given dimensions"}});
   check_bad("raw-nodims", "raw", [](const std::string& p) { read_volume(p); }, {{"12345678", "need their dimensions"}});
   VolumeReadOptions absurd;
@@ -234,7 +238,7 @@ TEST_CASE("volume readers reject bad files, naming file and problem") {
        {nh + "encoding: ascii\n\n1 2 3 4 5 6 7 8 9", "more ascii values"},
        {nh + "encoding: ascii\n\n1 2 3 4 5 6 7 300", "ascii value 300 out of range"},
        {nh + "encoding: ascii\n\n1 2 3 x 5 6 7 8", "malformed ascii data at value 3"},
-       {nh + "encoding: ascii\n\n1 2", "truncated ascii data"},
+       {nh + "encoding: ascii\n\n1 2", "need at least 15 B, more than the 3 B the file holds"},
        {nh + "encoding: gzip\n\nnot gzip at all", "gzip"},
        {nh + "type 2\nencoding: raw\n\n12345678", "malformed header line 'type 2'"}});
   fuzz(
@@ -254,22 +258,24 @@ TEST_CASE("text readers (normals, scalars, Matrix Market, config) reject bad fil
   check_bad(
       "scalars", "txt", [](const std::string& p) { read_scalars(p); },
       {{"", "no data"}, {"1\n2 3\n", "line 2: expected 1 numbers, got 2"}, {"1e999\n", "malformed or non-finite"}});
-  check_bad(
-      "mm", "mtx", [](const std::string& p) { read_matrix_market(p); },
-      {{"", "missing %%MatrixMarket header"},
-       {"hello\n", "missing %%MatrixMarket header"},
-       {"%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n", "only real coordinate"},
-       {"%%MatrixMarket matrix coordinate complex general\n", "only real coordinate"},
-       {"%%MatrixMarket matrix coordinate real general\n", "malformed size line"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2\n", "malformed size line"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2 1 junk\n1 1 1\n", "malformed size line"},
-       {"%%MatrixMarket matrix coordinate real general\n-2 2 1\n", "malformed size line"},
-       {"%%MatrixMarket matrix coordinate real general\n3000000000 3000000000 1\n1 1 1\n", "absurd size line"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2 5\n1 1 1\n", "absurd size line"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n", "truncated or malformed entry 2"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0abc\n", "truncated or malformed entry 1"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1\n", "entry 1 out of range"},
-       {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 nan\n", "entry 1 out of range or not finite"}});
+  check_bad("mm", "mtx", [](const std::string& p) { read_matrix_market(p); },
+            {{"", "missing %%MatrixMarket header"},
+             {"hello\n", "missing %%MatrixMarket header"},
+             {"%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n", "only real coordinate"},
+             {"%%MatrixMarket matrix coordinate complex general\n", "only real coordinate"},
+             {"%%MatrixMarket matrix coordinate real general\n", "malformed size line"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2\n", "malformed size line"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 1 junk\n1 1 1\n", "malformed size line"},
+             {"%%MatrixMarket matrix coordinate real general\n-2 2 1\n", "malformed size line"},
+             {"%%MatrixMarket matrix coordinate real general\n3000000000 3000000000 1\n1 1 1\n", "absurd size line"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 5\n1 1 1\n", "absurd size line"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n",
+              "line 4, entry 2: truncated: end of file after 1 of 2 declared entries"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0abc\n",
+              "line 3, entry 1: malformed entry '1 1 1.0abc'"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1\n",
+              "entry 1: index (3, 1) out of range for a 2 x 2 matrix"},
+             {"%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 nan\n", "line 3, entry 1: value not finite"}});
   check_bad("config", "json", [](const std::string& p) { Config::from_json_file(p); },
             {{"", "empty file"},
              {"  \n", "empty file"},

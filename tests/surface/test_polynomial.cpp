@@ -1,8 +1,11 @@
 // Polynomial parser and named shapes (docs/math.md §1.1).
 #include <doctest/doctest.h>
 
+#include <chrono>
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <string>
 
 using namespace corrlap;
 
@@ -34,10 +37,14 @@ TEST_CASE("parse errors name the position") {
 }
 
 TEST_CASE("every named shape parses and has a surface") {
-  for (const auto& [name, text] : named_shapes()) {
+  // A plain variable, not a structured binding: clang 14 cannot capture the latter (CAPTURE is a lambda).
+  for (const auto& entry : named_shapes()) {
+    const std::string& name = entry.first;
     CAPTURE(name);
     const ImplicitShape s = make_implicit_shape(name);
     CHECK(s.polynomial.total_degree() >= 2);
+    // The parser limits leave a wide margin: the named shapes have degree at most 6.
+    CHECK(s.polynomial.total_degree() <= 6);
   }
   CHECK(make_implicit_shape("sphere1").sphere_radius() == 1.0);
   CHECK(make_implicit_shape("sphere9").sphere_radius() == 9.0);
@@ -56,4 +63,52 @@ TEST_CASE("interval bounds enclose the values") {
         CHECK(p(q) >= mn);
         CHECK(p(q) <= mx);
       }
+}
+
+// Reliability probe: hostile strings of a few dozen characters used to overflow the stack
+// (30 000 parentheses), expand for seconds and gigabytes (nested powers), or escape as an
+// internal error (std::stol out_of_range). Each is now a named InputError, raised quickly.
+TEST_CASE("parser limits: nesting depth, total degree, expansion work, exponent and coefficient range") {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string deep = std::string(30000, '(') + "x" + std::string(30000, ')');
+  CHECK_THROWS_WITH_AS(Polynomial::parse(deep), doctest::Contains("nesting deeper than 200 levels"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse(std::string(30000, '-') + "x"), doctest::Contains("nesting deeper than 200"),
+                       InputError);
+  // 150 levels are fine: x.
+  const Polynomial nested = Polynomial::parse(std::string(150, '(') + "x" + std::string(150, ')'));
+  CHECK(nested(2.5, 0.0, 0.0) == 2.5);
+  CHECK(nested.total_degree() == 1);
+
+  CHECK_THROWS_WITH_AS(Polynomial::parse("((x*y*z)^64)^64"),
+                       doctest::Contains("total degree 192 of the power exceeds the limit 64"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("((x^8)^8)^8"), doctest::Contains("total degree 512"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x^40*y^30"),
+                       doctest::Contains("total degree 70 exceeds the limit 64 at position 5"), InputError);
+  // Degree 64 within the work budget still expands (about 1e7 operations): value (1 + 1e-3)^64.
+  const Polynomial full = Polynomial::parse("(x+y+z+1)^64");
+  CHECK(full.total_degree() == 64);
+  CHECK(full(1e-3, 0.0, 0.0) == doctest::Approx(std::pow(1.001, 64)).epsilon(1e-12));
+  // Degree 64 again, but the dense product of two 32nd powers costs 2.4e8 operations.
+  CHECK_THROWS_WITH_AS(Polynomial::parse("(x+y+z+1)^32*(x+y+z+1)^32"), doctest::Contains("expansion too large"),
+                       InputError);
+
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x^99999999999999999999"),
+                       doctest::Contains("exponent 99999999999999999999 exceeds the limit 64 at position 3"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x^65"), doctest::Contains("exponent 65 exceeds the limit 64"), InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x^2+1e999"),
+                       doctest::Contains("non-finite coefficient '1e999' (out of the range of double) at position 5"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("1e200*1e200*x"), doctest::Contains("non-finite coefficient after expansion"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(Polynomial::parse("x/1e-320"), doctest::Contains("non-finite coefficient after expansion"),
+                       InputError);
+  // Long inputs are shown by their first 80 characters only.
+  try {
+    Polynomial::parse(std::string(5000, '(') + "x");
+    FAIL("expected an error");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).size() < 200);
+  }
+  CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 2.0);
 }
