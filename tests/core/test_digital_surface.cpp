@@ -68,7 +68,8 @@ TEST_CASE("sphere1 counts equal the reference (docs/math.md §12.1)") {
 
 TEST_CASE("uncorrected sphere area does not converge (docs/math.md §12.1)") {
   for (auto [h, area] : {std::pair{0.5, 19.5}, std::pair{0.25, 18.375}, std::pair{0.1, 18.54}}) {
-    CAPTURE(h);
+    const auto h_copy = h;  // clang 14: no structured binding inside CAPTURE/INFO
+    CAPTURE(h_copy);
     const MeshInfo info = compute_mesh_info(surface_of("sphere1", h));
     CHECK(info.area == doctest::Approx(area).epsilon(1e-12));
   }
@@ -76,13 +77,15 @@ TEST_CASE("uncorrected sphere area does not converge (docs/math.md §12.1)") {
 
 TEST_CASE("goursat and torus counts equal the reference (docs/math.md §12.1)") {
   for (auto [h, V, F] : {std::tuple{0.5, 9512, 9510}, std::tuple{0.3, 26264, 26262}, std::tuple{2.0, 488, 486}}) {
-    CAPTURE(h);
+    const auto h_copy = h;  // clang 14: no structured binding inside CAPTURE/INFO
+    CAPTURE(h_copy);
     const MeshInfo info = compute_mesh_info(surface_of("goursat", h));
     CHECK(info.vertices == V);
     CHECK(info.faces == F);
   }
   for (auto [h, n] : {std::pair{0.5, 2584}, std::pair{0.3, 7520}, std::pair{2.0, 160}}) {
-    CAPTURE(h);
+    const auto h_copy = h;  // clang 14: no structured binding inside CAPTURE/INFO
+    CAPTURE(h_copy);
     const MeshInfo info = compute_mesh_info(surface_of("torus", h));
     CHECK(info.vertices == n);
     CHECK(info.faces == n);
@@ -134,7 +137,8 @@ TEST_CASE("enclosed volume equals voxel count times h^3 (divergence theorem)") {
     p.h = h;
     const VoxelGrid g = digitize(make_implicit_shape(shape), p);
     const SurfelMesh m = extract_surface(g);
-    CAPTURE(shape);
+    const auto shape_copy = shape;  // clang 14: no structured binding inside CAPTURE/INFO
+    CAPTURE(shape_copy);
     CHECK(enclosed_volume(m) == doctest::Approx(double(g.count()) * h * h * h).epsilon(1e-12));
   }
 }

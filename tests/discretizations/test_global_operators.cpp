@@ -36,7 +36,8 @@ void check_spectrum(const Eigen::VectorXd& mu, std::initializer_list<std::pair<d
   CHECK(std::abs(mu[0]) <= 1e-9);
   for (const auto& [value, mult] : expected)
     for (int m = 0; m < mult; ++m, ++i) {
-      INFO("eigenvalue " << i << " = " << mu[i] << ", expected " << value);
+      const auto value_copy = value;  // clang 14: no structured binding inside CAPTURE/INFO
+      INFO("eigenvalue " << i << " = " << mu[i] << ", expected " << value_copy);
       CHECK(std::abs(mu[i] - value) <= rel * value);
     }
 }
@@ -48,7 +49,8 @@ TEST_CASE("total mass on sphere1 with radial normals matches the reference (docs
       {0.5, {11.99117174, 12.31315677}}, {0.25, {12.10987569, 12.19109343}}, {0.1, {12.45922033, 12.47193387}}};
   for (const auto& [h, sums] : table) {
     const SphereCase s = sphere_case(h);
-    INFO("h = " << h);
+    const auto h_copy = h;  // clang 14: no structured binding inside CAPTURE/INFO
+    INFO("h_copy = " << h_copy);
     CHECK(build("interpolated", s).M.sum() == doctest::Approx(sums.first).epsilon(1e-9));
     CHECK(build("fem", s).M.sum() == doctest::Approx(sums.second).epsilon(1e-9));
     CHECK(build("fem", s, with("mass", std::string("lumped"))).M.sum() == doctest::Approx(sums.second).epsilon(1e-9));

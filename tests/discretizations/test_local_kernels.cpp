@@ -266,7 +266,8 @@ TEST_CASE("cyclic relabelling and reversal with negated normals give the same as
           n2.face = -n2.face;
         }
         const Operators o = disc->assemble(m, n2, params);
-        INFO(method << " shift " << shift << " reverse " << reverse);
+        const auto method_copy = method;  // clang 14: no structured binding inside CAPTURE/INFO
+        INFO(method_copy << " shift " << shift << " reverse " << reverse);
         CHECK(test::relative_difference(o.L, ref.L) <= 1e-13);
         CHECK(test::relative_difference(o.M, ref.M) <= 1e-13);
       }
