@@ -64,9 +64,10 @@ test-tsan: deps
 	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/tsan.supp" \
 	  $(BUILD)-tsan/tests/corrlap_stress_tests
 
-# libFuzzer targets of every reader and parser (clang-14), FUZZ_SECONDS each (default 30).
+# libFuzzer targets of every reader and parser (clang-14), FUZZ_SECONDS each (default 30), or
+# FUZZ_RUNS inputs each from a fixed seed (reproducible; what CI runs).
 fuzz: deps
-	FUZZ_SECONDS=$(FUZZ_SECONDS) bash scripts/fuzz.sh $(BUILD)-fuzz
+	FUZZ_SECONDS=$(FUZZ_SECONDS) FUZZ_RUNS=$(FUZZ_RUNS) bash scripts/fuzz.sh $(BUILD)-fuzz
 
 format:
 	bash scripts/check_format.sh --fix
