@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/output_file.hpp>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -92,8 +93,10 @@ PolygonMesh read_obj(const std::string& path) {
 }
 
 void write_obj(const std::string& path, const PolygonMesh& mesh) {
-  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
-  if (!f) throw IoError("OBJ file '" + path + "': cannot open for writing: " + std::strerror(errno));
+  for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
+    for (int c = 0; c < 3; ++c)
+      io_detail::require_finite(mesh.positions(v, c), path, "OBJ", "vertex", (long long)v + 1);
+  io_detail::OutputFile f(path, "OBJ");
   std::fprintf(f.get(), "# corrlap mesh: %lld vertices, %zu faces\n", (long long)mesh.positions.rows(),
                mesh.faces.size());
   for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
@@ -103,7 +106,7 @@ void write_obj(const std::string& path, const PolygonMesh& mesh) {
     for (int id : face) std::fprintf(f.get(), " %d", id + 1);
     std::fputc('\n', f.get());
   }
-  if (std::ferror(f.get())) throw IoError("OBJ file '" + path + "': write error");
+  f.commit();
 }
 
 }  // namespace corrlap

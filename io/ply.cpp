@@ -7,6 +7,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/output_file.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -454,11 +455,19 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
 
   std::string out = h.str();
   auto put = [&out](const auto& value) { out.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
+  // Positions, normals and scalars: no NaN or infinity reaches the file (the element is named).
+  auto put_finite = [&](double value, const char* element, Eigen::Index index, const std::string& name = "") {
+    if (!std::isfinite(value))
+      io_detail::require_finite(value, path, "PLY",
+                                name.empty() ? std::string(element) : "scalar '" + name + "' at " + element,
+                                (long long)index);
+    put(value);
+  };
   for (Eigen::Index v = 0; v < nv; ++v) {
-    for (int c = 0; c < 3; ++c) put(double(mesh.positions(v, c)));
+    for (int c = 0; c < 3; ++c) put_finite(double(mesh.positions(v, c)), "vertex", v);
     if (a.vertex_normals.rows())
-      for (int c = 0; c < 3; ++c) put(double(a.vertex_normals(v, c)));
-    for (const auto& [name, s] : a.vertex_scalars) put(double(s[v]));
+      for (int c = 0; c < 3; ++c) put_finite(double(a.vertex_normals(v, c)), "normal at vertex", v);
+    for (const auto& [name, s] : a.vertex_scalars) put_finite(double(s[v]), "vertex", v, name);
   }
   for (Eigen::Index f = 0; f < nf; ++f) {
     const auto& face = mesh.faces[std::size_t(f)];
@@ -468,13 +477,12 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
       put(std::uint8_t(face.size()));
     for (int id : face) put(std::int32_t(id));
     if (a.face_normals.rows())
-      for (int c = 0; c < 3; ++c) put(double(a.face_normals(f, c)));
-    for (const auto& [name, s] : a.face_scalars) put(double(s[f]));
+      for (int c = 0; c < 3; ++c) put_finite(double(a.face_normals(f, c)), "normal at face", f);
+    for (const auto& [name, s] : a.face_scalars) put_finite(double(s[f]), "face", f, name);
   }
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  io_detail::OutputFile file(path, "PLY", /*binary=*/true);
   if (std::fwrite(out.data(), 1, out.size(), file.get()) != out.size()) fail(path, "write error");
-  if (std::fflush(file.get()) != 0) fail(path, "write error");
+  file.commit();
 }
 
 }  // namespace corrlap

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/output_file.hpp>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -18,14 +19,6 @@
 namespace corrlap {
 
 namespace {
-using File = std::unique_ptr<FILE, int (*)(FILE*)>;
-
-File open_for_writing(const std::string& path, const char* what) {
-  File f(std::fopen(path.c_str(), "w"), &std::fclose);
-  if (!f) throw IoError(std::string(what) + " file '" + path + "': cannot open for writing: " + std::strerror(errno));
-  return f;
-}
-
 // Reads rows of exactly `cols` finite numbers.
 std::vector<double> read_rows(const std::string& path, int cols, const char* what) {
   std::ifstream in(path);
@@ -82,9 +75,11 @@ Eigen::MatrixX3d read_normals(const std::string& path) {
 }
 
 void write_normals(const std::string& path, const Eigen::MatrixX3d& n) {
-  File f = open_for_writing(path, "normals");
+  for (Eigen::Index i = 0; i < n.rows(); ++i)
+    for (int c = 0; c < 3; ++c) io_detail::require_finite(n(i, c), path, "normals", "row", (long long)i + 1);
+  io_detail::OutputFile f(path, "normals");
   for (Eigen::Index i = 0; i < n.rows(); ++i) std::fprintf(f.get(), "%.17g %.17g %.17g\n", n(i, 0), n(i, 1), n(i, 2));
-  if (std::ferror(f.get())) throw IoError("normals file '" + path + "': write error");
+  f.commit();
 }
 
 Eigen::VectorXd read_scalars(const std::string& path) {
@@ -93,19 +88,23 @@ Eigen::VectorXd read_scalars(const std::string& path) {
 }
 
 void write_scalars(const std::string& path, const Eigen::VectorXd& values) {
-  File f = open_for_writing(path, "scalars");
+  for (Eigen::Index i = 0; i < values.size(); ++i)
+    io_detail::require_finite(values[i], path, "scalars", "row", (long long)i + 1);
+  io_detail::OutputFile f(path, "scalars");
   for (Eigen::Index i = 0; i < values.size(); ++i) std::fprintf(f.get(), "%.17g\n", values[i]);
-  if (std::ferror(f.get())) throw IoError("scalars file '" + path + "': write error");
+  f.commit();
 }
 
 void write_matrix_market(const std::string& path, const Eigen::SparseMatrix<double>& A) {
-  File f = open_for_writing(path, "Matrix Market");
+  for (Eigen::Index k = 0; k < A.nonZeros(); ++k)
+    io_detail::require_finite(A.valuePtr()[k], path, "Matrix Market", "stored entry", (long long)k + 1);
+  io_detail::OutputFile f(path, "Matrix Market");
   std::fprintf(f.get(), "%%%%MatrixMarket matrix coordinate real general\n%% written by corrlap\n");
   std::fprintf(f.get(), "%lld %lld %lld\n", (long long)A.rows(), (long long)A.cols(), (long long)A.nonZeros());
   for (Eigen::Index c = 0; c < A.outerSize(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it)
       std::fprintf(f.get(), "%lld %lld %.17g\n", (long long)it.row() + 1, (long long)it.col() + 1, it.value());
-  if (std::ferror(f.get())) throw IoError("Matrix Market file '" + path + "': write error");
+  f.commit();
 }
 
 Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {

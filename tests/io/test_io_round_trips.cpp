@@ -7,6 +7,7 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <limits>
 #include <random>
 
 #include "test_support.hpp"
@@ -259,4 +260,54 @@ TEST_CASE("CLI digitizes every volume format with --threshold") {
     if (expected_vertices < 0) expected_vertices = int(m.positions.rows());
     CHECK(int(m.positions.rows()) == expected_vertices);
   }
+}
+
+TEST_CASE("writers refuse NaN and infinity and never leave a half-written file") {
+  const std::string dir = corrlap::test::tmp_path("atomic_writes");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string normals = dir + "/n.txt", scalars = dir + "/s.txt", mtx = dir + "/A.mtx", obj = dir + "/m.obj";
+  // A valid file first: a failed write later must leave it exactly as it was.
+  Eigen::MatrixX3d n(2, 3);
+  n << 0, 0, 1, 1, 0, 0;
+  corrlap::write_normals(normals, n);
+  const std::string before = corrlap::test::read_text(normals);
+  n(1, 2) = std::numeric_limits<double>::quiet_NaN();
+  try {
+    corrlap::write_normals(normals, n);
+    FAIL("a NaN normal was written");
+  } catch (const corrlap::IoError& e) {
+    CHECK(std::string(e.what()).find("row 2 is not finite (nan)") != std::string::npos);
+  }
+  CHECK(corrlap::test::read_text(normals) == before);
+
+  Eigen::VectorXd s(3);
+  s << 1, std::numeric_limits<double>::infinity(), 2;
+  CHECK_THROWS_WITH_AS(corrlap::write_scalars(scalars, s), doctest::Contains("row 2 is not finite (inf)"),
+                       corrlap::IoError);
+  CHECK_FALSE(std::filesystem::exists(scalars));
+
+  Eigen::SparseMatrix<double> A(2, 2);
+  A.insert(0, 0) = 1.0;
+  A.insert(1, 1) = -std::numeric_limits<double>::infinity();
+  A.makeCompressed();
+  CHECK_THROWS_WITH_AS(corrlap::write_matrix_market(mtx, A), doctest::Contains("stored entry 2 is not finite (-inf)"),
+                       corrlap::IoError);
+  CHECK_FALSE(std::filesystem::exists(mtx));
+
+  corrlap::PolygonMesh mesh;
+  mesh.positions = Eigen::MatrixX3d::Zero(3, 3);
+  mesh.positions(1, 0) = 1.0;
+  mesh.positions(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  mesh.faces = {{0, 1, 2}};
+  CHECK_THROWS_WITH_AS(corrlap::write_mesh(obj, mesh), doctest::Contains("vertex 3 is not finite"), corrlap::IoError);
+  CHECK_THROWS_WITH_AS(corrlap::write_mesh(dir + "/m.ply", mesh), doctest::Contains("vertex 2 is not finite"),
+                       corrlap::IoError);
+  // No temporary file is left behind by any of the failures.
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    CHECK(entry.path().filename().string().find(".tmp-") == std::string::npos);
+
+  // An unwritable destination: a named error, nothing created.
+  CHECK_THROWS_WITH_AS(corrlap::write_scalars(dir + "/no/such/folder/s.txt", Eigen::VectorXd::Ones(2)),
+                       doctest::Contains("cannot open for writing"), corrlap::IoError);
 }
