@@ -456,10 +456,9 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   std::string out = h.str();
   auto put = [&out](const auto& value) { out.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
   // Positions, normals and scalars: no NaN or infinity reaches the file (the element is named).
-  auto put_finite = [&](double value, const char* element, Eigen::Index index, const std::string& name = "") {
+  auto put_finite = [&](double value, const char* element, Eigen::Index index, const std::string* scalar = nullptr) {
     if (!std::isfinite(value))
-      io_detail::require_finite(value, path, "PLY",
-                                name.empty() ? std::string(element) : "scalar '" + name + "' at " + element,
+      io_detail::require_finite(value, path, "PLY", scalar ? "scalar '" + *scalar + "' at " + element : element,
                                 (long long)index);
     put(value);
   };
@@ -467,7 +466,7 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
     for (int c = 0; c < 3; ++c) put_finite(double(mesh.positions(v, c)), "vertex", v);
     if (a.vertex_normals.rows())
       for (int c = 0; c < 3; ++c) put_finite(double(a.vertex_normals(v, c)), "normal at vertex", v);
-    for (const auto& [name, s] : a.vertex_scalars) put_finite(double(s[v]), "vertex", v, name);
+    for (const auto& [name, s] : a.vertex_scalars) put_finite(double(s[v]), "vertex", v, &name);
   }
   for (Eigen::Index f = 0; f < nf; ++f) {
     const auto& face = mesh.faces[std::size_t(f)];
@@ -478,7 +477,7 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
     for (int id : face) put(std::int32_t(id));
     if (a.face_normals.rows())
       for (int c = 0; c < 3; ++c) put_finite(double(a.face_normals(f, c)), "normal at face", f);
-    for (const auto& [name, s] : a.face_scalars) put_finite(double(s[f]), "face", f, name);
+    for (const auto& [name, s] : a.face_scalars) put_finite(double(s[f]), "face", f, &name);
   }
   io_detail::OutputFile file(path, "PLY", /*binary=*/true);
   if (std::fwrite(out.data(), 1, out.size(), file.get()) != out.size()) fail(path, "write error");

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
-#include <corrlap/discretizations/registry.hpp>
 #include <cstdio>
 #include <iostream>
 
@@ -27,9 +26,9 @@ struct EigsArgs {
 void run(const EigsArgs& a) {
   if (a.k <= 0) throw InputError("-k must be positive");
   const OperatorOptions::Input in = a.options.prepare();
-  const Operators ops = make_discretization(a.options.method)->assemble(in.mesh, in.normals, in.params);
-  for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
-  if (const std::string note = boundary_condition_note(in.mesh); !note.empty()) std::cerr << "eigs: " << note << "\n";
+  const Operators ops = a.options.assemble(in);
+  if (const BoundaryCondition boundary = boundary_condition(in.mesh); !boundary.closed())
+    std::cerr << "eigs: " << boundary.note() << "\n";
   const Eigen::Index n = ops.L.rows();
   Config config;
   if (!a.solver_config_file.empty()) config.merge(Config::from_json_file(a.solver_config_file));

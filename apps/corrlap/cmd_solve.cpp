@@ -58,7 +58,8 @@ void run(const SolveArgs& a) {
   const std::string kind = method->required_normals() == NormalKind::None ? "none" : a.normals.describe(surface);
   const Operators ops = method->assemble(mesh, normals, params);
   for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
-  if (const std::string note = boundary_condition_note(mesh); !note.empty()) std::cerr << "solve: " << note << "\n";
+  const BoundaryCondition boundary = boundary_condition(mesh);
+  if (!boundary.closed()) std::cerr << "solve: " << boundary.note() << "\n";
   if (ops.domain != Operators::Domain::Vertices)
     throw InputError("corrlap solve: method '" + a.method +
                      "' defines operators on faces; the Poisson problem is set on vertices");
@@ -100,7 +101,7 @@ void run(const SolveArgs& a) {
     j["surface"] = a.source.describe();
     j["normals"] = kind;
     j["rhs"] = a.rhs;
-    j["boundary"] = boundary_condition(mesh);
+    j["boundary"] = boundary.label();
     j["n"] = n;
     j["assemble_s"] = assemble_s;
     j["analyze_s"] = report.analyze_seconds;

@@ -56,11 +56,12 @@ OperatorOptions::Input OperatorOptions::prepare(bool extras) const {
   return in;
 }
 
-Operators OperatorOptions::build(bool extras) const {
-  const Input in = prepare(extras);
+Operators OperatorOptions::assemble(const Input& in) const {
   Operators ops = make_discretization(method)->assemble(in.mesh, in.normals, in.params);
   for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
   return ops;
 }
+
+Operators OperatorOptions::build(bool extras) const { return assemble(prepare(extras)); }
 
 }  // namespace corrlap::cli

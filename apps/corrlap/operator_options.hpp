@@ -31,7 +31,9 @@ struct OperatorOptions {
   };
   /// `extras`: also request D0/sharp/flat/M1/M_lumped when the method supports it.
   Input prepare(bool extras = false) const;
-  /// Builds the operators; warnings go to stderr.
+  /// Assembles the operators of a prepared input; warnings go to stderr.
+  Operators assemble(const Input& in) const;
+  /// prepare() then assemble().
   Operators build(bool extras = false) const;
 };
 

@@ -125,19 +125,21 @@ std::string SurfaceSource::describe() const {
   return os.str();
 }
 
-std::string boundary_condition(const SurfelMesh& mesh) {
-  const MeshInfo info = compute_mesh_info(mesh);
-  if (info.closed()) return "closed";
-  return "natural (zero Neumann) on " + std::to_string(info.boundary_edges) + " boundary edges";
+BoundaryCondition boundary_condition(const SurfelMesh& mesh) {
+  BoundaryCondition bc;
+  for (const int n : build_edges(mesh).faces_per_edge) bc.boundary_edges += n == 1;
+  return bc;
 }
 
-std::string boundary_condition_note(const SurfelMesh& mesh) {
-  const MeshInfo info = compute_mesh_info(mesh);
-  if (info.closed()) return {};
-  // Every discretization assembles L without boundary terms, which is the weak form of the zero
-  // Neumann condition; the solvers add nothing else.
-  return "the surface is open (" + std::to_string(info.boundary_edges) +
+std::string BoundaryCondition::note() const {
+  if (closed()) return {};
+  return "the surface is open (" + std::to_string(boundary_edges) +
          " boundary edges): natural (zero Neumann) boundary conditions are used";
+}
+
+std::string BoundaryCondition::label() const {
+  if (closed()) return "closed";
+  return "natural (zero Neumann) on " + std::to_string(boundary_edges) + " boundary edges";
 }
 
 }  // namespace corrlap::cli

@@ -49,11 +49,18 @@ struct SurfaceSource {
   std::string describe() const;
 };
 
-/// Empty for a closed surface; otherwise the boundary condition the solvers' problems then use,
-/// for the user to read: "the surface is open (N boundary edges): natural (zero Neumann) boundary
-/// conditions" (docs/math.md §10.4).
-std::string boundary_condition_note(const SurfelMesh& mesh);
-/// "closed" or "natural (zero Neumann) on N boundary edges", for JSON reports.
-std::string boundary_condition(const SurfelMesh& mesh);
+/// The boundary condition the solvers' problems get on this surface: none on a closed surface;
+/// on an open one, natural (zero Neumann) conditions on its boundary edges, because every
+/// discretization assembles L without boundary terms (docs/math.md §10.4).
+struct BoundaryCondition {
+  int boundary_edges = 0;
+  bool closed() const { return boundary_edges == 0; }
+  /// Empty when closed, else "the surface is open (N boundary edges): natural (zero Neumann)
+  /// boundary conditions are used", for the user to read.
+  std::string note() const;
+  /// "closed" or "natural (zero Neumann) on N boundary edges", for JSON reports.
+  std::string label() const;
+};
+BoundaryCondition boundary_condition(const SurfelMesh& mesh);
 
 }  // namespace corrlap::cli

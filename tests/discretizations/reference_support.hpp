@@ -6,10 +6,12 @@
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/discretizations/assembly/detail/face_kernel_isa.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <string>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -75,6 +77,16 @@ inline MatrixDiff compare_matrices(const Eigen::SparseMatrix<double>& A, const E
 
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+
+namespace corrlap::test {
+/// Every instruction set of the per-face kernels that this machine runs (Best = what assembly picks).
+inline std::vector<detail::FaceKernelIsa> face_kernel_isas() {
+  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Scalar, detail::FaceKernelIsa::Sse2,
+                                             detail::FaceKernelIsa::Best};
+  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
+  return isas;
+}
+}  // namespace corrlap::test
 
 namespace corrlap::test {
 

@@ -61,9 +61,7 @@ TEST_CASE("fem face kernel on random quads: every ISA gives the scalar bits, whi
     return g;
   };
   const std::vector<double> g0 = run(detail::FaceKernelIsa::Scalar);
-  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Sse2, detail::FaceKernelIsa::Best};
-  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
-  for (const auto isa : isas) {
+  for (const auto isa : test::face_kernel_isas()) {  // Scalar against itself too: the reference run is repeatable
     INFO("isa " << int(isa));
     const std::vector<double> g = run(isa);
     CHECK(same(g, g0, 0));
@@ -105,9 +103,7 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) 
 }  // namespace
 
 TEST_CASE("fem fast face values and assembly are bitwise the readable local matrices") {
-  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Scalar, detail::FaceKernelIsa::Sse2,
-                                             detail::FaceKernelIsa::Best};
-  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
+  const std::vector<detail::FaceKernelIsa> isas = test::face_kernel_isas();
   for (const char* shape : {"sphere1", "torus"})
     for (bool perturbed : {false, true}) {
       const test::SphereCase s = test::shape_case(shape, shape == std::string("torus") ? 0.5 : 0.125, perturbed);

@@ -112,9 +112,7 @@ TEST_CASE("interpolated assembly kernel on random squares: bitwise interpolated_
 }
 
 TEST_CASE("interpolated fast face terms are bitwise the readable interpolated_local") {
-  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Scalar, detail::FaceKernelIsa::Sse2,
-                                             detail::FaceKernelIsa::Best};
-  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
+  const std::vector<detail::FaceKernelIsa> isas = test::face_kernel_isas();
   for (const char* shape : {"sphere1", "torus"})
     for (bool perturbed : {false, true}) {
       const test::SphereCase s = test::shape_case(shape, shape == std::string("torus") ? 0.5 : 0.125, perturbed);
@@ -197,9 +195,7 @@ TEST_CASE("vectorized face kernel (SSE2, AVX2) gives the scalar kernel's bits an
   };
   std::vector<double> t0, p0;
   REQUIRE(run(detail::FaceKernelIsa::Scalar, t0, p0) == -1);
-  std::vector<detail::FaceKernelIsa> isas = {detail::FaceKernelIsa::Sse2, detail::FaceKernelIsa::Best};
-  if (detail::cpu_has_avx2()) isas.push_back(detail::FaceKernelIsa::Avx2);
-  for (const auto isa : isas) {
+  for (const auto isa : test::face_kernel_isas()) {  // Scalar against itself too: the reference run is repeatable
     INFO("isa " << int(isa));
     std::vector<double> t, p;
     REQUIRE(run(isa, t, p) == -1);
@@ -216,7 +212,7 @@ TEST_CASE("vectorized face kernel (SSE2, AVX2) gives the scalar kernel's bits an
   // Non-square faces: the first of the range is reported by every ISA, whether it sits inside a
   // vector batch (42, 43 in one batch of 2 and of 4 lanes) or in the scalar tail (102).
   pos[1][std::size_t(4 * 102 + 2)] += 1e-3;
-  isas.push_back(detail::FaceKernelIsa::Scalar);
+  const std::vector<detail::FaceKernelIsa> isas = test::face_kernel_isas();
   for (const auto isa : isas) {
     std::vector<double> t, p;
     CHECK(run(isa, t, p) == 102);
