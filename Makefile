@@ -46,11 +46,14 @@ bench: build
 install: build
 	cmake --install $(BUILD)
 
-# Every test built with AddressSanitizer + UndefinedBehaviorSanitizer (own build folder; the
-# consumer test is built with the same flags). Any report fails the run.
+# Every test built with AddressSanitizer + UndefinedBehaviorSanitizer by clang-14 (own build folder;
+# the consumer test is built with the same compiler and flags): the project's clang build and its
+# sanitizer run in one. Any report fails the run. SANITIZE_CXX=g++ SANITIZE_CC=gcc for GCC's.
+SANITIZE_CXX ?= clang++-14
+SANITIZE_CC ?= clang-14
 test-sanitize: deps
 	cmake -S . -B $(BUILD)-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCORRLAP_SANITIZE=ON \
-	  -DCORRLAP_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	  -DCMAKE_CXX_COMPILER=$(SANITIZE_CXX) -DCMAKE_C_COMPILER=$(SANITIZE_CC) -DCORRLAP_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 	cmake --build $(BUILD)-sanitize -j $(JOBS)
 	cd $(BUILD)-sanitize && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) --timeout 3600

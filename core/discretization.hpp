@@ -30,6 +30,10 @@ struct Operators {
   std::optional<Eigen::SparseMatrix<double>> M1;        ///< #E x #E one-form inner product
   Domain domain = Domain::Vertices;
   std::vector<std::string> warnings;  ///< e.g. normals inconsistent with the surfel orientation
+  /// Non-empty when L or M may break the properties documented above (L negative semi-definite,
+  /// M positive definite): what was computed as given and why. A solver failing on these
+  /// operators should name it (the CLI does). Empty for operators that keep the contract.
+  std::string contract_risk;
 };
 
 /// Empties everything but the storage of L and M, for a method that refills `ops` (assemble_into).
@@ -41,6 +45,7 @@ inline void reset_for_reuse(Operators& ops) {
   ops.M1.reset();
   ops.domain = Operators::Domain::Vertices;
   ops.warnings.clear();
+  ops.contract_risk.clear();
 }
 
 /// What a policy does with normals inconsistent with the surfel orientation (u.n <= 0).

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "error.hpp"
+#include "memory_budget.hpp"
 
 namespace corrlap {
 
@@ -38,6 +39,11 @@ VoxelGrid::VoxelGrid(const Eigen::Vector3i& lower, const Eigen::Vector3i& upper,
   }
   words_per_row_ = (static_cast<std::size_t>(n.x()) + 63) / 64;
   const std::size_t words = words_per_row_ * static_cast<std::size_t>(n.y()) * static_cast<std::size_t>(n.z());
+  {
+    std::ostringstream what;
+    what << "voxel grid: a box of " << n.x() << "x" << n.y() << "x" << n.z() << " voxels";
+    check_memory_budget(double(words) * sizeof(std::uint64_t), what.str(), "use a larger grid step or a smaller box");
+  }
   // All zero without writing (see ZeroFilledAllocator): digitization then touches only the pages
   // holding inside voxels.
   words_.resize(words);

@@ -106,7 +106,7 @@ class CorrectedFem final : public Discretization {
     check_quad_mesh(mesh, "fem");
 
     reset_for_reuse(ops);
-    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops.warnings);
+    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, "fem", ops);
     const Eigen::MatrixX3d& u = prepared.matrix();
     detail::corrected_fem_fast_assembly(mesh, u, pattern, mass == "lumped", extras, ops);
     if (extras) ops.D0 = global_d0(build_edges(mesh), mesh.num_vertices());

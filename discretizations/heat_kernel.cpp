@@ -336,7 +336,7 @@ class HeatKernel final : public Discretization {
       throw InputError("heat-kernel: distance=tangent needs variant=dual (one normal per surfel)");
 
     Operators ops;
-    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops.warnings);
+    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops);
     const Eigen::MatrixX3d& u = prepared.matrix();
     const Eigen::MatrixX3d n = trivial_face_normals(mesh);
     const int F = mesh.num_faces();

@@ -161,8 +161,7 @@ class InterpolatedCorrected final : public Discretization {
     check_quad_mesh(mesh, "interpolated");
 
     reset_for_reuse(ops);
-    const PreparedNormals prepared =
-        prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops.warnings);
+    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Vertex, params, "interpolated", ops);
     const Eigen::MatrixX3d& u = prepared.matrix();
     detail::interpolated_fast_assembly(mesh, u, pattern, lambda, kappa, global, ops);
     if (extras) add_extras(mesh, u, lambda, kappa, global, ops);

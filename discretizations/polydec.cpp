@@ -82,7 +82,7 @@ class PolyDec final : public Discretization {
 
     reset_for_reuse(ops);
     Eigen::MatrixX3d u;
-    if (projected_) u = prepare_normals(mesh, normals, NormalKind::Face, params, who, ops.warnings).matrix();
+    if (projected_) u = prepare_normals(mesh, normals, NormalKind::Face, params, who, ops).matrix();
     const int F = mesh.num_faces();
     // Per face: L_f (16), |a_f| (1); with extras also U_f (12, column-major), V_f (12), M1_f (16).
     const std::size_t stride = extras ? 57 : 17;

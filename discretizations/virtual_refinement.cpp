@@ -296,7 +296,7 @@ class Vrm final : public Discretization {
     bool lumped_mass = false;
     VirtualPointOptions vopt;
     Eigen::MatrixX3d u, n;
-    std::string policy = "warn";
+    std::string policy = kDefaultOrientation;
     if (corrected_) {
       const std::string mass = params.get_string("mass", "full");
       if (mass != "full" && mass != "lumped")
@@ -306,8 +306,8 @@ class Vrm final : public Discretization {
       vopt.gradient_tolerance = params.get_double("gradient_tolerance", 1e-12);
       if (vopt.max_iterations < 1) throw InputError(name() + ": max_iterations must be >= 1");
       if (!(vopt.gradient_tolerance > 0)) throw InputError(name() + ": gradient_tolerance must be > 0");
-      policy = params.get_string("orientation", "warn");
-      u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops.warnings).matrix();
+      policy = params.get_string("orientation", kDefaultOrientation);
+      u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops).matrix();
       n = trivial_face_normals(mesh);  // docs/math.md §1.3/§1.5: outward trivial normal
     }
 

@@ -95,6 +95,12 @@ PolygonMesh read_off(const std::string& path) {
              io_detail::readable_bytes(needed) + ", more than the " + io_detail::readable_bytes(double(file_bytes)) +
              " the file holds (truncated file?)");
 
+  // Coordinates (24 bytes per vertex) and faces (a vector of at least 3 indices, ~40 bytes).
+  std::ostringstream label;
+  label << "OFF file '" << path << "'";
+  io_detail::check_budget(label.str(), 24.0 * double(nv) + 40.0 * double(nf),
+                          io_detail::readable_count(std::uint64_t(nv)) + " vertices and " +
+                              io_detail::readable_count(std::uint64_t(nf)) + " faces");
   // Rows are added as they are read: a wrong count cannot make us allocate more than the file holds.
   std::vector<double> xyz;
   xyz.reserve(std::size_t(nv) * 3);

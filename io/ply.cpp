@@ -321,6 +321,13 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
     }
   }
 
+  // Positions (24 bytes), one double per vertex property, and per face a double per property
+  // plus an index vector (~40 bytes).
+  io_detail::check_budget("PLY file '" + path + "'",
+                          double(vertex_el->count) * (24.0 + 8.0 * double(vertex_el->properties.size())) +
+                              double(face_el->count) * (40.0 + 8.0 * double(face_el->properties.size())),
+                          io_detail::readable_count(vertex_el->count) + " vertices and " +
+                              io_detail::readable_count(face_el->count) + " faces");
   PolygonMesh mesh;
   const Eigen::Index nv = Eigen::Index(vertex_el->count);
   mesh.positions.resize(nv, 3);

@@ -173,6 +173,10 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
          " for " + readable_count(std::uint64_t(nnz)) +
          " entries (each dimension is limited to max(1 048 576, 4 x entries) = " +
          readable_count(std::uint64_t(dim_limit)) + ")");
+  // Triplets (16 bytes each, twice for symmetric files) and the compressed matrix (12 bytes per entry).
+  const double stored = double(nnz) * (symmetric ? 2.0 : 1.0);
+  io_detail::check_budget("Matrix Market file '" + path + "'", stored * 28.0 + 8.0 * double(c),
+                          readable_count(std::uint64_t(nnz)) + " entries");
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(std::size_t(nnz) * (symmetric ? 2 : 1));
   for (long long k = 0; k < nnz; ++k) {

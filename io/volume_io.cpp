@@ -19,7 +19,8 @@ namespace corrlap {
 
 namespace {
 
-// Memory budget for one volume: 2^34 voxels (16 GiB) is beyond any volume this tool is meant for.
+// Hard limit for one volume, whatever the memory budget: 2^34 voxels (16 GiB) is beyond any volume this
+// tool is meant for.
 // Sizes are checked against it, and against what the file can hold, before anything is allocated.
 constexpr std::uint64_t kMaxVoxels = std::uint64_t{1} << 34;
 // Deflate cannot expand one compressed byte into more than 1032 bytes (a 258-byte match costs at
@@ -54,14 +55,15 @@ std::string describe(const Eigen::Vector3i& s) {
   return os.str();
 }
 
-// Positive sizes within the memory budget; returns the voxel count (= bytes of uint8 data).
+// Positive sizes within the memory budget (--max-memory); returns the voxel count (= bytes of uint8 data).
 std::size_t checked_voxels(const std::string& path, const Eigen::Vector3i& s) {
   if ((s.array() <= 0).any()) fail(path, describe(s) + ": dimensions must be positive");
   const auto n = voxel_count(s);
   if (!n || *n > kMaxVoxels)
     fail(path, describe(s) + (n ? " need " + io_detail::readable_bytes(double(*n)) : std::string(" overflow 64 bits")) +
-                   ", more than the memory budget of " + io_detail::readable_bytes(double(kMaxVoxels)) +
-                   " (dimensions are absurdly large)");
+                   ", more than the " + io_detail::readable_bytes(double(kMaxVoxels)) +
+                   " a volume may hold (dimensions are absurdly large)");
+  io_detail::check_budget("volume file '" + path + "'", double(*n), describe(s));
   return std::size_t(*n);
 }
 

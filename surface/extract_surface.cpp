@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/memory_budget.hpp>
 #include <ctime>
 #include <sstream>
 
@@ -17,6 +18,11 @@ namespace corrlap {
 namespace {
 
 constexpr int kBits = 21;
+// Peak bytes per surfel of extract_surface beyond the grid: the mesh (surfel 20, face 16, about one
+// vertex 24), the sort keys (16), corner occurrences and vertex numbering (about 40). Measured: the
+// peak RSS of `corrlap digitize` grows by 140 B per surfel (bench/RESULTS.md, "memory budget"), which
+// also counts the touched grid pages and the writer; checked before the mesh is allocated.
+constexpr double kExtractionBytesPerSurfel = 140.0;
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
 // Surfel key (docs/math.md §1.4): positive flag, then Khalimsky coordinates relative to the box
@@ -191,6 +197,11 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
         "surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the box)");
   // Corner occurrences 4 f + c must fit in 32 bits with one value left as the "none" marker.
   if (F >= (std::size_t{1} << 30)) throw InputError("surface extraction: 2^30 or more surfels");
+  // The mesh and the extraction's own arrays, before they are allocated: at most
+  // kExtractionBytesPerSurfel per surfel (bench/RESULTS.md, "memory budget").
+  check_memory_budget(double(F) * kExtractionBytesPerSurfel + double(grid.memory_bytes()),
+                      "surface extraction of " + std::to_string(F) + " surfels",
+                      "use a larger grid step (--h) or a smaller box");
   lap("transitions");
 
   // 2. Face order (docs/math.md §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the

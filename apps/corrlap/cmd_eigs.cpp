@@ -1,9 +1,11 @@
 // corrlap eigs: the k smallest values of -lambda for L u = lambda M u (docs/math.md §10.5, §12.3).
 // Dense solver for small meshes by default; --solver NAME uses Spectra's shift-invert Lanczos with
 // that linear solver backend for (L - sigma M)^{-1}.
+#include <algorithm>
 #include <chrono>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/text_io.hpp>
 #include <cstdio>
 #include <iostream>
 
@@ -38,12 +40,26 @@ void run(const EigsArgs& a) {
   if (sparse && !config.has("solver")) config.set("solver", kDefaultLinearSolver);
   auto eig = make_eigen_solver(sparse ? kDefaultEigenSolver : "dense", config);
   const auto t0 = std::chrono::steady_clock::now();
-  const EigenResult r = eig->solve(ops.L, ops.M, a.k);  // values are -lambda >= 0, ascending
+  // values are -lambda >= 0, ascending, when L is negative semi-definite
+  const EigenResult r = explain_solver_failure(ops, [&] { return eig->solve(ops.L, ops.M, a.k); });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::FILE* f = a.out.empty() ? stdout : std::fopen(a.out.c_str(), "w");
-  if (!f) throw IoError("eigs: cannot write '" + a.out + "'");
-  for (Eigen::Index i = 0; i < r.values.size(); ++i) std::fprintf(f, "%.17g\n", r.values[i]);
-  if (f != stdout) std::fclose(f);
+  if (!r.values.allFinite()) throw NumericalError("eigs: the eigen solver returned a value that is not finite");
+  if (a.out.empty()) {
+    for (Eigen::Index i = 0; i < r.values.size(); ++i) std::printf("%.17g\n", r.values[i]);
+  } else {
+    write_scalars(a.out, r.values);
+  }
+  // A value -lambda < 0 means L u = lambda M u with lambda > 0: L is not negative semi-definite
+  // (tolerance: rounding of the dense or shift-invert solve, relative to the largest value).
+  const double scale = std::max(1.0, r.values.size() ? r.values.cwiseAbs().maxCoeff() : 0.0);
+  const Eigen::Index wrong_sign = (r.values.array() < -1e-8 * scale).count();
+  if (wrong_sign > 0) {
+    std::cerr << "warning: eigs: " << wrong_sign << " of the values -lambda are negative (smallest "
+              << r.values.minCoeff() << "): L is not negative semi-definite";
+    if (!ops.contract_risk.empty())
+      std::cerr << "; likely cause: " << ops.contract_risk << "; remedy: --orientation clamp (the default)";
+    std::cerr << "\n";
+  }
   if (r.values.size() < a.k) std::cerr << "eigs: only " << r.values.size() << " eigenvalues exist\n";
   std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << n << " x " << n << " problem with " << eig->name()
             << (sparse ? " (" + config.get_string("solver", "") + ")" : std::string()) << " in " << seconds << " s\n";

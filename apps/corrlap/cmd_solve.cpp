@@ -15,6 +15,7 @@
 
 #include "command.hpp"
 #include "normal_options.hpp"
+#include "operator_options.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
@@ -25,6 +26,7 @@ struct SolveArgs {
   std::string method = "fem";
   NormalOptions normals;
   std::vector<std::string> params;
+  std::string orientation;
   std::string rhs = "x2";
   std::string solver;
   std::string config_file;
@@ -47,7 +49,8 @@ void run(const SolveArgs& a) {
   auto solver = make_linear_solver(config, kDefaultLinearSolver);
 
   auto method = make_discretization(a.method);
-  const Config params = Config::from_key_values(a.params);
+  Config params = Config::from_key_values(a.params);
+  if (!a.orientation.empty()) params.set("orientation", a.orientation);
   const TestFunction* analytic = has_test_function(a.rhs) ? &test_function(a.rhs) : nullptr;
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -72,7 +75,8 @@ void run(const SolveArgs& a) {
   double residual = 0.0;
   std::optional<PoissonErrors> err;
   if (analytic) {
-    const PoissonResult r = solve_poisson(ops, mesh.positions, *analytic, *solver, c);
+    const PoissonResult r =
+        explain_solver_failure(ops, [&] { return solve_poisson(ops, mesh.positions, *analytic, *solver, c); });
     g = r.g;
     residual = r.residual;
     // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
@@ -88,7 +92,7 @@ void run(const SolveArgs& a) {
     if (b.size() != n)
       throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(b.size()) +
                        " values, the mesh has " + std::to_string(n) + " vertices");
-    g = solve_neumann_poisson(ops.L, ops.M, b, *solver, 0.0, 0);
+    g = explain_solver_failure(ops, [&] { return solve_neumann_poisson(ops.L, ops.M, b, *solver, 0.0, 0); });
     residual = neumann_residual(ops.L, ops.M, b, g, 0);
   }
   const SolverReport report = solver->info();
@@ -128,7 +132,12 @@ void run(const SolveArgs& a) {
     else
       std::cout << "error       n/a (analytic solution known for x2/expx/p6 on the unit sphere only)\n";
   }
-  if (report.status != SolverStatus::Success) std::cerr << "warning: " << report.message << "\n";
+  if (report.status != SolverStatus::Success) {
+    std::cerr << "warning: " << report.message;
+    if (!ops.contract_risk.empty())
+      std::cerr << "; likely cause: " << ops.contract_risk << "; remedy: --orientation clamp (the default)";
+    std::cerr << "\n";
+  }
 }
 
 RegisterCommand reg(40, "solve", [](CLI::App& app) {
@@ -139,6 +148,9 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
   cmd->add_option("--method", args->method, "discretization (registry name)")->capture_default_str();
   args->normals.add_options(*cmd);
   cmd->add_option("--param", args->params, "method parameter key=value (repeatable)");
+  cmd->add_option("--orientation", args->orientation,
+                  "normals with u.n <= 0: clamp (default: raise u.n to 0.05) | warn (use as given) | error")
+      ->check(CLI::IsMember({"error", "warn", "clamp"}));
   std::string names;
   for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
   cmd->add_option(

@@ -1,6 +1,7 @@
 // corrlap: command-line front end. Each subcommand lives in its own cmd_*.cpp file.
 #include <algorithm>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/memory_budget.hpp>
 #include <corrlap/core/threads.hpp>
 #include <iostream>
 #include <new>
@@ -23,6 +24,11 @@ int main(int argc, char** argv) {
   int threads = 0;
   app.add_option("--threads", threads, "worker threads for TBB and OpenBLAS (default: all; env CORRLAP_THREADS)")
       ->check(corrlap::cli::non_negative_number());
+  std::string max_memory;
+  app.add_option("--max-memory", max_memory,
+                 "memory budget for what the input asks for (voxel grids, surfels, file contents), e.g. 8G or "
+                 "512M; larger requests are refused before allocating (default: this machine's memory; env "
+                 "CORRLAP_MAX_MEMORY)");
   auto& list = cli::commands();
   std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.order < b.order; });
   for (const auto& c : list) c.setup(app);
@@ -32,6 +38,10 @@ int main(int argc, char** argv) {
         set_thread_count(threads);
       else
         apply_thread_count_from_environment();
+      if (!max_memory.empty())
+        set_memory_budget(parse_memory_size(max_memory));
+      else
+        apply_memory_budget_from_environment();
     } catch (const corrlap::Error& e) {
       std::cerr << "corrlap: error: " << e.what() << "\n";
       std::exit(1);

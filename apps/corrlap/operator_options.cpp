@@ -21,7 +21,9 @@ void OperatorOptions::add_options(CLI::App& cmd) {
       ->check(CLI::IsMember({"full", "lumped", "measure", "identity"}));
   cmd.add_option("--t", heat_t, "heat-kernel: diffusion time (default 0.1 h^(2/3), docs/math.md §6)");
   cmd.add_option("--cutoff", cutoff, "heat-kernel: couple points closer than cutoff * sqrt(2t) (default 3)");
-  cmd.add_option("--orientation", orientation, "normals with u.n <= 0: error | warn (default) | clamp")
+  cmd.add_option("--orientation", orientation,
+                 "normals with u.n <= 0: clamp (default: raise u.n to 0.05) | warn (use as given; L, M may break their "
+                 "contract) | error")
       ->check(CLI::IsMember({"error", "warn", "clamp"}));
   cmd.add_option("--param", params, "method parameter key=value (repeatable)");
   cmd.add_option("--config", config_file, "JSON object of method parameters");

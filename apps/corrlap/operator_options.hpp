@@ -3,6 +3,7 @@
 // method parameters; builds the operators and reports warnings on stderr.
 #include <CLI/CLI.hpp>
 #include <corrlap/core/discretization.hpp>
+#include <corrlap/core/error.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,5 +37,20 @@ struct OperatorOptions {
   /// prepare() then assemble().
   Operators build(bool extras = false) const;
 };
+
+/// Runs `solve()` (a linear or eigen solve of `ops`). A solver failure (NumericalError) on operators
+/// that were assembled at a contract risk (Operators::contract_risk, e.g. orientation=warn) is
+/// rethrown naming that likely cause and the remedy, instead of a bare "not positive definite".
+template <class Solve>
+auto explain_solver_failure(const Operators& ops, Solve&& solve) -> decltype(solve()) {
+  try {
+    return solve();
+  } catch (const NumericalError& e) {
+    if (ops.contract_risk.empty()) throw;
+    throw NumericalError(std::string(e.what()) + "\n  likely cause: " + ops.contract_risk +
+                         ", so L need not be negative semi-definite nor M positive definite\n  remedy: "
+                         "--orientation clamp (the default) repairs those normals");
+  }
+}
 
 }  // namespace corrlap::cli

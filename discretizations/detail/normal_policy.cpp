@@ -11,7 +11,9 @@
 namespace corrlap {
 
 std::vector<ParameterInfo> normal_policy_parameters() {
-  return {{"orientation", "warn", "normals with u.n <= 0 on a surfel: error | warn (compute as given) | clamp"},
+  return {{"orientation", "clamp",
+           "normals with u.n <= 0 on a surfel: clamp (raise u.n to clamp_min) | warn (compute as given: L, M may "
+           "break their contract) | error"},
           {"clamp_min", "0.05", "with orientation=clamp: smallest allowed u.n before renormalization"},
           {"normalize", "false", "rescale non-unit normals instead of rejecting them"}};
 }
@@ -42,8 +44,9 @@ Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh) {
 }
 
 PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                const Config& params, const std::string& method, std::vector<std::string>& warnings,
+                                const Config& params, const std::string& method, Operators& ops,
                                 OrientationReport* out_report) {
+  std::vector<std::string>& warnings = ops.warnings;
   if (kind == NormalKind::None) return PreparedNormals(Eigen::MatrixX3d());
   const bool face = kind == NormalKind::Face;
   const Eigen::MatrixX3d& given = face ? normals.face : normals.vertex;
@@ -61,7 +64,7 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
     check_normals(given, expected, what);
   }
   const Eigen::MatrixX3d& u = result.matrix();
-  const OrientationPolicy policy = parse_orientation_policy(params.get_string("orientation", "warn"));
+  const OrientationPolicy policy = parse_orientation_policy(params.get_string("orientation", kDefaultOrientation));
   const double clamp_min = params.get_double("clamp_min", 0.05);
   if (!(clamp_min > 0.0 && clamp_min < 1.0)) throw InputError(method + ": clamp_min must be in (0, 1)");
 
@@ -123,7 +126,12 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
     case OrientationPolicy::Error:
       throw InputError(r.summary(method));
     case OrientationPolicy::Warn:
-      warnings.push_back(r.summary(method));
+      // As given, like the reference: a corrected area u.n <= 0 makes that element's measure
+      // non-positive (docs/math.md §4.2), so the assembled operators lose their sign guarantees.
+      ops.contract_risk = r.summary(method) + ", used as given (orientation=warn)";
+      warnings.push_back(r.summary(method) +
+                         "; used as given (orientation=warn): L may not be negative semi-definite nor M positive "
+                         "definite, so solvers may fail; orientation=clamp (the default) repairs these normals");
       return result;
     case OrientationPolicy::Clamp:
       break;
@@ -146,7 +154,10 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
       }
     if (!changed) break;
   }
-  warnings.push_back(r.summary(method) + "; clamped to u.n >= " + std::to_string(clamp_min));
+  std::ostringstream note;
+  note << r.summary(method) << "; raised to u.n >= " << clamp_min
+       << " and renormalized (orientation=clamp, the default; orientation=warn uses them as given)";
+  warnings.push_back(note.str());
   return PreparedNormals(std::move(clamped));
 }
 

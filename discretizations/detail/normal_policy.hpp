@@ -12,6 +12,10 @@ namespace corrlap {
 
 /// Parameter keys shared by every corrected method (documented in parameters()).
 std::vector<ParameterInfo> normal_policy_parameters();
+/// The default policy: clamp. "warn" computes exactly what the reference computes, but one corner
+/// with u.n slightly below 0 can give L a positive eigenvalue of 1e5 (torus, h = 0.25, true
+/// normals: 16 of 42496 corners, docs/discretizations.md), which no user asking for an operator wants.
+inline constexpr const char* kDefaultOrientation = "clamp";
 /// "error" | "warn" | "clamp"; InputError otherwise.
 OrientationPolicy parse_orientation_policy(const std::string& text);
 
@@ -39,16 +43,17 @@ class PreparedNormals {
   const Eigen::MatrixX3d* borrowed_ = nullptr;
 };
 
-/// Returns the normals the kernels must use:
+/// Returns the normals the kernels must use (warnings and contract_risk go to `ops`):
 ///  - checks count, finiteness, non-zero length and unit length (parameter "normalize": rescale instead);
 ///  - orientation: for face normals u_f . n_f, for vertex normals u_v . n_f at every corner of f;
-///    policy "error" throws naming the worst element, "warn" (default) keeps the normals exactly as
-///    given and appends a warning with the count and the worst element, "clamp" raises u . n_f to
-///    `clamp_min` (default 0.05) and renormalizes.
+///    policy "clamp" (default) raises u . n_f to `clamp_min` (default 0.05), renormalizes and appends
+///    a warning with the count and the worst element; "warn" keeps the normals exactly as given,
+///    appends a warning saying what that breaks and sets ops.contract_risk; "error" throws naming
+///    the worst element.
 ///  - normals pointing inward on more than half of the elements are rejected under every policy
 ///    (flipped orientation: the mass matrix would be negative).
 PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                const Config& params, const std::string& method, std::vector<std::string>& warnings,
+                                const Config& params, const std::string& method, Operators& ops,
                                 OrientationReport* report = nullptr);
 
 /// Trivial (outward) unit normal of every face: from the surfel data when present, else from

@@ -4,6 +4,8 @@
 // gives an IoError naming the value and the limit instead of a wrap-around, an undefined
 // conversion or an allocation of gigabytes.
 #include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/memory_budget.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -31,20 +33,17 @@ inline std::string readable_count(std::uint64_t n) {
   return out;
 }
 
-/// "60 B", "12.3 KiB", "4.0 GiB".
-inline std::string readable_bytes(double bytes) {
-  static const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
-  int u = 0;
-  while (bytes >= 1024.0 && u < 6) {
-    bytes /= 1024.0;
-    ++u;
+/// "60 B", "12.3 KiB", "4.0 GiB" (core/memory_budget.hpp).
+inline std::string readable_bytes(double bytes) { return corrlap::readable_bytes(bytes); }
+
+/// Refuses, as an IoError prefixed by `file_label` (e.g. "PLY file 'x.ply'"), a reader allocation
+/// of `bytes` for `what` (e.g. "3 000 000 vertices") above the memory budget (--max-memory).
+inline void check_budget(const std::string& file_label, double bytes, const std::string& what) {
+  try {
+    check_memory_budget(bytes, what, "is the header corrupt?");
+  } catch (const InputError& e) {
+    throw IoError(file_label + ": " + e.what());
   }
-  char buf[32];
-  if (u == 0)
-    std::snprintf(buf, sizeof buf, "%.0f B", bytes);
-  else
-    std::snprintf(buf, sizeof buf, "%.1f %s", bytes, units[u]);
-  return buf;
 }
 
 /// A double from a file, printed for a message: at most 6 significant digits, nan/inf spelled out

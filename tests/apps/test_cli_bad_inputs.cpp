@@ -49,6 +49,13 @@ std::string make_inputs() {
   write_text(dir + "/short.raw", std::string(7, '\0'));
   write_text(dir + "/model.stl", "solid x\n");
   write_text(dir + "/three_values.txt", "1\n2\n3\n");
+  write_text(dir + "/huge_count.ply",
+             "ply\nformat binary_little_endian 1.0\nelement vertex 4294967296\nproperty float x\nend_header\n");
+  write_text(dir + "/huge_count.off", "OFF\n100000000 100000000 0\n0 0 0\n");
+  write_text(dir + "/no_end.vol", "X: 2\nY: 2\nZ: 2\nVoxel-Size: 1\n");
+  write_text(dir + "/big.vol", "X: 1024\nY: 1024\nZ: 1024\nVoxel-Size: 1\nAlpha-Color: 0\nVersion: 2\n.\n");
+  write_text(dir + "/bad_sizes.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 -2 2\nencoding: raw\n\n");
+  write_text(dir + "/no_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
   return dir;
 }
 
@@ -59,6 +66,15 @@ const std::vector<BadCall>& catalogue() {
       {"nosuchcommand", "nosuchcommand"},
       {"--threads -3 info {D}/s.obj", "--threads: must be a number >= 0 (got -3)"},
       {"--threads abc info {D}/s.obj", "'abc' is not a number"},
+      // The memory budget (--max-memory): malformed, and requests beyond it refused before allocating.
+      {"--max-memory abc info {D}/s.obj", "memory size 'abc': expected a positive size"},
+      {"--max-memory 0 info {D}/s.obj", "memory size '0'"},
+      {"--max-memory 1M digitize --shape sphere1 --h 0.01 --out {D}/x.obj",
+       "more than the memory budget of 1.0 MiB (--max-memory); use a larger grid step or a smaller box"},
+      {"--max-memory 64M digitize --shape sphere1 --h 0.004 --bbox -1.2 1.2 --offset 1 --out {D}/x.obj",
+       "surface extraction of"},
+      {"--max-memory 64M digitize --volume {D}/big.vol --threshold 0 --out {D}/x.obj",
+       "needs 1.0 GiB, more than the memory budget of 64.0 MiB"},
       // digitize: sources and parameters.
       {"digitize --out {D}/x.obj", "Exactly 1 option from [--shape,--polynomial,--volume,--mesh-file] is required"},
       {"digitize --shape sphere1 --volume {D}/trunc.vol --out {D}/x.obj", "2 were given"},
@@ -81,12 +97,26 @@ const std::vector<BadCall>& catalogue() {
       {"digitize --volume {D}/short.raw --raw-dimensions 2 2 2 --threshold 0 --out {D}/x.obj", "short.raw'"},
       {"digitize --volume {D}/float.nrrd --threshold 0 --out {D}/x.obj", "unsupported type 'float'"},
       {"digitize --volume {D}/model.stl --threshold 0 --out {D}/x.obj", "unsupported extension 'stl'"},
+      {"digitize --volume {D}/no_end.vol --threshold 0 --out {D}/x.obj", "no_end.vol'"},
+      {"digitize --volume {D}/big.vol --threshold 0 --out {D}/x.obj", "the file holds"},
+      {"digitize --volume {D}/bad_sizes.nrrd --threshold 0 --out {D}/x.obj", "bad_sizes.nrrd'"},
+      {"digitize --volume " + corrlap::test::reference_dir() +
+           "/bad_inputs/nrrd_sizes_wrap_ascii.nrrd --threshold 0 "
+           "--out {D}/x.obj",
+       "4 295 032 832 voxels"},
+      {"digitize --volume " + corrlap::test::reference_dir() +
+           "/bad_inputs/nrrd_gzip_1gib.nrrd --threshold 0 "
+           "--out {D}/x.obj",
+       "of gzip data can hold"},
       // digitize: mesh files.
       {"digitize --mesh-file {D}/s.obj --out {D}/x.obj", "--mesh-file needs --resolution N"},
       {"digitize --mesh-file {D}/s.obj --resolution 0 --out {D}/x.obj", "--resolution: must be a positive number"},
       {"digitize --mesh-file {D}/trunc.ply --resolution 16 --out {D}/x.obj", "trunc.ply'"},
       {"digitize --mesh-file {D}/trunc.off --resolution 16 --out {D}/x.obj", "trunc.off'"},
       {"digitize --mesh-file {D}/missing.obj --resolution 16 --out {D}/x.obj", "missing.obj': cannot open"},
+      {"digitize --mesh-file {D}/huge_count.ply --resolution 16 --out {D}/x.obj", "absurd element count 4294967296"},
+      {"digitize --mesh-file {D}/huge_count.off --resolution 16 --out {D}/x.obj", "the file holds"},
+      {"digitize --mesh-file {D}/no_faces.obj --resolution 16 --out {D}/x.obj", "no_faces.obj'"},
       // info.
       {"info", "file is required"},
       {"info {D}/missing.obj", "missing.obj': cannot open"},
@@ -135,6 +165,11 @@ const std::vector<BadCall>& catalogue() {
       {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs x2 --param tolerance=1",
        "unknown config key 'tolerance'"},
       {"solve --method polydec --shape sphere1 --h 0.2 --rhs x2 --config {D}/broken.json", "invalid JSON"},
+      {"solve --method fem --shape sphere1 --h 0.2 --normals true --rhs x2 --orientation sideways", "--orientation"},
+      // A solver failing on operators assembled from inconsistent normals used as given names the
+      // cause and the remedy (torus, h = 0.25, true normals: 16 corners with u.n <= 0).
+      {"solve --method interpolated --shape torus --h 0.25 --normals true --orientation warn --rhs x2",
+       "remedy: --orientation clamp (the default)"},
       // eigs.
       {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 0", "-k must be positive"},
       {"eigs --method fem --shape sphere1 --h 0.2 --normals true -k 100000", "k = 100000 must be in"},

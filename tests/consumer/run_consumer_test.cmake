@@ -19,9 +19,14 @@ if(MODE STREQUAL "install")
 else()
   set(package_hint -Dcorrlap_DIR=${BUILD_DIR})
 endif()
-# CONSUMER_FLAGS: the sanitizer flags of a sanitizer build (empty otherwise).
+# CONSUMER_FLAGS: the sanitizer flags of a sanitizer build (empty otherwise); CONSUMER_CXX: the
+# compiler of the build under test.
+set(compiler_hint "")
+if(CONSUMER_CXX)
+  set(compiler_hint -DCMAKE_CXX_COMPILER=${CONSUMER_CXX})
+endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR}
-  ${package_hint} -DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}"
+  ${package_hint} ${compiler_hint} -DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}"
   "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}" RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "configuring the consumer against the package (${MODE}) failed (${rc})")

@@ -222,7 +222,10 @@ TEST_CASE("every quad method gives the same bits with and without a QuadPattern"
     set_thread_count(t);
     const QuadPattern pa = QuadPattern::build(a.mesh), pb = QuadPattern::build(b.mesh);
     const QuadPattern pa_copy = pa;  // copies share the state
-    for (const auto& [name, kv] : cases) {
+    for (const auto& test_case : cases) {
+      // Named copies, not a structured binding: INFO captures them in a lambda (clang-14 refuses bindings).
+      const std::string& name = test_case.first;
+      const std::string& kv = test_case.second;
       INFO(name << " " << kv << ", " << t << " threads");
       const auto d = make_discretization(name);
       const Config params = kv.empty() ? Config{} : Config::from_key_values({kv});

@@ -221,12 +221,14 @@ TEST_CASE("corrected methods: inconsistent orientation follows the policy error 
     }
     const Operators w = d->assemble(s.mesh, n, warn);
     CHECK(w.warnings.size() == 1);
+    CHECK_FALSE(w.contract_risk.empty());  // used as given: the solver-facing caveat is set
     CHECK(std::isfinite(w.L.sum()));
-    const Operators dflt = d->assemble(s.mesh, n, Config{});  // warn is the default
-    CHECK(dflt.warnings.size() == 1);
-    CHECK(relative_difference(dflt.L, w.L) == 0.0);
     const Operators c = d->assemble(s.mesh, n, clamp);
     CHECK(c.warnings.size() == 1);
+    CHECK(c.contract_risk.empty());
+    const Operators dflt = d->assemble(s.mesh, n, Config{});  // clamp is the default
+    CHECK(dflt.warnings.size() == 1);
+    CHECK(relative_difference(dflt.L, c.L) == 0.0);
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eM(Eigen::MatrixXd(c.M), Eigen::EigenvaluesOnly);
     if (name != "interpolated") CHECK(eM.eigenvalues().minCoeff() > 0.0);  // clamped: positive corrected areas
     CHECK((c.L * Eigen::VectorXd::Ones(c.L.cols())).cwiseAbs().maxCoeff() <= 1e-12 * max_abs(c.L));

@@ -145,14 +145,18 @@ TEST_CASE("fem fast face values and assembly are bitwise the readable local matr
                                       rows[j] = -K[std::size_t(f)](i, j), rows[4 + j] = M[std::size_t(f)](i, j);
                                   },
                                   {&L, &Mf});
+      // orientation=warn: the normals exactly as given, like the readable matrices (some perturbed
+      // ones have u.n <= 0, which the default policy would clamp).
       const auto fem = make_corrected_fem();
       const QuadPattern pattern = QuadPattern::build(s.mesh);
+      const Config as_given = Config::from_key_values({"orientation=warn"});
       for (const Operators& ops :
-           {fem->assemble(s.mesh, s.normals, Config{}), fem->assemble(s.mesh, s.normals, Config{}, pattern)}) {
+           {fem->assemble(s.mesh, s.normals, as_given), fem->assemble(s.mesh, s.normals, as_given, pattern)}) {
         CHECK(same_bits(ops.L, L));
         CHECK(same_bits(ops.M, Mf));
       }
-      const Operators lumped = fem->assemble(s.mesh, s.normals, Config::from_key_values({"mass=lumped"}), pattern);
+      const Operators lumped =
+          fem->assemble(s.mesh, s.normals, Config::from_key_values({"mass=lumped", "orientation=warn"}), pattern);
       bool diag = lumped.M.nonZeros() == s.mesh.num_vertices();
       for (int v = 0; diag && v < s.mesh.num_vertices(); ++v) {
         double d = 0.0;  // corners at v, ascending face order

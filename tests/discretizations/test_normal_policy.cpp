@@ -16,10 +16,11 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   const SurfelMesh mesh = test::sphere1_surface(0.25);
   NormalFields nf;
   nf.face = true_face_normals(make_implicit_shape("sphere1"), mesh);
-  std::vector<std::string> warnings;
+  Operators ops;  // receives warnings and contract_risk
+  const std::vector<std::string>& warnings = ops.warnings;
   OrientationReport report;
 
-  const PreparedNormals plain = prepare_normals(mesh, nf, NormalKind::Face, Config(), "test", warnings, &report);
+  const PreparedNormals plain = prepare_normals(mesh, nf, NormalKind::Face, Config(), "test", ops, &report);
   CHECK_FALSE(plain.is_copy());
   CHECK(&plain.matrix() == &nf.face);
   CHECK(report.inconsistent == 0);
@@ -29,25 +30,35 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   NormalFields scaled = nf;
   scaled.face *= 2.0;
   const PreparedNormals normalized =
-      prepare_normals(mesh, scaled, NormalKind::Face, Config::from_key_values({"normalize=true"}), "test", warnings);
+      prepare_normals(mesh, scaled, NormalKind::Face, Config::from_key_values({"normalize=true"}), "test", ops);
   CHECK(normalized.is_copy());
   CHECK((normalized.matrix() - nf.face).cwiseAbs().maxCoeff() < 1e-15);
   CHECK(scaled.face.row(0).norm() == doctest::Approx(2.0));
-  CHECK_THROWS_WITH_AS(prepare_normals(mesh, scaled, NormalKind::Face, Config(), "test", warnings),
+  CHECK_THROWS_WITH_AS(prepare_normals(mesh, scaled, NormalKind::Face, Config(), "test", ops),
                        doctest::Contains("length"), InputError);
 
-  // one face tangent to its surfel: warn borrows (exact reference values), clamp copies
+  CHECK(ops.contract_risk.empty());
+
+  // one face tangent to its surfel: warn borrows (exact reference values) and says what that
+  // breaks; clamp (the default) copies and keeps the contract
   NormalFields tangent = nf;
   const Eigen::Vector3d n0 = trivial_face_normals(mesh).row(0).transpose();
   tangent.face.row(0) = n0.unitOrthogonal().transpose();
-  warnings.clear();
-  const PreparedNormals warned = prepare_normals(mesh, tangent, NormalKind::Face, Config(), "test", warnings, &report);
+  ops.warnings.clear();
+  const PreparedNormals warned = prepare_normals(mesh, tangent, NormalKind::Face,
+                                                 Config::from_key_values({"orientation=warn"}), "test", ops, &report);
   CHECK_FALSE(warned.is_copy());
   CHECK(report.inconsistent == 1);
   CHECK(report.worst_face == 0);
-  CHECK(warnings.size() == 1);
-  const PreparedNormals clamped = prepare_normals(mesh, tangent, NormalKind::Face,
-                                                  Config::from_key_values({"orientation=clamp"}), "test", warnings);
+  REQUIRE(warnings.size() == 1);
+  CHECK(warnings[0].find("L may not be negative semi-definite nor M positive definite") != std::string::npos);
+  CHECK(warnings[0].find("orientation=clamp") != std::string::npos);
+  CHECK(ops.contract_risk.find("1 of") != std::string::npos);
+  Operators clamped_ops;
+  const PreparedNormals clamped = prepare_normals(mesh, tangent, NormalKind::Face, Config(), "test", clamped_ops);
+  CHECK(clamped_ops.contract_risk.empty());
+  REQUIRE(clamped_ops.warnings.size() == 1);
+  CHECK(clamped_ops.warnings[0].find("raised to u.n >= 0.05") != std::string::npos);
   CHECK(clamped.is_copy());
   CHECK(clamped.matrix().row(0).dot(n0) >= 0.05 - 1e-12);
   CHECK(clamped.matrix().row(0).norm() == doctest::Approx(1.0));

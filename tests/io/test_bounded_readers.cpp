@@ -77,7 +77,7 @@ TEST_CASE("NRRD sizes whose voxel count wraps 32 bits are rejected before readin
   huge.raw_dimensions = Eigen::Vector3i(m, m, m);
   const std::string raw = tmp_path("eight_bytes.raw");
   write_text(raw, "12345678");
-  expect_error([&] { read_volume(raw, huge); }, {"overflow 64 bits, more than the memory budget of 16.0 GiB"});
+  expect_error([&] { read_volume(raw, huge); }, {"overflow 64 bits, more than the 16.0 GiB a volume may hold"});
 }
 
 TEST_CASE("NRRD gzip: announced sizes bounded by what the compressed bytes can hold; inflating stops at the sizes") {
