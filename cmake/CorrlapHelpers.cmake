@@ -31,6 +31,9 @@ function(corrlap_library name)
     $<BUILD_INTERFACE:${CORRLAP_BUILD_INCLUDE_DIR}>
     $<INSTALL_INTERFACE:include>)
   target_link_libraries(corrlap_${name} PUBLIC ${ARG_PUBLIC} PRIVATE ${ARG_PRIVATE})
+  # The public headers are C++20: a consumer gets that requirement from the package (a compiler
+  # whose default is older, e.g. clang-14's C++14, would fail on <optional>, <string_view>...).
+  target_compile_features(corrlap_${name} PUBLIC cxx_std_20)
   corrlap_warnings(corrlap_${name})
   foreach(header ${headers})
     if(header MATCHES "(^|/)detail/")

@@ -4,6 +4,8 @@
 #include <cctype>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/output_file.hpp>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -126,14 +128,20 @@ Volume read_vol(const std::string& path) {
   return v;
 }
 
+// The voxel values, then commit: a failed write leaves no half-written volume (io/detail/output_file.hpp).
+void write_values(io_detail::OutputFile& out, const Volume& v) {
+  // A short write sets the stream's error flag, which commit() reports naming the file.
+  if (!v.values.empty()) (void)std::fwrite(v.values.data(), 1, v.values.size(), out.get());
+  out.commit();
+}
+
 void write_vol(const std::string& path, const Volume& v) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) fail(path, "cannot open for writing");
-  out << "Center-X: " << v.size.x() / 2 << "\nCenter-Y: " << v.size.y() / 2 << "\nCenter-Z: " << v.size.z() / 2
-      << "\nX: " << v.size.x() << "\nY: " << v.size.y() << "\nZ: " << v.size.z()
-      << "\nVoxel-Size: 1\nAlpha-Color: 0\nVoxel-Endian: 0\nInt-Endian: 0123\nVersion: 2\n.\n";
-  out.write(reinterpret_cast<const char*>(v.values.data()), std::streamsize(v.values.size()));
-  if (!out) fail(path, "write error");
+  io_detail::OutputFile out(path, "volume", true);
+  std::fprintf(out.get(),
+               "Center-X: %d\nCenter-Y: %d\nCenter-Z: %d\nX: %d\nY: %d\nZ: %d\nVoxel-Size: 1\nAlpha-Color: 0\n"
+               "Voxel-Endian: 0\nInt-Endian: 0123\nVersion: 2\n.\n",
+               v.size.x() / 2, v.size.y() / 2, v.size.z() / 2, v.size.x(), v.size.y(), v.size.z());
+  write_values(out, v);
 }
 
 Volume read_raw(const std::string& path, const VolumeReadOptions& options) {
@@ -149,10 +157,8 @@ Volume read_raw(const std::string& path, const VolumeReadOptions& options) {
 }
 
 void write_raw(const std::string& path, const Volume& v) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) fail(path, "cannot open for writing");
-  out.write(reinterpret_cast<const char*>(v.values.data()), std::streamsize(v.values.size()));
-  if (!out) fail(path, "write error");
+  io_detail::OutputFile out(path, "volume", true);
+  write_values(out, v);
 }
 
 // ---- NRRD (http://teem.sourceforge.net/nrrd/format.html) ----
@@ -315,12 +321,12 @@ Volume read_nrrd(const std::string& path) {
 }
 
 void write_nrrd(const std::string& path, const Volume& v) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) fail(path, "cannot open for writing");
-  out << "NRRD0004\n# written by corrlap\ntype: uint8\ndimension: 3\nsizes: " << v.size.x() << " " << v.size.y() << " "
-      << v.size.z() << "\nencoding: raw\nendian: little\n\n";
-  out.write(reinterpret_cast<const char*>(v.values.data()), std::streamsize(v.values.size()));
-  if (!out) fail(path, "write error");
+  io_detail::OutputFile out(path, "volume", true);
+  std::fprintf(
+      out.get(),
+      "NRRD0004\n# written by corrlap\ntype: uint8\ndimension: 3\nsizes: %d %d %d\nencoding: raw\nendian: little\n\n",
+      v.size.x(), v.size.y(), v.size.z());
+  write_values(out, v);
 }
 
 }  // namespace

@@ -311,3 +311,37 @@ TEST_CASE("writers refuse NaN and infinity and never leave a half-written file")
   CHECK_THROWS_WITH_AS(corrlap::write_scalars(dir + "/no/such/folder/s.txt", Eigen::VectorXd::Ones(2)),
                        doctest::Contains("cannot open for writing"), corrlap::IoError);
 }
+
+TEST_CASE("volume writers go through a temporary file: replaced whole, or untouched on failure") {
+  const std::string dir = corrlap::test::tmp_path("atomic_volumes");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  Volume small;
+  small.size = Eigen::Vector3i(2, 2, 2);
+  small.values.assign(8, 7);
+  Volume large;
+  large.size = Eigen::Vector3i(4, 3, 2);
+  large.values.assign(24, 200);
+  for (const std::string ext : {"vol", "raw", "nrrd"}) {
+    CAPTURE(ext);
+    const std::string path = dir + "/v." + ext;
+    VolumeReadOptions opt;
+    if (ext == "raw") opt.raw_dimensions = small.size;
+    write_volume(path, small);
+    const std::string before = corrlap::test::read_text(path);
+    CHECK(read_volume(path, opt).values == small.values);
+    // A volume whose data does not match its sizes is refused; the existing file stays as it was.
+    Volume broken = large;
+    broken.values.pop_back();
+    CHECK_THROWS_AS(write_volume(path, broken), corrlap::IoError);
+    CHECK(corrlap::test::read_text(path) == before);
+    // A valid rewrite replaces it whole.
+    write_volume(path, large);
+    if (ext == "raw") opt.raw_dimensions = large.size;
+    CHECK(read_volume(path, opt).values == large.values);
+    CHECK_THROWS_WITH_AS(write_volume(dir + "/no/such/folder/v." + ext, small),
+                         doctest::Contains("cannot open for writing"), corrlap::IoError);
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    CHECK(entry.path().filename().string().find(".tmp-") == std::string::npos);
+}
