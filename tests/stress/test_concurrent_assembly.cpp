@@ -2,8 +2,8 @@
 // without a pattern and through one QuadPattern per mesh shared by all tasks (its lazy parts and
 // scratch pool are then used concurrently): every result must equal the serial one bit for bit.
 #include <doctest/doctest.h>
-#include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/discretizations/assembly/quad_pattern.hpp>
@@ -11,11 +11,17 @@
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <thread>
 #include <vector>
+
+#include "stress/concurrently.hpp"
 
 using namespace corrlap;
 
 namespace {
+// Assemblies in flight at once (at least 4, more on larger machines).
+const int kLanes = int(std::max(4u, std::thread::hardware_concurrency()));
+
 struct Case {
   SurfelMesh mesh;
   NormalFields normals;
@@ -56,7 +62,7 @@ TEST_CASE("concurrent assembly of every method equals the serial result bitwise"
       expected[m].push_back(make_discretization(methods[m])->assemble(c.mesh, c.normals, Config()));
   constexpr int kRounds = 24;
   std::atomic<int> mismatches{0}, runs{0};
-  tbb::parallel_for(0, int(methods.size()) * kRounds, [&](int task) {
+  test::concurrently(int(methods.size()) * kRounds, kLanes, [&](int task) {
     const std::size_t m = std::size_t(task) % methods.size();
     const std::size_t c = std::size_t(task / int(methods.size())) % cases.size();
     const Operators ops = make_discretization(methods[m])->assemble(cases[c].mesh, cases[c].normals, Config());
@@ -92,7 +98,7 @@ TEST_CASE("concurrent assemblies sharing one QuadPattern equal the serial result
   constexpr int kRounds = 16;
   const int tasks = int(methods.size()) * 2 * kRounds;
   std::atomic<int> mismatches{0}, runs{0};
-  tbb::parallel_for(0, tasks, [&](int task) {
+  test::concurrently(tasks, kLanes, [&](int task) {
     const std::size_t m = std::size_t(task) % methods.size();
     const std::size_t variant = std::size_t(task / int(methods.size())) % 2;
     const std::size_t c = std::size_t(task / int(2 * methods.size())) % cases.size();

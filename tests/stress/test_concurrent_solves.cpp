@@ -1,12 +1,9 @@
 // Stress test (ctest label "stress"): 12 concurrent TBB tasks, 60 rounds each, every round
 // assembling an operator with the parallel assembly plan and refactorizing/solving it with every
 // backend. Direct solvers must reproduce the serial results bitwise, CG to its tolerance.
-// Run it under ThreadSanitizer with -DCORRLAP_TSAN=ON (docs/backends.md).
+// Run it under ThreadSanitizer with `make test-tsan` (docs/backends.md; tests/stress/concurrently.hpp).
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <cmath>
@@ -18,6 +15,8 @@
 #include <mutex>
 #include <string>
 #include <vector>
+
+#include "stress/concurrently.hpp"
 
 using namespace corrlap;
 using SpMat = Eigen::SparseMatrix<double>;
@@ -92,12 +91,10 @@ TEST_CASE("concurrent assembly + factorization + solves equal the serial results
   std::atomic<int> solves{0}, assembly_mismatch{0}, direct_mismatch{0}, cg_off{0}, errors{0};
   std::mutex message_mutex;
   std::string first_error;
-  // TBB caps workers at the core count by default; lift the cap so that kTasks really run at once.
-  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, kTasks);
+  // kTasks really at once (TBB's default cap is the core count; concurrently() lifts it).
   std::atomic<int> running{0}, max_running{0};
-  tbb::task_arena arena(kTasks);
-  arena.execute([&] {
-    tbb::parallel_for(0, kTasks, 1, [&](int t) {
+  {
+    test::concurrently(kTasks, kTasks, [&](int t) {
       const int now = ++running;
       for (int m = max_running.load(); now > m && !max_running.compare_exchange_weak(m, now);) {
       }
@@ -135,7 +132,7 @@ TEST_CASE("concurrent assembly + factorization + solves equal the serial results
       }
       --running;
     });
-  });
+  }
   INFO("first error: " << first_error);
   MESSAGE("tasks running at once (max): " << max_running.load());
   CHECK(max_running.load() >= 8);
