@@ -87,6 +87,49 @@ Eigen::VectorXd solve_neumann_poisson(const SpMat& L, const SpMat& M, const Eige
   return solve_dirichlet(L, M, compatible, {pin}, Eigen::VectorXd::Constant(1, pin_value), solver);
 }
 
+Eigen::MatrixXd solve_neumann_poisson_columns(const SpMat& L, const SpMat& M, const Eigen::MatrixXd& B,
+                                              LinearSolver& solver, const Eigen::VectorXd& pin_values, int pin) {
+  const Eigen::Index n = L.rows();
+  if (L.cols() != n || M.rows() != n || M.cols() != n || B.rows() != n || pin_values.size() != B.cols())
+    throw InputError("Neumann problem: sizes differ (L " + std::to_string(L.rows()) + "x" + std::to_string(L.cols()) +
+                     ", B " + std::to_string(B.rows()) + "x" + std::to_string(B.cols()) + ", " +
+                     std::to_string(pin_values.size()) + " pin values)");
+  if (pin < 0 || pin >= n) throw InputError("Neumann problem: pinned vertex " + std::to_string(pin) + " out of range");
+  if (n < 2) throw InputError("Neumann problem: needs at least 2 vertices");
+  // The same steps as solve_neumann_poisson (compatibility projection, pin, the free rows of
+  // L g = M b_c with -L_ff handed to the solver), with every column sharing one factorization.
+  const Eigen::VectorXd m1 = M * Eigen::VectorXd::Ones(n);
+  const double area = m1.sum();
+  Eigen::MatrixXd rhs_full(n, B.cols());
+  for (Eigen::Index j = 0; j < B.cols(); ++j) {
+    if (!std::isfinite(pin_values[j])) throw InputError("Neumann problem: pin value is not finite");
+    const Eigen::VectorXd compatible = B.col(j).array() - m1.dot(B.col(j)) / area;
+    Eigen::VectorXd u_fixed = Eigen::VectorXd::Zero(n);
+    u_fixed[pin] = pin_values[j];
+    rhs_full.col(j) = M * compatible - L * u_fixed;
+  }
+  const auto free_of = [pin](Eigen::Index v) { return v < pin ? v : v - 1; };  // v != pin
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(std::size_t(L.nonZeros()));
+  for (Eigen::Index j = 0; j < L.outerSize(); ++j) {
+    if (j == pin) continue;
+    for (SpMat::InnerIterator it(L, j); it; ++it)
+      if (it.row() != pin) triplets.emplace_back(free_of(it.row()), free_of(j), -it.value());
+  }
+  SpMat A(n - 1, n - 1);
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::MatrixXd rhs(n - 1, B.cols());
+  for (Eigen::Index v = 0; v < n; ++v)
+    if (v != pin) rhs.row(free_of(v)) = -rhs_full.row(v);
+  solver.compute(A);
+  const Eigen::MatrixXd free_part = solver.solve(rhs);
+  Eigen::MatrixXd G(n, B.cols());
+  for (Eigen::Index v = 0; v < n; ++v)
+    if (v != pin) G.row(v) = free_part.row(free_of(v));
+  G.row(pin) = pin_values.transpose();
+  return G;
+}
+
 ErrorNorms error_norms(const SpMat& M, const Eigen::VectorXd& e) {
   if (M.rows() != e.size() || M.cols() != e.size())
     throw InputError("error norms: M is " + std::to_string(M.rows()) + "x" + std::to_string(M.cols()) + ", error has " +

@@ -30,6 +30,13 @@ Eigen::VectorXd solve_neumann_poisson(const Eigen::SparseMatrix<double>& L, cons
                                       const Eigen::VectorXd& b, LinearSolver& solver, double pin_value = 0.0,
                                       int pin = 0);
 
+/// solve_neumann_poisson for several right-hand sides at once (#V x k columns of B, one pin value
+/// per column): one factorization, k solves. Column j equals solve_neumann_poisson(L, M, B.col(j),
+/// solver, pin_values[j], pin) up to the rounding of the multi-column solve.
+Eigen::MatrixXd solve_neumann_poisson_columns(const Eigen::SparseMatrix<double>& L,
+                                              const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& B,
+                                              LinearSolver& solver, const Eigen::VectorXd& pin_values, int pin = 0);
+
 /// Norms of an error vector e of docs/math.md §10.3/§10.4: L_inf = max |e|, L_2 = sqrt(e^T M e / 1^T M 1).
 struct ErrorNorms {
   double linf = 0.0;

@@ -1,0 +1,274 @@
+// corrlap study: the paper's evaluations (§3; docs/math.md §10) in one command: forward, backward and
+// eigenvalue errors of several methods over grid steps and centres, written as CSV tables
+// (results, summary, fitted orders) and plots (studies/plot_study.py). docs/studies.md.
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/studies/study.hpp>
+#include <corrlap/studies/study_tables.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "command.hpp"
+#include "study_output.hpp"
+#include "validators.hpp"
+
+namespace corrlap::cli {
+namespace {
+
+struct StudyArgs {
+  std::string kind;
+  std::string methods = "fem,interpolated,corrected-vrm,projected-polydec";
+  std::string h = "0.1,0.05,0.025";
+  std::string functions = "x2,expx,p6";
+  StudyOptions options;
+  std::vector<double> bbox = {-2.0, 2.0};
+  std::string out;
+  bool resume = false, overwrite = false, no_plots = false;
+};
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) items.push_back(item);
+  return items;
+}
+
+// The options a resumed study must share with the one in DIR (methods, h and functions may grow).
+nlohmann::json fixed_options(const StudyOptions& o) {
+  nlohmann::json j;
+  j["study"] = to_string(o.kind);
+  j["normals"] = o.normals;
+  j["ii_k"] = o.ii_k;
+  j["ii_alpha"] = o.ii_alpha;
+  j["centers"] = o.centers;
+  j["seed"] = o.seed;
+  j["shape"] = o.shape;
+  j["bbox"] = {o.min_aabb, o.max_aabb};
+  j["offset"] = o.offset;
+  j["diffusion"] = o.naive ? 0.0 : o.diffusion;
+  j["k"] = o.kind == StudyKind::Eigen ? o.k : 0;
+  j["solver"] = o.linear_solver;
+  j["params"] = o.method_params;
+  return j;
+}
+
+std::string format_seconds(double s) {
+  char buf[32];
+  if (s < 60)
+    std::snprintf(buf, sizeof buf, "%.0f s", s);
+  else if (s < 3600)
+    std::snprintf(buf, sizeof buf, "%dm%02ds", int(s) / 60, int(s) % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%dh%02dm", int(s) / 3600, (int(s) / 60) % 60);
+  return buf;
+}
+
+// The plotting script: installed beside the program (../share/corrlap), else in the source tree.
+std::string plot_script() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto installed = exe.parent_path().parent_path() / "share" / "corrlap" / "plot_study.py";
+    if (std::filesystem::exists(installed)) return installed.string();
+  }
+#ifdef CORRLAP_PLOT_SCRIPT
+  if (std::filesystem::exists(CORRLAP_PLOT_SCRIPT)) return CORRLAP_PLOT_SCRIPT;
+#endif
+  return "";
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+void run(StudyArgs& a) {
+  StudyOptions& o = a.options;
+  o.kind = parse_study_kind(a.kind);
+  o.methods = split_list(a.methods);
+  o.h = parse_grid_steps(a.h);
+  o.functions = o.kind == StudyKind::Eigen ? std::vector<std::string>{} : split_list(a.functions);
+  o.min_aabb = a.bbox[0];
+  o.max_aabb = a.bbox[1];
+  o.validate();
+  if (a.resume && a.overwrite) throw InputError("study: --resume and --overwrite exclude each other");
+
+  namespace fs = std::filesystem;
+  const fs::path dir(a.out);
+  fs::create_directories(dir);
+  const bool eigen = o.kind == StudyKind::Eigen;
+  const std::string results = (dir / (eigen ? "eigen.csv" : "results.csv")).string();
+  const std::string options_file = (dir / "study.json").string();
+  const nlohmann::json fixed = fixed_options(o);
+  // Units already computed (resume): (h, centre, method) with every requested function present.
+  std::set<std::tuple<double, int, std::string>> done;
+  if (fs::exists(results)) {
+    if (a.overwrite) {
+      fs::remove(results);
+    } else if (!a.resume) {
+      throw InputError("study: '" + a.out + "' already holds a study (" + results +
+                       "); pass --resume to continue it or --overwrite to start again");
+    } else {
+      if (fs::exists(options_file)) {
+        std::ifstream in(options_file);
+        const nlohmann::json before = nlohmann::json::parse(in, nullptr, false);
+        for (const auto& [key, value] : fixed.items())
+          if (before.is_discarded() || !before.contains(key) || before[key] != value)
+            throw InputError(
+                "study: --resume: option '" + key + "' differs from the study in '" + a.out + "' (" +
+                (before.is_discarded() || !before.contains(key) ? std::string("missing") : before[key].dump()) +
+                " there, " + value.dump() + " now); use another --out or --overwrite");
+      }
+      std::map<std::tuple<double, int, std::string>, std::set<std::string>> seen;
+      if (eigen) {
+        for (const EigenRow& r : read_eigen_csv(results)) seen[{r.h, r.center, r.method}].insert("eigen");
+      } else {
+        for (const StudyRow& r : read_results_csv(results)) seen[{r.h, r.center, r.method}].insert(r.function);
+      }
+      for (const auto& [unit, functions] : seen) {
+        bool all = true;
+        for (const std::string& f : eigen ? std::vector<std::string>{"eigen"} : o.functions)
+          all = all && functions.count(f);
+        if (all) done.insert(unit);
+      }
+      std::cerr << "study: resuming " << a.out << ": " << done.size() << " unit(s) already computed\n";
+    }
+  }
+  {
+    std::ofstream out(options_file);
+    out << fixed.dump(2) << "\n";
+  }
+
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  double last_printed = -1;
+  StudyCallbacks cb;
+  cb.already_done = [&](double h, int center, const std::string& method) {
+    for (const auto& [uh, uc, um] : done)
+      if (uc == center && um == method && std::abs(uh - h) <= 1e-12 * h) return true;
+    return false;
+  };
+  cb.rows = [&](const std::vector<StudyRow>& rows) { write_results_csv(results, rows, true); };
+  cb.eigen_rows = [&](const std::vector<EigenRow>& rows) { write_eigen_csv(results, rows, true); };
+  cb.progress = [&](const StudyProgress& p) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double eta = p.cost_fraction > 0 ? elapsed * (1.0 - p.cost_fraction) / p.cost_fraction : 0.0;
+    // A TTY gets a bar redrawn in place; a log one line per 10% of the work and at the end.
+    if (!tty && p.done != p.total && p.cost_fraction < last_printed + 0.1) return;
+    last_printed = p.cost_fraction;
+    const int width = 24, filled = int(std::lround(p.cost_fraction * width));
+    std::ostringstream line;
+    line << "study " << to_string(o.kind) << " [" << std::string(std::size_t(filled), '#')
+         << std::string(std::size_t(width - filled), '.') << "] " << p.done << "/" << p.total << "  h=" << p.h
+         << " centre " << p.center + 1 << "/" << o.centers << " " << p.method << "  elapsed " << format_seconds(elapsed)
+         << "  ETA " << format_seconds(eta);
+    if (tty)
+      std::cerr << "\r" << line.str() << "\033[K" << (p.done == p.total ? "\n" : "") << std::flush;
+    else
+      std::cerr << line.str() << "\n";
+  };
+  run_study(o, cb);
+  finish_study(a.out, eigen, !a.no_plots);
+}
+
+}  // namespace
+
+void finish_study(const std::string& out, bool eigen, bool plots) {
+  namespace fs = std::filesystem;
+  const fs::path dir(out);
+  const std::string results = (dir / (eigen ? "eigen.csv" : "results.csv")).string();
+  // Tables from every row in the file (this run's and the resumed ones).
+  std::cout << "study: " << results << "\n";
+  if (!eigen) {
+    const std::vector<StudyRow> rows = read_results_csv(results);
+    const std::string summary = (dir / "summary.csv").string(), orders = (dir / "orders.csv").string();
+    write_summary_csv(summary, summarize(rows));
+    const std::vector<OrderRow> fitted = fit_orders(rows);
+    write_orders_csv(orders, fitted);
+    std::cout << "study: " << summary << "\nstudy: " << orders << "\n";
+    for (const OrderRow& r : fitted)
+      if (r.norm == std::string("l2"))
+        std::cout << "  order " << r.study << " " << r.method << " " << r.normals << " " << r.function
+                  << " L2: " << r.order
+                  << (std::isnan(r.low) ? std::string()
+                                        : " [" + std::to_string(r.low) + ", " + std::to_string(r.high) + "]")
+                  << "\n";
+  }
+  if (!plots) return;
+  const std::string script = plot_script();
+  const char* python_env = std::getenv("CORRLAP_PYTHON");
+  const std::string python = python_env && *python_env        ? python_env
+                             : fs::exists("/usr/bin/python3") ? "/usr/bin/python3"
+                                                              : "python3";
+  if (script.empty()) {
+    std::cerr << "study: plots skipped (plot_study.py not found beside the program)\n";
+    return;
+  }
+  const std::string command = shell_quote(python) + " " + shell_quote(script) + " " + shell_quote(out);
+  std::fflush(stdout);
+  std::cout.flush();
+  const int status = std::system(command.c_str());
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (code == 3)
+    std::cerr << "study: plots skipped: matplotlib is not available (apt-get install python3-matplotlib)\n";
+  else if (code != 0)
+    std::cerr << "warning: study: the plotting script failed (" << command << ", exit " << code
+              << "); the tables are written\n";
+}
+
+namespace {
+
+RegisterCommand reg(45, "study", [](CLI::App& app) {
+  auto args = std::make_shared<StudyArgs>();
+  auto* cmd =
+      app.add_subcommand("study",
+                         "the paper's evaluations: forward | backward | eigen errors of several methods over grid "
+                         "steps and centres -> CSV tables and plots (docs/studies.md)");
+  cmd->add_option("study", args->kind, "forward | backward | eigen")->required();
+  cmd->add_option("--methods", args->methods, "comma-separated discretizations")->capture_default_str();
+  cmd->add_option("--h", args->h, "grid steps: a comma list (0.1,0.05) or A:B:N (N log-spaced steps from A to B)")
+      ->capture_default_str();
+  cmd->add_option("--functions", args->functions, "forward/backward: test functions x2, expx, p6")
+      ->capture_default_str();
+  cmd->add_option("--normals", args->options.normals,
+                  "true | ii (II with k = 3, alpha = 1/3) | exact (the shape's normal at each vertex, spec §12.5)")
+      ->check(CLI::IsMember({"true", "ii", "exact"}))
+      ->capture_default_str();
+  cmd->add_option("--centers", args->options.centers,
+                  "centres per h: uniform in [-h/2, h/2]^3 (centre 0 when 1; docs/math.md §10.1)")
+      ->check(positive_number())
+      ->capture_default_str();
+  cmd->add_option("--seed", args->options.seed, "seed of the centre draws")->capture_default_str();
+  cmd->add_option("--diffusion", args->options.diffusion, "forward: dt = diffusion * h (docs/math.md §10.3)")
+      ->capture_default_str();
+  cmd->add_flag("--naive", args->options.naive, "forward: no diffusion, X = M^-1 L f");
+  cmd->add_option("-k", args->options.k, "eigen: number of eigenvalues")->capture_default_str();
+  cmd->add_option("--shape", args->options.shape, "implicit shape (the errors assume the unit sphere)")
+      ->capture_default_str();
+  cmd->add_option("--bbox", args->bbox, "digitization box MIN MAX")->expected(2)->capture_default_str();
+  cmd->add_option("--offset", args->options.offset, "extra voxels around the box")->capture_default_str();
+  cmd->add_option("--solver", args->options.linear_solver, "linear solver backend")->capture_default_str();
+  cmd->add_option("--param", args->options.method_params,
+                  "method parameter key=value for the methods that have the key (repeatable)");
+  cmd->add_option("--out", args->out, "output folder")->required();
+  cmd->add_flag("--resume", args->resume, "continue the study in --out: computed units are not recomputed");
+  cmd->add_flag("--overwrite", args->overwrite, "replace the study in --out");
+  cmd->add_flag("--no-plots", args->no_plots, "tables only");
+  cmd->callback([args] { run(*args); });
+});
+
+}  // namespace
+}  // namespace corrlap::cli

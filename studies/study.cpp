@@ -1,0 +1,312 @@
+#include "study.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <corrlap/backends/registry.hpp>
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/error.hpp>
+#include <corrlap/discretizations/assembly/quad_pattern.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/problems/problems.hpp>
+#include <corrlap/problems/test_functions.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <cstdlib>
+#include <limits>
+#include <optional>
+#include <set>
+#include <sstream>
+
+namespace corrlap {
+
+StudyKind parse_study_kind(const std::string& name) {
+  if (name == "forward") return StudyKind::Forward;
+  if (name == "backward") return StudyKind::Backward;
+  if (name == "eigen") return StudyKind::Eigen;
+  throw InputError("unknown study '" + name + "': expected forward, backward or eigen");
+}
+
+const char* to_string(StudyKind kind) {
+  switch (kind) {
+    case StudyKind::Forward:
+      return "forward";
+    case StudyKind::Backward:
+      return "backward";
+    case StudyKind::Eigen:
+      return "eigen";
+  }
+  return "?";
+}
+
+void StudyOptions::validate() const {
+  if (methods.empty()) throw InputError("study: no method given (--methods fem,interpolated,...)");
+  const std::vector<std::string> known = discretization_registry().names();
+  for (const std::string& m : methods)
+    if (std::find(known.begin(), known.end(), m) == known.end()) (void)make_discretization(m);  // lists the names
+  for (const std::string& kv : method_params) {
+    const std::string key = kv.substr(0, kv.find('='));
+    bool known_key = false;
+    for (const std::string& m : methods)
+      for (const ParameterInfo& p : make_discretization(m)->parameters()) known_key = known_key || p.name == key;
+    if (kv.find('=') == std::string::npos || !known_key)
+      throw InputError("study: method parameter '" + kv + "': no method of the study has the key '" + key + "'");
+  }
+  if (h.empty()) throw InputError("study: the list of grid steps is empty (--h 0.1,0.05 or A:B:N)");
+  for (double step : h)
+    if (!(step > 0.0) || !std::isfinite(step)) {
+      std::ostringstream os;
+      os << "study: grid step h = " << step << " must be positive and finite";
+      throw InputError(os.str());
+    }
+  if (kind != StudyKind::Eigen) {
+    if (functions.empty()) throw InputError("study: no test function given (--functions x2,expx,p6)");
+    for (const std::string& f : functions) (void)test_function(f);  // InputError listing the names
+  }
+  if (normals != "true" && normals != "ii" && normals != "exact")
+    throw InputError("study: normals '" + normals + "': expected true, ii or exact");
+  if (centers < 1 || centers > 10000) throw InputError("study: --centers must be in [1, 10000]");
+  if (kind == StudyKind::Forward && !naive && !(diffusion > 0.0 && std::isfinite(diffusion)))
+    throw InputError("study: --diffusion must be positive (or --naive)");
+  if (kind == StudyKind::Eigen && (k < 1 || k > 1000)) throw InputError("study: -k must be in [1, 1000]");
+  if (!(min_aabb < max_aabb)) throw InputError("study: the box needs MIN < MAX");
+  if (offset < 0) throw InputError("study: --offset must be >= 0");
+  if (!(ii_k > 0) || !std::isfinite(ii_alpha)) throw InputError("study: II radius parameters must be positive");
+}
+
+std::vector<double> parse_grid_steps(const std::string& text) {
+  const auto fail = [&](const std::string& why) -> std::vector<double> {
+    throw InputError("grid steps '" + text + "': " + why + " (expected a list 0.1,0.05 or A:B:N)");
+  };
+  const auto number = [&](const std::string& s) {
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || end != s.c_str() + s.size()) fail("'" + s + "' is not a number");
+    if (!(v > 0.0) || !std::isfinite(v)) fail("h = " + s + " must be positive and finite");
+    return v;
+  };
+  std::vector<double> out;
+  if (text.find(':') != std::string::npos) {
+    std::vector<std::string> parts;
+    std::stringstream ss(text);
+    for (std::string p; std::getline(ss, p, ':');) parts.push_back(p);
+    if (parts.size() != 3) return fail("a range needs three fields A:B:N");
+    const double a = number(parts[0]), b = number(parts[1]);
+    char* end = nullptr;
+    const long n = std::strtol(parts[2].c_str(), &end, 10);
+    if (parts[2].empty() || end != parts[2].c_str() + parts[2].size() || n < 1 || n > 1000)
+      return fail("N = '" + parts[2] + "' must be an integer in [1, 1000]");
+    if (n == 1) return {a};
+    for (long i = 0; i < n; ++i)
+      out.push_back(std::exp(std::log(a) + (std::log(b) - std::log(a)) * double(i) / double(n - 1)));
+    return out;
+  }
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) out.push_back(number(item));
+  if (out.empty()) return fail("the list is empty");
+  return out;
+}
+
+Eigen::Vector3d study_center_offset(unsigned long long seed, int index, int count) {
+  if (count <= 1) return Eigen::Vector3d::Zero();
+  // splitmix64: a fixed, documented generator (std::uniform_real_distribution differs between
+  // standard libraries), so that a seed gives the same centres everywhere.
+  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + std::uint64_t(index) * 0xD1B54A32D192ED03ull;
+  const auto next = [&state] {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  Eigen::Vector3d o;
+  for (int a = 0; a < 3; ++a) o[a] = double(next() >> 11) * 0x1.0p-53 - 0.5;
+  return o;
+}
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The method parameters that this method accepts: a key=value list shared by all methods (e.g.
+// orientation=warn) applies to the methods that know the key.
+Config params_for(const Discretization& d, const std::vector<std::string>& key_values) {
+  std::vector<std::string> mine;
+  for (const std::string& kv : key_values) {
+    const std::string key = kv.substr(0, kv.find('='));
+    for (const ParameterInfo& p : d.parameters())
+      if (p.name == key) mine.push_back(kv);
+  }
+  return Config::from_key_values(mine);
+}
+
+// The surface of one (h, centre): shared by every method.
+struct SharedSurface {
+  SurfelMesh mesh;
+  VoxelGrid grid;
+  ImplicitShape shape;
+  NormalFields normals;  // face and vertex
+  std::optional<QuadPattern> pattern;
+  Eigen::MatrixX3d face_centres;
+};
+
+SharedSurface build_surface(const StudyOptions& o, double h, const Eigen::Vector3d& c) {
+  SharedSurface s;
+  s.shape = make_implicit_shape(o.shape, c);
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = o.min_aabb;
+  p.max_aabb = o.max_aabb;
+  p.offset = o.offset;
+  s.grid = digitize(s.shape, p);
+  s.mesh = extract_surface(s.grid);
+  NormalRequest request;
+  request.source = o.normals == "ii" ? NormalSource::II : NormalSource::True;
+  request.ii.k = o.ii_k;
+  request.ii.alpha = o.ii_alpha;
+  s.normals = resolve_normals(s.mesh, NormalKind::Vertex, request, &s.shape, &s.grid, "study");
+  // "exact": the shape's normal at every vertex (radial on spheres), the field of spec §12.5's
+  // vertex-normal rows; face normals stay the true ones.
+  if (o.normals == "exact") s.normals.vertex = exact_vertex_normals(s.shape, s.mesh);
+  s.pattern = QuadPattern::build(s.mesh);
+  s.face_centres = s.mesh.face_centroids();
+  return s;
+}
+
+// "fem at h = 0.05, centre 3: <what>" for errors raised inside a unit.
+[[noreturn]] void rethrow_in_unit(const std::exception& e, const std::string& method, double h, int center) {
+  std::ostringstream os;
+  os << "study: " << method << " at h = " << h << ", centre " << center << ": " << e.what();
+  if (dynamic_cast<const InputError*>(&e)) throw InputError(os.str());
+  throw NumericalError(os.str());
+}
+
+}  // namespace
+
+void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
+  o.validate();
+  std::vector<double> hs = o.h;
+  std::sort(hs.begin(), hs.end(), std::greater<>());  // coarse first: early rows, early errors
+  std::vector<const TestFunction*> functions;
+  for (const std::string& f : o.functions) functions.push_back(&test_function(f));
+
+  // Work of a unit ~ number of surfels ~ 1/h^2: the fraction of it done drives the ETA.
+  double total_cost = 0;
+  for (double h : hs) total_cost += double(o.centers) * double(o.methods.size()) / (h * h);
+  StudyProgress progress;
+  progress.total = int(hs.size()) * o.centers * int(o.methods.size());
+  double cost_done = 0;
+  const auto report = [&](double h, int center, const std::string& method) {
+    ++progress.done;
+    cost_done += 1.0 / (h * h);
+    progress.h = h;
+    progress.center = center;
+    progress.method = method;
+    progress.cost_fraction = cost_done / total_cost;
+    if (cb.progress) cb.progress(progress);
+  };
+
+  for (double h : hs)
+    for (int center = 0; center < o.centers; ++center) {
+      std::vector<std::string> todo;
+      for (const std::string& m : o.methods)
+        if (cb.already_done && cb.already_done(h, center, m))
+          report(h, center, m);
+        else
+          todo.push_back(m);
+      if (todo.empty()) continue;
+      const Eigen::Vector3d c = h * study_center_offset(o.seed, center, o.centers);
+      const SharedSurface s = build_surface(o, h, c);
+      for (const std::string& method : todo) {
+        const auto t0 = std::chrono::steady_clock::now();
+        try {
+          const auto d = make_discretization(method);
+          const Operators ops = d->assemble(s.mesh, s.normals, params_for(*d, o.method_params), *s.pattern);
+          if (!ops.contract_risk.empty())
+            throw NumericalError("the operators may break their contract: " + ops.contract_risk);
+          // Values live where the operator does: vertices, or surfel centres (heat kernel, §6).
+          const Eigen::MatrixX3d& points = ops.domain == Operators::Domain::Faces ? s.face_centres : s.mesh.positions;
+          if (o.kind == StudyKind::Eigen) {
+            Config config;
+            config.set("solver", o.linear_solver);
+            const EigenResult r = make_eigen_solver(kDefaultEigenSolver, config)->solve(ops.L, ops.M, o.k);
+            const double t = seconds_since(t0);
+            std::vector<EigenRow> rows;
+            for (Eigen::Index i = 0; i < r.values.size(); ++i) {
+              EigenRow row;
+              row.method = method;
+              row.normals = o.normals;
+              row.h = h;
+              row.center = center;
+              row.index = int(i);
+              const double l = std::floor(std::sqrt(double(i)));  // index i is in the multiplet l
+              row.exact = l * (l + 1.0);
+              row.computed = r.values[i];
+              row.relative_error =
+                  i == 0 ? std::numeric_limits<double>::quiet_NaN() : (row.computed - row.exact) / row.exact;
+              row.time_s = t;
+              rows.push_back(row);
+            }
+            if (cb.eigen_rows) cb.eigen_rows(rows);
+          } else {
+            // Every function at once: one factorization per method and unit.
+            const Eigen::Index n = points.rows();
+            Eigen::MatrixXd F(n, Eigen::Index(functions.size())), Lap(n, Eigen::Index(functions.size()));
+            for (std::size_t j = 0; j < functions.size(); ++j) {
+              const TestFunctionSamples samples = sample_on_unit_sphere(*functions[j], points, c);
+              F.col(Eigen::Index(j)) = samples.f;
+              Lap.col(Eigen::Index(j)) = samples.laplacian;
+            }
+            auto solver = make_linear_solver(o.linear_solver);
+            std::vector<ErrorNorms> errors(functions.size());
+            if (o.kind == StudyKind::Backward) {
+              // docs/math.md §10.4: L g = M b_c, vertex 0 pinned to f(q_0), errors with means removed.
+              const Eigen::MatrixXd G =
+                  solve_neumann_poisson_columns(ops.L, ops.M, Lap, *solver, F.row(0).transpose(), 0);
+              for (std::size_t j = 0; j < functions.size(); ++j)
+                errors[j] = poisson_errors(ops.M, G.col(Eigen::Index(j)), F.col(Eigen::Index(j)));
+            } else {
+              // docs/math.md §10.3: X = (M - dt L)^{-1} L f, dt = diffusion * h (0: naive).
+              const double dt = o.naive ? 0.0 : o.diffusion * h;
+              Eigen::SparseMatrix<double> A = dt == 0.0 ? ops.M : Eigen::SparseMatrix<double>(ops.M - dt * ops.L);
+              A.makeCompressed();
+              solver->compute(A);
+              const Eigen::MatrixXd LF = ops.L * F;
+              const Eigen::MatrixXd X = solver->solve(LF);
+              for (std::size_t j = 0; j < functions.size(); ++j)
+                errors[j] = error_norms(ops.M, X.col(Eigen::Index(j)) - Lap.col(Eigen::Index(j)));
+            }
+            const double t = seconds_since(t0);
+            std::vector<StudyRow> rows;
+            for (std::size_t j = 0; j < functions.size(); ++j) {
+              StudyRow row;
+              row.study = to_string(o.kind);
+              row.method = method;
+              row.normals = o.normals;
+              row.function = functions[j]->name;
+              row.h = h;
+              row.center = center;
+              row.c = c;
+              row.vertices = s.mesh.num_vertices();
+              row.faces = s.mesh.num_faces();
+              row.error_linf = errors[j].linf;
+              row.error_l2 = errors[j].l2;
+              row.time_s = t;
+              if (!std::isfinite(row.error_linf) || !std::isfinite(row.error_l2))
+                throw NumericalError("the error of " + row.function + " is not finite");
+              rows.push_back(row);
+            }
+            if (cb.rows) cb.rows(rows);
+          }
+        } catch (const Error& e) {
+          rethrow_in_unit(e, method, h, center);
+        }
+        report(h, center, method);
+      }
+    }
+}
+
+}  // namespace corrlap

@@ -1,0 +1,94 @@
+#pragma once
+// The evaluation studies of the paper (§3) as a library: forward, backward (Poisson) and eigenvalue
+// errors of any set of discretizations over a list of grid steps and random centres
+// (docs/math.md §10; docs/studies.md). One study = options -> rows; the tables (summary, orders)
+// are computed from the rows (study_tables.hpp), and the CLI (`corrlap study`) writes them as CSV.
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace corrlap {
+
+enum class StudyKind { Forward, Backward, Eigen };
+/// "forward" | "backward" | "eigen"; InputError listing the names otherwise.
+StudyKind parse_study_kind(const std::string& name);
+const char* to_string(StudyKind kind);
+
+struct StudyOptions {
+  StudyKind kind = StudyKind::Backward;
+  std::vector<std::string> methods = {"fem"};   ///< registry names
+  std::vector<double> h = {0.1, 0.05};          ///< grid steps (any order)
+  std::vector<std::string> functions = {"x2"};  ///< docs/math.md §10.2 names (forward, backward)
+  std::string normals = "true";  ///< "true", "ii" (docs/math.md §1.5, §7) or "exact" (radial vertex normals)
+  double ii_k = 3.0, ii_alpha = 1.0 / 3.0;  ///< II radius k h^alpha (the paper's 1/3)
+  int centers = 1;                          ///< N: centre 0 when 1, else uniform draws (§10.1)
+  unsigned long long seed = 1;              ///< of the centre draws
+  std::string shape = "sphere1";            ///< implicit shape (a unit sphere for the errors)
+  double min_aabb = -2.0, max_aabb = 2.0;   ///< docs/math.md §10.1 box
+  int offset = 5;                           ///< extra voxels around the box
+  double diffusion = 0.035;                 ///< forward: dt = diffusion * h (§10.3)
+  bool naive = false;                       ///< forward: dt = 0 (X = M^-1 L f)
+  int k = 49;                               ///< eigen: number of eigenvalues
+  std::string linear_solver = "cholmod";    ///< backend of every linear solve
+  std::vector<std::string> method_params;   ///< key=value for every method (unknown keys skipped per method)
+
+  /// InputError naming the first invalid option (unknown method or function, h <= 0, empty lists...).
+  void validate() const;
+};
+
+/// Grid steps from "0.1,0.05,0.025" (a comma list) or "A:B:N" (N steps from A to B, equally spaced
+/// in log h, both ends included). InputError naming the text for anything else, h <= 0 or N < 1.
+std::vector<double> parse_grid_steps(const std::string& text);
+
+/// The centre offset of centre `index` (of `count`), in units of h: 0 when count == 1, else uniform
+/// in [-1/2, 1/2]^3 from the seed (the same offsets at every h; splitmix64, platform-independent).
+Eigen::Vector3d study_center_offset(unsigned long long seed, int index, int count);
+
+/// One result of a forward or backward study: a (method, function, h, centre).
+struct StudyRow {
+  std::string study, method, normals, function;
+  double h = 0;
+  int center = 0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  long long vertices = 0, faces = 0;
+  double error_linf = 0, error_l2 = 0;
+  double time_s = 0;  ///< assembly + solve of this method (shared work excluded)
+};
+
+/// One eigenvalue of an eigen study: -lambda_index against l(l+1) of the unit sphere.
+struct EigenRow {
+  std::string method, normals;
+  double h = 0;
+  int center = 0;
+  int index = 0;
+  double exact = 0, computed = 0;
+  double relative_error = 0;  ///< (computed - exact) / exact; NaN for index 0
+  double time_s = 0;
+};
+
+/// Where the work stands: called after every (h, centre, method) unit with the counts, the
+/// current unit's labels and the fraction of the estimated total cost done (work ~ 1/h^2).
+struct StudyProgress {
+  int done = 0, total = 0;
+  double h = 0;
+  int center = 0;
+  std::string method;
+  double cost_fraction = 0;
+};
+
+struct StudyCallbacks {
+  /// Units (h, centre, method) already in a resumed results file: skipped when it returns true.
+  std::function<bool(double h, int center, const std::string& method)> already_done;
+  std::function<void(const std::vector<StudyRow>&)> rows;        ///< after each unit (forward, backward)
+  std::function<void(const std::vector<EigenRow>&)> eigen_rows;  ///< after each unit (eigen)
+  std::function<void(const StudyProgress&)> progress;
+};
+
+/// Runs the study. Work shared by the methods is done once per (h, centre): digitization, surface,
+/// normals and the quad assembly pattern. Methods run one after the other (each uses every core),
+/// so memory holds one operator set at a time. Throws InputError for bad options, the solver's
+/// errors for failures (naming the method, h and centre).
+void run_study(const StudyOptions& options, const StudyCallbacks& callbacks);
+
+}  // namespace corrlap

@@ -1,0 +1,297 @@
+#include "study_tables.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <corrlap/core/error.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace corrlap {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct MeanStd {
+  double mean = 0, std = 0;
+};
+MeanStd mean_std(const std::vector<double>& v) {
+  MeanStd r;
+  if (v.empty()) return r;
+  for (double x : v) r.mean += x;
+  r.mean /= double(v.size());
+  if (v.size() > 1) {
+    double ss = 0;
+    for (double x : v) ss += (x - r.mean) * (x - r.mean);
+    r.std = std::sqrt(ss / double(v.size() - 1));
+  }
+  return r;
+}
+
+std::string group_key(const StudyRow& r) { return r.study + '\n' + r.method + '\n' + r.normals + '\n' + r.function; }
+
+std::string number(double v) {
+  if (std::isnan(v)) return "nan";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::FILE* open_csv(const std::string& path, bool append, const char* header) {
+  const bool fresh = !append || !std::filesystem::exists(path) || std::filesystem::file_size(path) == 0;
+  std::FILE* f = std::fopen(path.c_str(), fresh ? "w" : "a");
+  if (!f) throw IoError("study: cannot write '" + path + "'");
+  if (fresh) std::fprintf(f, "%s\n", header);
+  return f;
+}
+
+void close_csv(std::FILE* f, const std::string& path) {
+  const bool bad = std::ferror(f) != 0;
+  if (std::fclose(f) != 0 || bad) throw IoError("study: write error on '" + path + "' (disk full?)");
+}
+
+constexpr const char* kResultsHeader =
+    "study,method,normals,function,h,center,cx,cy,cz,vertices,faces,error_linf,error_l2,time_s";
+constexpr const char* kEigenHeader = "study,method,normals,h,center,index,exact,computed,relative_error,time_s";
+
+// A CSV file as rows of fields addressed by column name.
+class CsvReader {
+ public:
+  CsvReader(const std::string& path, const char* expected_header) : path_(path) {
+    std::ifstream in(path);
+    if (!in) throw IoError("study: cannot open '" + path + "'");
+    std::string line;
+    if (!std::getline(in, line)) throw IoError("study: '" + path + "' is empty");
+    if (line != expected_header)
+      throw IoError("study: '" + path + "': unexpected header '" + line.substr(0, 120) + "' (expected '" +
+                    expected_header + "')");
+    columns_ = split(line).size();
+    for (std::size_t lineno = 2; std::getline(in, line); ++lineno) {
+      if (line.empty()) continue;
+      std::vector<std::string> fields = split(line);
+      if (fields.size() != columns_)
+        throw IoError("study: '" + path + "', line " + std::to_string(lineno) + ": " + std::to_string(fields.size()) +
+                      " fields, expected " + std::to_string(columns_) + " (an interrupted write? remove that line)");
+      rows_.push_back({lineno, std::move(fields)});
+    }
+  }
+  struct Row {
+    std::size_t line;
+    std::vector<std::string> fields;
+  };
+  const std::vector<Row>& rows() const { return rows_; }
+  double number(const Row& r, std::size_t column) const {
+    const std::string& s = r.fields[column];
+    if (s == "nan") return kNaN;
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || end != s.c_str() + s.size())
+      throw IoError("study: '" + path_ + "', line " + std::to_string(r.line) + ": '" + s + "' is not a number");
+    return v;
+  }
+
+ private:
+  static std::vector<std::string> split(const std::string& line) {
+    std::vector<std::string> out;
+    std::string field;
+    std::istringstream ss(line);
+    while (std::getline(ss, field, ',')) out.push_back(field);
+    if (!line.empty() && line.back() == ',') out.emplace_back();
+    return out;
+  }
+  std::string path_;
+  std::size_t columns_ = 0;
+  std::vector<Row> rows_;
+};
+
+}  // namespace
+
+std::vector<SummaryRow> summarize(const std::vector<StudyRow>& rows) {
+  std::vector<std::string> order;
+  std::map<std::string, std::map<double, std::vector<const StudyRow*>, std::greater<>>> groups;
+  for (const StudyRow& r : rows) {
+    const std::string key = group_key(r);
+    if (!groups.count(key)) order.push_back(key);
+    groups[key][r.h].push_back(&r);
+  }
+  std::vector<SummaryRow> out;
+  for (const std::string& key : order)
+    for (const auto& [h, members] : groups[key]) {
+      SummaryRow s;
+      const StudyRow& first = *members.front();
+      s.study = first.study;
+      s.method = first.method;
+      s.normals = first.normals;
+      s.function = first.function;
+      s.h = h;
+      s.centers = int(members.size());
+      std::vector<double> linf, l2;
+      for (const StudyRow* m : members) {
+        linf.push_back(m->error_linf);
+        l2.push_back(m->error_l2);
+      }
+      const MeanStd a = mean_std(linf), b = mean_std(l2);
+      s.linf_mean = a.mean;
+      s.linf_std = a.std;
+      s.l2_mean = b.mean;
+      s.l2_std = b.std;
+      out.push_back(s);
+    }
+  return out;
+}
+
+double student_t_975(int dof) {
+  static const double table[31] = {0,     12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                                   2.201, 2.179,  2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080,
+                                   2.074, 2.069,  2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+  if (dof < 1) return kNaN;
+  if (dof <= 30) return table[dof];
+  const double z = 1.959964;  // Cornish-Fisher: z + (z^3 + z) / (4 dof)
+  return z + (z * z * z + z) / (4.0 * double(dof));
+}
+
+std::vector<OrderRow> fit_orders(const std::vector<StudyRow>& rows) {
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<const StudyRow*>> groups;
+  for (const StudyRow& r : rows) {
+    const std::string key = group_key(r);
+    if (!groups.count(key)) order.push_back(key);
+    groups[key].push_back(&r);
+  }
+  std::vector<OrderRow> out;
+  for (const std::string& key : order)
+    for (const char* norm : {"linf", "l2"}) {
+      const std::vector<const StudyRow*>& g = groups[key];
+      std::vector<double> x, y;
+      double h_min = std::numeric_limits<double>::infinity(), h_max = 0;
+      for (const StudyRow* r : g) {
+        const double e = std::string(norm) == "linf" ? r->error_linf : r->error_l2;
+        if (!(e > 0) || !std::isfinite(e)) continue;  // log of a zero error: not a point of the fit
+        x.push_back(std::log(r->h));
+        y.push_back(std::log(e));
+        h_min = std::min(h_min, r->h);
+        h_max = std::max(h_max, r->h);
+      }
+      if (x.size() < 2 || !(h_min < h_max)) continue;
+      const double n = double(x.size());
+      double mx = 0, my = 0;
+      for (std::size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
+      mx /= n;
+      my /= n;
+      double sxx = 0, sxy = 0;
+      for (std::size_t i = 0; i < x.size(); ++i) sxx += (x[i] - mx) * (x[i] - mx), sxy += (x[i] - mx) * (y[i] - my);
+      OrderRow o;
+      const StudyRow& first = *g.front();
+      o.study = first.study;
+      o.method = first.method;
+      o.normals = first.normals;
+      o.function = first.function;
+      o.norm = norm;
+      o.order = sxy / sxx;
+      o.points = int(x.size());
+      o.h_min = h_min;
+      o.h_max = h_max;
+      o.low = o.high = kNaN;
+      if (x.size() >= 3) {
+        double ssr = 0;
+        for (std::size_t i = 0; i < x.size(); ++i) {
+          const double fit = my + o.order * (x[i] - mx);
+          ssr += (y[i] - fit) * (y[i] - fit);
+        }
+        const double se = std::sqrt(ssr / (n - 2.0) / sxx);
+        const double t = student_t_975(int(x.size()) - 2);
+        o.low = o.order - t * se;
+        o.high = o.order + t * se;
+      }
+      out.push_back(o);
+    }
+  return out;
+}
+
+void write_results_csv(const std::string& path, const std::vector<StudyRow>& rows, bool append) {
+  std::FILE* f = open_csv(path, append, kResultsHeader);
+  for (const StudyRow& r : rows)
+    std::fprintf(f, "%s,%s,%s,%s,%s,%d,%s,%s,%s,%lld,%lld,%s,%s,%s\n", r.study.c_str(), r.method.c_str(),
+                 r.normals.c_str(), r.function.c_str(), number(r.h).c_str(), r.center, number(r.c.x()).c_str(),
+                 number(r.c.y()).c_str(), number(r.c.z()).c_str(), r.vertices, r.faces, number(r.error_linf).c_str(),
+                 number(r.error_l2).c_str(), number(r.time_s).c_str());
+  close_csv(f, path);
+}
+
+void write_eigen_csv(const std::string& path, const std::vector<EigenRow>& rows, bool append) {
+  std::FILE* f = open_csv(path, append, kEigenHeader);
+  for (const EigenRow& r : rows)
+    std::fprintf(f, "eigen,%s,%s,%s,%d,%d,%s,%s,%s,%s\n", r.method.c_str(), r.normals.c_str(), number(r.h).c_str(),
+                 r.center, r.index, number(r.exact).c_str(), number(r.computed).c_str(),
+                 number(r.relative_error).c_str(), number(r.time_s).c_str());
+  close_csv(f, path);
+}
+
+void write_summary_csv(const std::string& path, const std::vector<SummaryRow>& rows) {
+  std::FILE* f = open_csv(path, false,
+                          "study,method,normals,function,h,centers,error_linf_mean,error_linf_std,error_l2_mean,"
+                          "error_l2_std");
+  for (const SummaryRow& r : rows)
+    std::fprintf(f, "%s,%s,%s,%s,%s,%d,%s,%s,%s,%s\n", r.study.c_str(), r.method.c_str(), r.normals.c_str(),
+                 r.function.c_str(), number(r.h).c_str(), r.centers, number(r.linf_mean).c_str(),
+                 number(r.linf_std).c_str(), number(r.l2_mean).c_str(), number(r.l2_std).c_str());
+  close_csv(f, path);
+}
+
+void write_orders_csv(const std::string& path, const std::vector<OrderRow>& rows) {
+  std::FILE* f = open_csv(path, false,
+                          "study,method,normals,function,norm,order,order_low,order_high,interval,h_min,h_max,points");
+  for (const OrderRow& r : rows)
+    std::fprintf(f, "%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%d\n", r.study.c_str(), r.method.c_str(), r.normals.c_str(),
+                 r.function.c_str(), r.norm.c_str(), number(r.order).c_str(), number(r.low).c_str(),
+                 number(r.high).c_str(), kOrderIntervalLabel, number(r.h_min).c_str(), number(r.h_max).c_str(),
+                 r.points);
+  close_csv(f, path);
+}
+
+std::vector<StudyRow> read_results_csv(const std::string& path) {
+  const CsvReader csv(path, kResultsHeader);
+  std::vector<StudyRow> out;
+  for (const auto& row : csv.rows()) {
+    StudyRow r;
+    r.study = row.fields[0];
+    r.method = row.fields[1];
+    r.normals = row.fields[2];
+    r.function = row.fields[3];
+    r.h = csv.number(row, 4);
+    r.center = int(csv.number(row, 5));
+    r.c = Eigen::Vector3d(csv.number(row, 6), csv.number(row, 7), csv.number(row, 8));
+    r.vertices = (long long)csv.number(row, 9);
+    r.faces = (long long)csv.number(row, 10);
+    r.error_linf = csv.number(row, 11);
+    r.error_l2 = csv.number(row, 12);
+    r.time_s = csv.number(row, 13);
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::vector<EigenRow> read_eigen_csv(const std::string& path) {
+  const CsvReader csv(path, kEigenHeader);
+  std::vector<EigenRow> out;
+  for (const auto& row : csv.rows()) {
+    EigenRow r;
+    r.method = row.fields[1];
+    r.normals = row.fields[2];
+    r.h = csv.number(row, 3);
+    r.center = int(csv.number(row, 4));
+    r.index = int(csv.number(row, 5));
+    r.exact = csv.number(row, 6);
+    r.computed = csv.number(row, 7);
+    r.relative_error = csv.number(row, 8);
+    r.time_s = csv.number(row, 9);
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace corrlap
