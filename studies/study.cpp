@@ -13,6 +13,7 @@
 #include <corrlap/problems/test_functions.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <optional>
@@ -98,8 +99,14 @@ std::vector<double> parse_grid_steps(const std::string& text) {
     if (parts[2].empty() || end != parts[2].c_str() + parts[2].size() || n < 1 || n > 1000)
       return fail("N = '" + parts[2] + "' must be an integer in [1, 1000]");
     if (n == 1) return {a};
-    for (long i = 0; i < n; ++i)
-      out.push_back(std::exp(std::log(a) + (std::log(b) - std::log(a)) * double(i) / double(n - 1)));
+    for (long i = 0; i < n; ++i) {
+      // Rounded to 12 significant digits, so that 0.1:0.0125:4 gives 0.05 and 0.025 exactly as
+      // typed (not 0.05000000000000001), the same values a list would give.
+      const double step = std::exp(std::log(a) + (std::log(b) - std::log(a)) * double(i) / double(n - 1));
+      char text_step[32];
+      std::snprintf(text_step, sizeof text_step, "%.12g", step);
+      out.push_back(std::strtod(text_step, nullptr));
+    }
     return out;
   }
   std::stringstream ss(text);

@@ -154,7 +154,7 @@ void run(StudyArgs& a) {
 
   const bool tty = isatty(STDERR_FILENO) != 0;
   const auto t0 = std::chrono::steady_clock::now();
-  double last_printed = -1;
+  double last_printed = -1, last_h = 0;
   StudyCallbacks cb;
   cb.already_done = [&](double h, int center, const std::string& method) {
     for (const auto& [uh, uc, um] : done)
@@ -166,8 +166,11 @@ void run(StudyArgs& a) {
   cb.progress = [&](const StudyProgress& p) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double eta = p.cost_fraction > 0 ? elapsed * (1.0 - p.cost_fraction) / p.cost_fraction : 0.0;
-    // A TTY gets a bar redrawn in place; a log one line per 10% of the work and at the end.
-    if (!tty && p.done != p.total && p.cost_fraction < last_printed + 0.1) return;
+    // A TTY gets a bar redrawn in place; a log one line per 10% of the work, at each new grid
+    // step (the natural milestones of a study) and at the end.
+    const bool new_h = p.h != last_h;
+    last_h = p.h;
+    if (!tty && p.done != p.total && !new_h && p.cost_fraction < last_printed + 0.1) return;
     last_printed = p.cost_fraction;
     const int width = 24, filled = int(std::lround(p.cost_fraction * width));
     std::ostringstream line;
