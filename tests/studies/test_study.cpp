@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/text_io.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <filesystem>
@@ -205,6 +206,21 @@ TEST_CASE("corrlap study: CSV files with the documented columns, resume without 
   // A resume with another fixed option is refused naming it.
   CHECK(test::run_cli(args + " --resume --seed 5", &out, &err) == 1);
   CHECK(err.find("option 'seed' differs") != std::string::npos);
+  // The eigen study's values are those of `corrlap eigs` for the same input (shift-invert, cholmod).
+  const std::string eig_dir = dir + "_eigen";
+  std::filesystem::remove_all(eig_dir);
+  REQUIRE(test::run_cli("study eigen --methods fem --h 0.2 -k 10 --no-plots --out " + eig_dir, &out, &err) == 0);
+  const std::vector<EigenRow> study_values = read_eigen_csv(eig_dir + "/eigen.csv");
+  REQUIRE(study_values.size() == 10);
+  const std::string eigs_file = eig_dir + "/eigs.txt";
+  REQUIRE(test::run_cli("eigs --method fem --shape sphere1 --h 0.2 --bbox -2 2 --normals true -k 10 --solver cholmod "
+                        "--out " +
+                            eigs_file,
+                        &out, &err) == 0);
+  const Eigen::VectorXd eigs_values = read_scalars(eigs_file);
+  REQUIRE(eigs_values.size() == 10);
+  for (int i = 0; i < 10; ++i)
+    CHECK(std::abs(study_values[std::size_t(i)].computed - eigs_values[i]) <= 1e-9 * (1.0 + eigs_values[i]));
   // Bad options through the CLI.
   const std::string d2 = " --no-plots --out " + dir + "_bad";
   CHECK(test::run_cli("study sideways" + d2, &out, &err) == 1);
