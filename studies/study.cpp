@@ -17,7 +17,6 @@
 #include <cstdlib>
 #include <limits>
 #include <optional>
-#include <set>
 #include <sstream>
 
 namespace corrlap {
@@ -218,16 +217,16 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
 
   for (double h : hs)
     for (int center = 0; center < o.centers; ++center) {
-      std::vector<std::string> todo;
+      std::vector<std::string> to_compute;
       for (const std::string& m : o.methods)
         if (cb.already_done && cb.already_done(h, center, m))
           report(h, center, m);
         else
-          todo.push_back(m);
-      if (todo.empty()) continue;
+          to_compute.push_back(m);
+      if (to_compute.empty()) continue;
       const Eigen::Vector3d c = h * study_center_offset(o.seed, center, o.centers);
       const SharedSurface s = build_surface(o, h, c);
-      for (const std::string& method : todo) {
+      for (const std::string& method : to_compute) {
         const auto t0 = std::chrono::steady_clock::now();
         try {
           const auto d = make_discretization(method);

@@ -32,7 +32,27 @@ MeanStd mean_std(const std::vector<double>& v) {
   return r;
 }
 
-std::string group_key(const StudyRow& r) { return r.study + '\n' + r.method + '\n' + r.normals + '\n' + r.function; }
+// The rows of each (study, method, normals, function), groups in the order they first appear.
+std::vector<std::vector<const StudyRow*>> group_rows(const std::vector<StudyRow>& rows) {
+  std::map<std::string, std::size_t> index;
+  std::vector<std::vector<const StudyRow*>> groups;
+  for (const StudyRow& r : rows) {
+    const std::string key = r.study + '\n' + r.method + '\n' + r.normals + '\n' + r.function;
+    const auto [it, fresh] = index.emplace(key, groups.size());
+    if (fresh) groups.emplace_back();
+    groups[it->second].push_back(&r);
+  }
+  return groups;
+}
+
+// The labels of a group's first row onto a table row (SummaryRow, OrderRow).
+template <class TableRow>
+void copy_labels(const StudyRow& from, TableRow& to) {
+  to.study = from.study;
+  to.method = from.method;
+  to.normals = from.normals;
+  to.function = from.function;
+}
 
 std::string number(double v) {
   if (std::isnan(v)) return "nan";
@@ -111,22 +131,13 @@ class CsvReader {
 }  // namespace
 
 std::vector<SummaryRow> summarize(const std::vector<StudyRow>& rows) {
-  std::vector<std::string> order;
-  std::map<std::string, std::map<double, std::vector<const StudyRow*>, std::greater<>>> groups;
-  for (const StudyRow& r : rows) {
-    const std::string key = group_key(r);
-    if (!groups.count(key)) order.push_back(key);
-    groups[key][r.h].push_back(&r);
-  }
   std::vector<SummaryRow> out;
-  for (const std::string& key : order)
-    for (const auto& [h, members] : groups[key]) {
+  for (const auto& group : group_rows(rows)) {
+    std::map<double, std::vector<const StudyRow*>, std::greater<>> by_h;
+    for (const StudyRow* r : group) by_h[r->h].push_back(r);
+    for (const auto& [h, members] : by_h) {
       SummaryRow s;
-      const StudyRow& first = *members.front();
-      s.study = first.study;
-      s.method = first.method;
-      s.normals = first.normals;
-      s.function = first.function;
+      copy_labels(*members.front(), s);
       s.h = h;
       s.centers = int(members.size());
       std::vector<double> linf, l2;
@@ -141,6 +152,7 @@ std::vector<SummaryRow> summarize(const std::vector<StudyRow>& rows) {
       s.l2_std = b.std;
       out.push_back(s);
     }
+  }
   return out;
 }
 
@@ -155,17 +167,9 @@ double student_t_975(int dof) {
 }
 
 std::vector<OrderRow> fit_orders(const std::vector<StudyRow>& rows) {
-  std::vector<std::string> order;
-  std::map<std::string, std::vector<const StudyRow*>> groups;
-  for (const StudyRow& r : rows) {
-    const std::string key = group_key(r);
-    if (!groups.count(key)) order.push_back(key);
-    groups[key].push_back(&r);
-  }
   std::vector<OrderRow> out;
-  for (const std::string& key : order)
+  for (const auto& g : group_rows(rows))
     for (const char* norm : {"linf", "l2"}) {
-      const std::vector<const StudyRow*>& g = groups[key];
       std::vector<double> x, y;
       double h_min = std::numeric_limits<double>::infinity(), h_max = 0;
       for (const StudyRow* r : g) {
@@ -185,11 +189,7 @@ std::vector<OrderRow> fit_orders(const std::vector<StudyRow>& rows) {
       double sxx = 0, sxy = 0;
       for (std::size_t i = 0; i < x.size(); ++i) sxx += (x[i] - mx) * (x[i] - mx), sxy += (x[i] - mx) * (y[i] - my);
       OrderRow o;
-      const StudyRow& first = *g.front();
-      o.study = first.study;
-      o.method = first.method;
-      o.normals = first.normals;
-      o.function = first.function;
+      copy_labels(*g.front(), o);
       o.norm = norm;
       o.order = sxy / sxx;
       o.points = int(x.size());
