@@ -8,6 +8,9 @@
 
 namespace corrlap {
 
+/// Triangles as rows of three 0-based vertex ids (#T x 3).
+using TriangleIndices = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
 /// Vertices and faces of any degree >= 3 (0-based ids), as stored in a file.
 struct PolygonMesh {
   Eigen::MatrixX3d positions;
@@ -25,6 +28,6 @@ SurfelMesh to_surfel_mesh(const PolygonMesh& mesh, const std::string& what);
 PolygonMesh to_polygon_mesh(const SurfelMesh& mesh);
 
 /// Triangles (#T x 3): triangles kept, other polygons fanned from their first corner.
-Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> triangulate(const PolygonMesh& mesh);
+TriangleIndices triangulate(const PolygonMesh& mesh);
 
 }  // namespace corrlap

@@ -3,11 +3,10 @@
 // triangle mesh (paper §3.4, docs/math.md §10.6). Registry name "cotan".
 #include <Eigen/Core>
 #include <corrlap/core/discretization.hpp>
+#include <corrlap/core/polygon_mesh.hpp>
 #include <memory>
 
 namespace corrlap {
-
-using TriangleIndices = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 /// Lumped mass of the cotan Laplacian.
 enum class CotanMass {

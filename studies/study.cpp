@@ -9,15 +9,19 @@
 #include <corrlap/discretizations/assembly/quad_pattern.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/io/mesh_io.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/problems/test_functions.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <corrlap/surface/mesh_voxelization.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <optional>
 #include <sstream>
+
+#include "cotan_reference.hpp"
 
 namespace corrlap {
 
@@ -25,7 +29,8 @@ StudyKind parse_study_kind(const std::string& name) {
   if (name == "forward") return StudyKind::Forward;
   if (name == "backward") return StudyKind::Backward;
   if (name == "eigen") return StudyKind::Eigen;
-  throw InputError("unknown study '" + name + "': expected forward, backward or eigen");
+  if (name == "cotan") return StudyKind::Cotan;
+  throw InputError("unknown study '" + name + "': expected forward, backward, eigen or cotan");
 }
 
 const char* to_string(StudyKind kind) {
@@ -36,6 +41,8 @@ const char* to_string(StudyKind kind) {
       return "backward";
     case StudyKind::Eigen:
       return "eigen";
+    case StudyKind::Cotan:
+      return "cotan";
   }
   return "?";
 }
@@ -53,23 +60,42 @@ void StudyOptions::validate() const {
     if (kv.find('=') == std::string::npos || !known_key)
       throw InputError("study: method parameter '" + kv + "': no method of the study has the key '" + key + "'");
   }
-  if (h.empty()) throw InputError("study: the list of grid steps is empty (--h 0.1,0.05 or A:B:N)");
-  for (double step : h)
-    if (!(step > 0.0) || !std::isfinite(step)) {
-      std::ostringstream os;
-      os << "study: grid step h = " << step << " must be positive and finite";
-      throw InputError(os.str());
-    }
+  if (kind == StudyKind::Cotan) {
+    if (mesh_file.empty()) throw InputError("study cotan: no mesh given (--mesh-file bunny.obj)");
+    if (resolutions.empty()) throw InputError("study cotan: the list of resolutions is empty (--resolutions 128,256)");
+    for (int n : resolutions)
+      if (n < 4 || n > 4096)
+        throw InputError("study cotan: resolution " + std::to_string(n) + " must be in [4, 4096] voxels");
+    if (refine_vertices < 0 || refine_vertices > 100000000)
+      throw InputError("study cotan: --refine-vertices must be in [0, 1e8]");
+    if (reference_values != "interpolated" && reference_values != "at-foot")
+      throw InputError("study cotan: reference values '" + reference_values + "': expected interpolated or at-foot");
+    if (reference_laplacian != "plain" && reference_laplacian != "diffused")
+      throw InputError("study cotan: reference Laplacian '" + reference_laplacian + "': expected plain or diffused");
+    if (normals != "mesh" && normals != "ii")
+      throw InputError("study cotan: normals '" + normals + "': expected mesh (the reference's) or ii");
+  } else {
+    if (h.empty()) throw InputError("study: the list of grid steps is empty (--h 0.1,0.05 or A:B:N)");
+    for (double step : h)
+      if (!(step > 0.0) || !std::isfinite(step)) {
+        std::ostringstream os;
+        os << "study: grid step h = " << step << " must be positive and finite";
+        throw InputError(os.str());
+      }
+    if (normals != "true" && normals != "ii" && normals != "exact")
+      throw InputError("study: normals '" + normals + "': expected true, ii or exact" +
+                       (normals == "mesh" ? " (mesh normals belong to the cotan study)" : ""));
+  }
   if (kind != StudyKind::Eigen) {
     if (functions.empty()) throw InputError("study: no test function given (--functions x2,expx,p6)");
     for (const std::string& f : functions) (void)test_function(f);  // InputError listing the names
   }
-  if (normals != "true" && normals != "ii" && normals != "exact")
-    throw InputError("study: normals '" + normals + "': expected true, ii or exact");
   if (centers < 1 || centers > 10000) throw InputError("study: --centers must be in [1, 10000]");
-  if (kind == StudyKind::Forward && !naive && !(diffusion > 0.0 && std::isfinite(diffusion)))
+  if ((kind == StudyKind::Forward || kind == StudyKind::Cotan) && !naive &&
+      !(diffusion > 0.0 && std::isfinite(diffusion)))
     throw InputError("study: --diffusion must be positive (or --naive)");
   if (kind == StudyKind::Eigen && (k < 1 || k > 1000)) throw InputError("study: -k must be in [1, 1000]");
+  if (linear_solver != "auto") (void)make_linear_solver(linear_solver);  // InputError listing the backends
   if (!(min_aabb < max_aabb)) throw InputError("study: the box needs MIN < MAX");
   if (offset < 0) throw InputError("study: --offset must be >= 0");
   if (!(ii_k > 0) || !std::isfinite(ii_alpha)) throw InputError("study: II radius parameters must be positive");
@@ -149,7 +175,8 @@ Config params_for(const Discretization& d, const std::vector<std::string>& key_v
   return Config::from_key_values(mine);
 }
 
-// The surface of one (h, centre): shared by every method.
+// The surface of one (h, centre): shared by every method, with the reference values of the test
+// functions where the operators live (vertices, or surfel centres for the heat kernel, §6).
 struct SharedSurface {
   SurfelMesh mesh;
   VoxelGrid grid;
@@ -157,9 +184,23 @@ struct SharedSurface {
   NormalFields normals;  // face and vertex
   std::optional<QuadPattern> pattern;
   Eigen::MatrixX3d face_centres;
+  Eigen::MatrixXd vertex_f, vertex_laplacian, face_f, face_laplacian;  // #points x #functions
 };
 
-SharedSurface build_surface(const StudyOptions& o, double h, const Eigen::Vector3d& c) {
+// docs/math.md §10.1: the functions at the radial projections onto the unit sphere of centre c.
+void sample_sphere(const std::vector<const TestFunction*>& functions, const Eigen::MatrixX3d& points,
+                   const Eigen::Vector3d& c, Eigen::MatrixXd& f, Eigen::MatrixXd& laplacian) {
+  f.resize(points.rows(), Eigen::Index(functions.size()));
+  laplacian.resizeLike(f);
+  for (std::size_t j = 0; j < functions.size(); ++j) {
+    const TestFunctionSamples samples = sample_on_unit_sphere(*functions[j], points, c);
+    f.col(Eigen::Index(j)) = samples.f;
+    laplacian.col(Eigen::Index(j)) = samples.laplacian;
+  }
+}
+
+SharedSurface build_surface(const StudyOptions& o, double h, const Eigen::Vector3d& c,
+                            const std::vector<const TestFunction*>& functions) {
   SharedSurface s;
   s.shape = make_implicit_shape(o.shape, c);
   DigitizationParams p;
@@ -179,7 +220,59 @@ SharedSurface build_surface(const StudyOptions& o, double h, const Eigen::Vector
   if (o.normals == "exact") s.normals.vertex = exact_vertex_normals(s.shape, s.mesh);
   s.pattern = QuadPattern::build(s.mesh);
   s.face_centres = s.mesh.face_centroids();
+  if (o.kind != StudyKind::Eigen) {
+    sample_sphere(functions, s.mesh.positions, c, s.vertex_f, s.vertex_laplacian);
+    sample_sphere(functions, s.face_centres, c, s.face_f, s.face_laplacian);
+  }
   return s;
+}
+
+// docs/math.md §10.6: the reference mesh translated by c, digitized at step h; values (and, for
+// normals "mesh", the normals) projected from the reference onto the vertices and surfel centres.
+SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::Vector3d& c,
+                                 const CotanReference& reference) {
+  SharedSurface s;
+  PolygonMesh moved;
+  moved.positions = reference.positions.rowwise() + c.transpose();
+  moved.faces.reserve(std::size_t(reference.triangles.rows()));
+  for (Eigen::Index t = 0; t < reference.triangles.rows(); ++t)
+    moved.faces.push_back({reference.triangles(t, 0), reference.triangles(t, 1), reference.triangles(t, 2)});
+  MeshVoxelizationParams p;
+  p.h = h;
+  s.grid = voxelize_mesh(moved, p);
+  s.mesh = extract_surface(s.grid);
+  s.face_centres = s.mesh.face_centroids();
+  const ReferenceValues values =
+      o.reference_values == "at-foot" ? ReferenceValues::AtFoot : ReferenceValues::Interpolated;
+  const double dt = o.reference_laplacian == "diffused" && !o.naive ? o.diffusion * h : 0.0;
+  const Eigen::MatrixXd truth = diffused_reference_laplacian(reference, dt);
+  ReferenceSamples at_vertices = sample_reference(reference, truth, s.mesh.positions, c, values);
+  ReferenceSamples at_faces = sample_reference(reference, truth, s.face_centres, c, values);
+  if (o.normals == "mesh") {
+    s.normals.vertex = std::move(at_vertices.normals);
+    s.normals.face = std::move(at_faces.normals);
+  } else {
+    NormalRequest request;
+    request.source = NormalSource::II;
+    request.ii.k = o.ii_k;
+    request.ii.alpha = o.ii_alpha;
+    s.normals = resolve_normals(s.mesh, NormalKind::Vertex, request, nullptr, &s.grid, "study");
+  }
+  s.pattern = QuadPattern::build(s.mesh);
+  s.vertex_f = std::move(at_vertices.f);
+  s.vertex_laplacian = std::move(at_vertices.laplacian);
+  s.face_f = std::move(at_faces.f);
+  s.face_laplacian = std::move(at_faces.laplacian);
+  return s;
+}
+
+// The backend for one method's systems. "auto": CHOLMOD, except for operators with many nonzeros per
+// row: the heat kernel couples every surfel within K sqrt(2t) (~2000 per row at h = 0.0125, §6), and
+// the Cholesky factor of such a matrix fills in far beyond it, while Jacobi CG needs a few products
+// (forward: M - dt L is diagonally dominant for dt = 0.035 h). Measured in bench/RESULTS.md.
+std::string solver_for(const std::string& choice, const Eigen::SparseMatrix<double>& L) {
+  if (choice != "auto") return choice;
+  return L.nonZeros() > 64 * L.rows() ? "cg" : "cholmod";
 }
 
 // "fem at h = 0.05, centre 3: <what>" for errors raised inside a unit.
@@ -194,10 +287,17 @@ SharedSurface build_surface(const StudyOptions& o, double h, const Eigen::Vector
 
 void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
   o.validate();
-  std::vector<double> hs = o.h;
-  std::sort(hs.begin(), hs.end(), std::greater<>());  // coarse first: early rows, early errors
+  // Cotan: the reference once per study; resolution N of a mesh whose longest side is 2 is h = 2 / N.
   std::vector<const TestFunction*> functions;
   for (const std::string& f : o.functions) functions.push_back(&test_function(f));
+  std::optional<CotanReference> reference;
+  std::vector<double> hs = o.h;
+  if (o.kind == StudyKind::Cotan) {
+    reference = make_cotan_reference(read_mesh(o.mesh_file), functions, o.refine_vertices);
+    hs.clear();
+    for (int n : o.resolutions) hs.push_back(2.0 / double(n));
+  }
+  std::sort(hs.begin(), hs.end(), std::greater<>());  // coarse first: early rows, early errors
 
   // Work of a unit ~ number of surfels ~ 1/h^2: the fraction of it done drives the ETA.
   double total_cost = 0;
@@ -225,7 +325,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
           to_compute.push_back(m);
       if (to_compute.empty()) continue;
       const Eigen::Vector3d c = h * study_center_offset(o.seed, center, o.centers);
-      const SharedSurface s = build_surface(o, h, c);
+      const SharedSurface s = reference ? build_mesh_surface(o, h, c, *reference) : build_surface(o, h, c, functions);
       for (const std::string& method : to_compute) {
         const auto t0 = std::chrono::steady_clock::now();
         try {
@@ -234,10 +334,10 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
           if (!ops.contract_risk.empty())
             throw NumericalError("the operators may break their contract: " + ops.contract_risk);
           // Values live where the operator does: vertices, or surfel centres (heat kernel, §6).
-          const Eigen::MatrixX3d& points = ops.domain == Operators::Domain::Faces ? s.face_centres : s.mesh.positions;
+          const bool on_faces = ops.domain == Operators::Domain::Faces;
           if (o.kind == StudyKind::Eigen) {
             Config config;
-            config.set("solver", o.linear_solver);
+            config.set("solver", solver_for(o.linear_solver, ops.L));
             const EigenResult r = make_eigen_solver(kDefaultEigenSolver, config)->solve(ops.L, ops.M, o.k);
             const double t = seconds_since(t0);
             std::vector<EigenRow> rows;
@@ -259,14 +359,9 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
             if (cb.eigen_rows) cb.eigen_rows(rows);
           } else {
             // Every function at once: one factorization per method and unit.
-            const Eigen::Index n = points.rows();
-            Eigen::MatrixXd F(n, Eigen::Index(functions.size())), Lap(n, Eigen::Index(functions.size()));
-            for (std::size_t j = 0; j < functions.size(); ++j) {
-              const TestFunctionSamples samples = sample_on_unit_sphere(*functions[j], points, c);
-              F.col(Eigen::Index(j)) = samples.f;
-              Lap.col(Eigen::Index(j)) = samples.laplacian;
-            }
-            auto solver = make_linear_solver(o.linear_solver);
+            const Eigen::MatrixXd& F = on_faces ? s.face_f : s.vertex_f;
+            const Eigen::MatrixXd& Lap = on_faces ? s.face_laplacian : s.vertex_laplacian;
+            auto solver = make_linear_solver(solver_for(o.linear_solver, ops.L));
             std::vector<ErrorNorms> errors(functions.size());
             if (o.kind == StudyKind::Backward) {
               // docs/math.md §10.4: L g = M b_c, vertex 0 pinned to f(q_0), errors with means removed.

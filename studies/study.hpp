@@ -1,6 +1,7 @@
 #pragma once
 // The evaluation studies of the paper (§3) as a library: forward, backward (Poisson) and eigenvalue
-// errors of any set of discretizations over a list of grid steps and random centres
+// errors of any set of discretizations over a list of grid steps and random centres, and the
+// forward comparison against the cotan Laplacian of a refined triangle mesh (§3.4)
 // (docs/math.md §10; docs/studies.md). One study = options -> rows; the tables (summary, orders)
 // are computed from the rows (study_tables.hpp), and the CLI (`corrlap study`) writes them as CSV.
 #include <Eigen/Core>
@@ -10,17 +11,21 @@
 
 namespace corrlap {
 
-enum class StudyKind { Forward, Backward, Eigen };
-/// "forward" | "backward" | "eigen"; InputError listing the names otherwise.
+/// Cotan: the forward protocol on a digitized triangle mesh, against the cotan Laplacian of the
+/// refined mesh mapped to the digital surface (paper §3.4, docs/math.md §10.6, cotan_reference.hpp).
+enum class StudyKind { Forward, Backward, Eigen, Cotan };
+/// "forward" | "backward" | "eigen" | "cotan"; InputError listing the names otherwise.
 StudyKind parse_study_kind(const std::string& name);
 const char* to_string(StudyKind kind);
 
 struct StudyOptions {
   StudyKind kind = StudyKind::Backward;
   std::vector<std::string> methods = {"fem"};   ///< registry names
-  std::vector<double> h = {0.1, 0.05};          ///< grid steps (any order)
+  std::vector<double> h = {0.1, 0.05};          ///< grid steps (any order); cotan: 2 / resolutions
   std::vector<std::string> functions = {"x2"};  ///< docs/math.md §10.2 names (forward, backward)
-  std::string normals = "true";  ///< "true", "ii" (docs/math.md §1.5, §7) or "exact" (radial vertex normals)
+  /// "true", "ii" (docs/math.md §1.5, §7) or "exact" (radial vertex normals); cotan: "mesh" (the
+  /// reference's vertex normals, projected and interpolated, at vertices and surfel centres) or "ii"
+  std::string normals = "true";
   double ii_k = 3.0, ii_alpha = 1.0 / 3.0;  ///< II radius k h^alpha (the paper's 1/3)
   int centers = 1;                          ///< N: centre 0 when 1, else uniform draws (§10.1)
   unsigned long long seed = 1;              ///< of the centre draws
@@ -30,8 +35,18 @@ struct StudyOptions {
   double diffusion = 0.035;                 ///< forward: dt = diffusion * h (§10.3)
   bool naive = false;                       ///< forward: dt = 0 (X = M^-1 L f)
   int k = 49;                               ///< eigen: number of eigenvalues
-  std::string linear_solver = "cholmod";    ///< backend of every linear solve
-  std::vector<std::string> method_params;   ///< key=value for every method (unknown keys skipped per method)
+  /// Backend of the linear solves: a registered name, or "auto" (CHOLMOD; Jacobi CG for operators
+  /// with more than 64 nonzeros per row, i.e. the heat kernel)
+  std::string linear_solver = "auto";
+  std::vector<std::string> method_params;  ///< key=value for every method (unknown keys skipped per method)
+  // Cotan study (paper §3.4): the mesh scaled so that its longest side spans 2, hence h = 2 / N.
+  std::string mesh_file;                           ///< triangle or polygon mesh (OBJ, PLY, OFF)
+  std::vector<int> resolutions = {128, 256, 512};  ///< N: voxels along the longest side
+  long long refine_vertices = 100000;              ///< Loop-subdivide the mesh up to this many vertices
+  std::string reference_values = "interpolated";   ///< "interpolated" (the paper) | "at-foot" (cotan_reference.hpp)
+  /// "plain": the truth is the cotan Laplacian M^-1 L f (paper §3.4); "diffused": the cotan forward
+  /// evaluation (M - dt L)^-1 L f with the study's dt, so that both sides carry the same smoothing.
+  std::string reference_laplacian = "plain";
 
   /// InputError naming the first invalid option (unknown method or function, h <= 0, empty lists...).
   void validate() const;
@@ -86,7 +101,8 @@ struct StudyCallbacks {
 };
 
 /// Runs the study. Work shared by the methods is done once per (h, centre): digitization, surface,
-/// normals and the quad assembly pattern. Methods run one after the other (each uses every core),
+/// normals, reference values and the quad assembly pattern (cotan: the refined reference mesh and its
+/// Laplacians once per study). Methods run one after the other (each uses every core),
 /// so memory holds one operator set at a time. Throws InputError for bad options, the solver's
 /// errors for failures (naming the method, h and centre).
 void run_study(const StudyOptions& options, const StudyCallbacks& callbacks);

@@ -1,5 +1,6 @@
 // corrlap study: the paper's evaluations (§3; docs/math.md §10) in one command: forward, backward and
-// eigenvalue errors of several methods over grid steps and centres, written as CSV tables
+// eigenvalue errors of several methods over grid steps and centres, and the cotan comparison on a
+// triangle mesh (§3.4), written as CSV tables
 // (results, summary, fitted orders) and plots (studies/plot_study.py). docs/studies.md.
 #include <unistd.h>
 
@@ -31,6 +32,8 @@ struct StudyArgs {
   std::string methods = "fem,interpolated,corrected-vrm,projected-polydec";
   std::string h = "0.1,0.05,0.025";
   std::string functions = "x2,expx,p6";
+  std::string resolutions = "128,256,512";
+  bool normals_given = false;
   StudyOptions options;
   std::vector<double> bbox = {-2.0, 2.0};
   std::string out;
@@ -61,6 +64,12 @@ nlohmann::json fixed_options(const StudyOptions& o) {
   j["k"] = o.kind == StudyKind::Eigen ? o.k : 0;
   j["solver"] = o.linear_solver;
   j["params"] = o.method_params;
+  if (o.kind == StudyKind::Cotan) {
+    j["mesh_file"] = o.mesh_file;
+    j["refine_vertices"] = o.refine_vertices;
+    j["reference_values"] = o.reference_values;
+    j["reference_laplacian"] = o.reference_laplacian;
+  }
   return j;
 }
 
@@ -99,7 +108,20 @@ void run(StudyArgs& a) {
   StudyOptions& o = a.options;
   o.kind = parse_study_kind(a.kind);
   o.methods = split_list(a.methods);
-  o.h = parse_grid_steps(a.h);
+  if (o.kind == StudyKind::Cotan) {
+    // The cotan study's truth is the mesh: its normals unless told otherwise; h = 2 / resolution.
+    if (!a.normals_given) o.normals = "mesh";
+    o.resolutions.clear();
+    for (const std::string& item : split_list(a.resolutions)) {
+      char* end = nullptr;
+      const long n = std::strtol(item.c_str(), &end, 10);
+      if (end != item.c_str() + item.size() || n < 4 || n > 4096)
+        throw InputError("study cotan: --resolutions: '" + item + "' is not an integer in [4, 4096]");
+      o.resolutions.push_back(int(n));
+    }
+  } else {
+    o.h = parse_grid_steps(a.h);
+  }
   o.functions = o.kind == StudyKind::Eigen ? std::vector<std::string>{} : split_list(a.functions);
   o.min_aabb = a.bbox[0];
   o.max_aabb = a.bbox[1];
@@ -240,15 +262,23 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
       app.add_subcommand("study",
                          "the paper's evaluations: forward | backward | eigen errors of several methods over grid "
                          "steps and centres -> CSV tables and plots (docs/studies.md)");
-  cmd->add_option("study", args->kind, "forward | backward | eigen")->required();
+  cmd->add_option("study", args->kind, "forward | backward | eigen | cotan")->required();
   cmd->add_option("--methods", args->methods, "comma-separated discretizations")->capture_default_str();
   cmd->add_option("--h", args->h, "grid steps: a comma list (0.1,0.05) or A:B:N (N log-spaced steps from A to B)")
       ->capture_default_str();
   cmd->add_option("--functions", args->functions, "forward/backward: test functions x2, expx, p6")
       ->capture_default_str();
   cmd->add_option("--normals", args->options.normals,
-                  "true | ii (II with k = 3, alpha = 1/3) | exact (the shape's normal at each vertex, spec §12.5)")
-      ->check(CLI::IsMember({"true", "ii", "exact"}))
+                  "true | ii (II with k = 3, alpha = 1/3) | exact (the shape's normal at each vertex, spec §12.5); "
+                  "cotan: mesh (default: the mesh's normals, projected) | ii")
+      ->check(CLI::IsMember({"true", "ii", "exact", "mesh"}))
+      ->each([args](const std::string&) { args->normals_given = true; })
+      ->capture_default_str();
+  cmd->add_option("--mesh-file", args->options.mesh_file, "cotan: the triangle mesh (OBJ, PLY, OFF)");
+  cmd->add_option("--resolutions", args->resolutions, "cotan: voxels along the mesh's longest side (h = 2 / N)")
+      ->capture_default_str();
+  cmd->add_option("--refine-vertices", args->options.refine_vertices,
+                  "cotan: Loop-subdivide the mesh to at least this many vertices (0: as given)")
       ->capture_default_str();
   cmd->add_option("--centers", args->options.centers,
                   "centres per h: uniform in [-h/2, h/2]^3 (centre 0 when 1; docs/math.md §10.1)")
@@ -263,9 +293,22 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--bbox", args->bbox, "digitization box MIN MAX")->expected(2)->capture_default_str();
   cmd->add_option("--offset", args->options.offset, "extra voxels around the box")->capture_default_str();
-  cmd->add_option("--solver", args->options.linear_solver, "linear solver backend")->capture_default_str();
+  cmd->add_option(
+         "--solver", args->options.linear_solver,
+         "linear solver backend, or auto (cholmod; cg for operators with > 64 nonzeros per row: the heat kernel)")
+      ->capture_default_str();
   cmd->add_option("--param", args->options.method_params,
                   "method parameter key=value for the methods that have the key (repeatable)");
+  cmd->add_option("--reference-values", args->options.reference_values,
+                  "cotan: interpolated (the paper: the mesh's vertex values, interpolated) | at-foot (the "
+                  "function evaluated at the projected point; the Laplacian stays interpolated)")
+      ->check(CLI::IsMember({"interpolated", "at-foot"}))
+      ->capture_default_str();
+  cmd->add_option("--reference-laplacian", args->options.reference_laplacian,
+                  "cotan: plain (the truth is M^-1 L f of the mesh) | diffused ((M - dt L)^-1 L f on the mesh, "
+                  "the same smoothing as the digital side)")
+      ->check(CLI::IsMember({"plain", "diffused"}))
+      ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->required();
   cmd->add_flag("--resume", args->resume, "continue the study in --out: computed units are not recomputed");
   cmd->add_flag("--overwrite", args->overwrite, "replace the study in --out");

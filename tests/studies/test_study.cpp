@@ -1,10 +1,13 @@
 // corrlap study (studies/study.hpp, study_tables.hpp, apps/corrlap/cmd_study.cpp): a tiny study's
-// rows, tables and fitted orders; spec §12.5 at centre 0; centre draws; resume; bad options.
+// rows, tables and fitted orders; spec §12.5 at centre 0; centre draws; resume; bad options; the
+// cotan comparison on a refined icosahedron (cotan_reference.hpp).
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/studies/cotan_reference.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <filesystem>
@@ -163,7 +166,78 @@ TEST_CASE("study options: unknown method, function or study, bad h lists and key
   o = tiny(StudyKind::Backward);
   o.method_params = {"no_such_key=1"};
   CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("no_such_key"), InputError);
-  CHECK_THROWS_WITH_AS(parse_study_kind("sideways"), doctest::Contains("forward, backward or eigen"), InputError);
+  CHECK_THROWS_WITH_AS(parse_study_kind("sideways"), doctest::Contains("forward, backward, eigen or cotan"),
+                       InputError);
+}
+
+namespace {
+// An icosahedron as an OBJ file: the cotan study's reference after Loop subdivision.
+std::string icosahedron_obj() {
+  const std::string path = test::tmp_path("icosahedron.obj");
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  PolygonMesh m;
+  m.positions.resize(12, 3);
+  m.positions << -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t,
+      0, -1, -t, 0, 1;
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  write_mesh(path, m);
+  return path;
+}
+}  // namespace
+
+TEST_CASE("cotan study: the refined, rescaled reference; sampling at its vertices; errors shrink with N") {
+  const std::string path = icosahedron_obj();
+  const std::vector<const TestFunction*> x2 = {&test_function("x2")};
+  const CotanReference ref = make_cotan_reference(read_mesh(path), x2, 2500);
+  CHECK(ref.subdivision_steps == 4);
+  CHECK(ref.positions.rows() == 2562);
+  CHECK(ref.scale == doctest::Approx((1 + std::sqrt(5.0)) / 2));  // longest side 2t -> 2
+  // Sampling exactly at the reference's vertices gives back the vertex values and normals.
+  const ReferenceSamples own = sample_reference(ref, ref.laplacian, ref.positions);
+  CHECK((own.f - ref.f).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK((own.laplacian - ref.laplacian).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK((own.normals - ref.normals).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK(own.max_distance < 1e-12);
+  // The diffused truth with dt = 0 is the plain one.
+  CHECK(diffused_reference_laplacian(ref, 0.0) == ref.laplacian);
+
+  StudyOptions o;
+  o.kind = StudyKind::Cotan;
+  o.mesh_file = path;
+  o.resolutions = {12, 24};
+  o.refine_vertices = 2500;
+  o.methods = {"fem"};
+  o.functions = {"x2"};
+  o.normals = "mesh";
+  o.reference_laplacian = "diffused";
+  const std::vector<StudyRow> rows = run_rows(o);
+  REQUIRE(rows.size() == 2);
+  CHECK(rows[0].study == "cotan");
+  CHECK(rows[0].h == 2.0 / 12);
+  CHECK(rows[1].h == 2.0 / 24);
+  MESSAGE("cotan study, icosahedron refined to 2562 vertices, fem, x2: L2 " << rows[0].error_l2 << " (N = 12), "
+                                                                            << rows[1].error_l2 << " (N = 24)");
+  // Forward with diffusion converges at order ~1: halving h must cut the error clearly.
+  CHECK(rows[1].error_l2 < rows[0].error_l2 / 1.4);
+
+  StudyOptions bad = o;
+  bad.mesh_file = "";
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("no mesh"), InputError);
+  bad = o;
+  bad.resolutions = {2};
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("[4, 4096]"), InputError);
+  bad = o;
+  bad.normals = "true";
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("expected mesh"), InputError);
+  bad = o;
+  bad.kind = StudyKind::Forward;
+  bad.normals = "mesh";
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("belong to the cotan study"), InputError);
+  bad = o;
+  bad.mesh_file = test::tmp_path("no-such-mesh.obj");
+  CHECK_THROWS_AS(run_rows(bad), InputError);
 }
 
 #ifdef CORRLAP_CLI
@@ -233,5 +307,11 @@ TEST_CASE("corrlap study: CSV files with the documented columns, resume without 
   CHECK(err.find("must be positive") != std::string::npos);
   CHECK(test::run_cli("study backward --methods fem --h ," + d2, &out, &err) == 1);
   CHECK(err.find("empty") != std::string::npos);
+  CHECK(test::run_cli("study cotan --methods fem" + d2, &out, &err) == 1);
+  CHECK(err.find("no mesh given (--mesh-file") != std::string::npos);
+  CHECK(test::run_cli("study cotan --mesh-file " + icosahedron_obj() + " --resolutions 64,x" + d2, &out, &err) == 1);
+  CHECK(err.find("'x' is not an integer") != std::string::npos);
+  CHECK(test::run_cli("study cotan --mesh-file " + icosahedron_obj() + " --normals true" + d2, &out, &err) == 1);
+  CHECK(err.find("expected mesh (the reference's) or ii") != std::string::npos);
 }
 #endif
