@@ -275,6 +275,31 @@ std::string solver_for(const std::string& choice, const Eigen::SparseMatrix<doub
   return L.nonZeros() > 64 * L.rows() ? "cg" : "cholmod";
 }
 
+// Overwrites L with M - dt L (compressed). In L's own storage when M is diagonal and L stores its
+// whole diagonal (lumped masses, the heat kernel): the heat kernel's L is the largest matrix of a
+// study (~2000 entries per row), and a copy of it was the memory peak of a forward unit. (Eigen
+// 3.4's SparseMatrix has no move constructor: by-value passing or returning would copy.)
+void make_forward_system(Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, double dt) {
+  bool diagonal_mass = true;
+  for (Eigen::Index j = 0; j < M.outerSize() && diagonal_mass; ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(M, j); it; ++it) diagonal_mass = diagonal_mass && it.row() == j;
+  L.makeCompressed();
+  std::vector<double*> diagonal(std::size_t(L.rows()), nullptr);
+  for (Eigen::Index j = 0; j < L.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(L, j); it; ++it)
+      if (it.row() == j) diagonal[std::size_t(j)] = &it.valueRef();
+  const bool in_place = diagonal_mass && std::find(diagonal.begin(), diagonal.end(), nullptr) == diagonal.end();
+  if (dt == 0.0 || !in_place) {  // the naive evaluation (A = M), or a general pair
+    Eigen::SparseMatrix<double> A = dt == 0.0 ? M : Eigen::SparseMatrix<double>(M - dt * L);
+    A.makeCompressed();
+    L.swap(A);
+    return;
+  }
+  for (Eigen::Index k = 0; k < L.nonZeros(); ++k) L.valuePtr()[k] *= -dt;
+  for (Eigen::Index j = 0; j < M.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(M, j); it; ++it) *diagonal[std::size_t(j)] += it.value();
+}
+
 // "fem at h = 0.05, centre 3: <what>" for errors raised inside a unit.
 [[noreturn]] void rethrow_in_unit(const std::exception& e, const std::string& method, double h, int center) {
   std::ostringstream os;
@@ -330,7 +355,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
         const auto t0 = std::chrono::steady_clock::now();
         try {
           const auto d = make_discretization(method);
-          const Operators ops = d->assemble(s.mesh, s.normals, params_for(*d, o.method_params), *s.pattern);
+          Operators ops = d->assemble(s.mesh, s.normals, params_for(*d, o.method_params), *s.pattern);
           if (!ops.contract_risk.empty())
             throw NumericalError("the operators may break their contract: " + ops.contract_risk);
           // Values live where the operator does: vertices, or surfel centres (heat kernel, §6).
@@ -372,10 +397,9 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
             } else {
               // docs/math.md §10.3: X = (M - dt L)^{-1} L f, dt = diffusion * h (0: naive).
               const double dt = o.naive ? 0.0 : o.diffusion * h;
-              Eigen::SparseMatrix<double> A = dt == 0.0 ? ops.M : Eigen::SparseMatrix<double>(ops.M - dt * ops.L);
-              A.makeCompressed();
-              solver->compute(A);
               const Eigen::MatrixXd LF = ops.L * F;
+              make_forward_system(ops.L, ops.M, dt);  // ops.L is now A = M - dt L
+              solver->compute(ops.L);
               const Eigen::MatrixXd X = solver->solve(LF);
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = error_norms(ops.M, X.col(Eigen::Index(j)) - Lap.col(Eigen::Index(j)));

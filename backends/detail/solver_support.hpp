@@ -15,6 +15,12 @@ namespace corrlap::detail {
 /// (relative tolerance 1e-10 on the Frobenius norm; every backend here is for symmetric systems).
 void check_matrix(const Eigen::SparseMatrix<double>& A, const std::string& solver, bool check_symmetry = true);
 
+/// ||A - A^T||_F without forming A^T or A - A^T (one int per column of scratch): one pass in column
+/// order pairs each lower entry with its mirror through a cursor per column (inner indices are
+/// sorted). The readable formula is (A - SparseMatrix(A.transpose())).norm(); this equals it up to
+/// round-off.
+double symmetry_defect(const Eigen::SparseMatrix<double>& A);
+
 /// Throws SolverError(InvalidInput) when B has not `n` rows, SolverError(NumericalIssue) on NaN/Inf.
 void check_rhs(const Eigen::MatrixXd& B, Eigen::Index n, const std::string& solver);
 
