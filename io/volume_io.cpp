@@ -88,7 +88,82 @@ void read_payload(std::istream& in, const std::string& path, Volume& v) {
                    io_detail::readable_count(std::uint64_t(in.gcount())));
 }
 
-// DGtal .vol: "Key: value" lines ended by a line "."; then X*Y*Z bytes.
+#ifdef CORRLAP_HAVE_ZLIB
+// Inflates exactly n bytes into v.values. The output buffer grows with what inflate really
+// produces (chunks of at most 1 MiB), so that the announced size alone never allocates memory;
+// producing more than n bytes is an error as soon as it happens.
+// `format` names the data in messages ("gzip", "zlib").
+void inflate_payload(const std::string& path, const std::string& compressed, std::size_t n, Volume& v,
+                     const std::string& format) {
+  // RAII so that every fail() below releases zlib's state.
+  struct Stream {
+    z_stream zs{};
+    bool live = false;
+    ~Stream() {
+      if (live) inflateEnd(&zs);
+    }
+  } s;
+  // 15 + 32: accept gzip and zlib headers (NRRD "gzip" files are gzip streams, .vol Version 3 zlib).
+  if (inflateInit2(&s.zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
+  s.live = true;
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  constexpr std::size_t kMaxIn = std::numeric_limits<uInt>::max();
+  std::size_t fed = 0, produced = 0;
+  v.values.clear();
+  int rc = Z_OK;
+  while (rc != Z_STREAM_END) {
+    if (s.zs.avail_in == 0 && fed < compressed.size()) {
+      const std::size_t k = std::min(compressed.size() - fed, kMaxIn);
+      s.zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data() + fed));
+      s.zs.avail_in = uInt(k);
+      fed += k;
+    }
+    // One byte of room beyond n detects a stream longer than the sizes announce.
+    const std::size_t room = std::min(kChunk, n + 1 - produced);
+    v.values.resize(produced + room);
+    s.zs.next_out = v.values.data() + produced;
+    s.zs.avail_out = uInt(room);
+    rc = inflate(&s.zs, Z_NO_FLUSH);
+    produced += room - s.zs.avail_out;
+    v.values.resize(produced);
+    if (produced > n)
+      fail(path, format + " data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
+    if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
+    if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
+      fail(path, "corrupt " + format + " data" + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
+  }
+  if (produced != n)
+    fail(path, "truncated " + format + " data: expected " + io_detail::readable_count(n) + " bytes, got " +
+                   io_detail::readable_count(produced));
+}
+#endif
+
+// The rest of `in` as compressed voxel data: refused before inflating when even the densest deflate
+// stream of that length could not hold n bytes.
+void read_compressed_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, std::size_t n,
+                             Volume& v, const std::string& format) {
+#ifdef CORRLAP_HAVE_ZLIB
+  const std::uint64_t compressed = io_detail::bytes_left(in);
+  const auto most = io_detail::checked_mul(compressed, kMaxDeflateRatio);
+  if (most && n > *most + 1024)
+    fail(path, describe(s) + " need " + io_detail::readable_bytes(double(n)) + ", more than the " +
+                   io_detail::readable_bytes(double(*most + 1024)) + " that " +
+                   io_detail::readable_bytes(double(compressed)) + " of " + format +
+                   " data can hold (deflate expands at most " + std::to_string(kMaxDeflateRatio) + " times)");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  inflate_payload(path, ss.str(), n, v, format);
+#else
+  (void)in;
+  (void)s;
+  (void)n;
+  (void)v;
+  fail(path, format + "-compressed data needs corrlap built with zlib (zlib1g-dev)");
+#endif
+}
+
+// DGtal .vol: "Key: value" lines ended by a line "."; then X*Y*Z bytes, x fastest: raw
+// (Version 2, or no Version field) or one zlib stream (Version 3, DGtal's VolWriter with compression).
 Volume read_vol(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
@@ -121,10 +196,17 @@ Volume read_vol(const std::string& path) {
       fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
     s[a] = int(d);
   }
-  checked_voxels(path, s);
+  const std::size_t n = checked_voxels(path, s);
   Volume v;
   v.size = s;
-  read_payload(in, path, v);
+  const auto version = fields.find("Version");
+  const std::string ver = version == fields.end() ? "2" : version->second;
+  if (ver == "2")
+    read_payload(in, path, v);
+  else if (ver == "3")
+    read_compressed_payload(in, path, s, n, v, "zlib");
+  else
+    fail(path, "unsupported Version '" + ver.substr(0, 20) + "' (supported: 2 raw, 3 zlib)");
   return v;
 }
 
@@ -135,13 +217,47 @@ void write_values(io_detail::OutputFile& out, const Volume& v) {
   out.commit();
 }
 
-void write_vol(const std::string& path, const Volume& v) {
+void write_vol(const std::string& path, const Volume& v, bool compressed) {
+#ifndef CORRLAP_HAVE_ZLIB
+  if (compressed) fail(path, ".vol Version 3 (zlib) needs corrlap built with zlib (zlib1g-dev)");
+#endif
   io_detail::OutputFile out(path, "volume", true);
   std::fprintf(out.get(),
                "Center-X: %d\nCenter-Y: %d\nCenter-Z: %d\nX: %d\nY: %d\nZ: %d\nVoxel-Size: 1\nAlpha-Color: 0\n"
-               "Voxel-Endian: 0\nInt-Endian: 0123\nVersion: 2\n.\n",
-               v.size.x() / 2, v.size.y() / 2, v.size.z() / 2, v.size.x(), v.size.y(), v.size.z());
-  write_values(out, v);
+               "Voxel-Endian: 0\nInt-Endian: 0123\nVersion: %d\n.\n",
+               v.size.x() / 2, v.size.y() / 2, v.size.z() / 2, v.size.x(), v.size.y(), v.size.z(), compressed ? 3 : 2);
+  if (!compressed) return write_values(out, v);
+#ifdef CORRLAP_HAVE_ZLIB
+  // One zlib stream, deflated 1 MiB of voxels at a time: the compressed volume is never held whole.
+  struct Stream {
+    z_stream zs{};
+    bool live = false;
+    ~Stream() {
+      if (live) deflateEnd(&zs);
+    }
+  } s;
+  if (deflateInit(&s.zs, Z_DEFAULT_COMPRESSION) != Z_OK) fail(path, "zlib initialisation failed");
+  s.live = true;
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  std::vector<unsigned char> buffer(kChunk);
+  std::size_t fed = 0;
+  int rc = Z_OK;
+  do {
+    const std::size_t k = std::min(kChunk, v.values.size() - fed);
+    s.zs.next_in = const_cast<Bytef*>(v.values.data() + fed);
+    s.zs.avail_in = uInt(k);
+    fed += k;
+    const int flush = fed == v.values.size() ? Z_FINISH : Z_NO_FLUSH;
+    do {
+      s.zs.next_out = buffer.data();
+      s.zs.avail_out = uInt(buffer.size());
+      rc = deflate(&s.zs, flush);
+      if (rc == Z_STREAM_ERROR) fail(path, "zlib compression failed");
+      (void)std::fwrite(buffer.data(), 1, buffer.size() - s.zs.avail_out, out.get());
+    } while (s.zs.avail_out == 0);
+  } while (rc != Z_STREAM_END);
+  out.commit();
+#endif
 }
 
 Volume read_raw(const std::string& path, const VolumeReadOptions& options) {
@@ -176,54 +292,6 @@ std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   return s;
 }
-
-#ifdef CORRLAP_HAVE_ZLIB
-// Inflates exactly n bytes into v.values. The output buffer grows with what inflate really
-// produces (chunks of at most 1 MiB), so that the announced size alone never allocates memory;
-// producing more than n bytes is an error as soon as it happens.
-void gunzip_payload(const std::string& path, const std::string& compressed, std::size_t n, Volume& v) {
-  // RAII so that every fail() below releases zlib's state.
-  struct Stream {
-    z_stream zs{};
-    bool live = false;
-    ~Stream() {
-      if (live) inflateEnd(&zs);
-    }
-  } s;
-  // 15 + 32: accept gzip and zlib headers (NRRD "gzip" files are gzip streams).
-  if (inflateInit2(&s.zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
-  s.live = true;
-  constexpr std::size_t kChunk = std::size_t{1} << 20;
-  constexpr std::size_t kMaxIn = std::numeric_limits<uInt>::max();
-  std::size_t fed = 0, produced = 0;
-  v.values.clear();
-  int rc = Z_OK;
-  while (rc != Z_STREAM_END) {
-    if (s.zs.avail_in == 0 && fed < compressed.size()) {
-      const std::size_t k = std::min(compressed.size() - fed, kMaxIn);
-      s.zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data() + fed));
-      s.zs.avail_in = uInt(k);
-      fed += k;
-    }
-    // One byte of room beyond n detects a stream longer than the sizes announce.
-    const std::size_t room = std::min(kChunk, n + 1 - produced);
-    v.values.resize(produced + room);
-    s.zs.next_out = v.values.data() + produced;
-    s.zs.avail_out = uInt(room);
-    rc = inflate(&s.zs, Z_NO_FLUSH);
-    produced += room - s.zs.avail_out;
-    v.values.resize(produced);
-    if (produced > n)
-      fail(path, "gzip data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
-    if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
-    if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
-      fail(path, std::string("corrupt gzip data") + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
-  }
-  if (produced != n)
-    fail(path, "truncated gzip data: expected " + io_detail::readable_count(n) + " bytes, got " +
-                   io_detail::readable_count(produced));
-}
-#endif
 
 Volume read_nrrd(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -297,20 +365,7 @@ Volume read_nrrd(const std::string& path) {
     std::string extra;
     if (in >> extra) fail(path, "more ascii values than the announced sizes");
   } else if (encoding == "gzip" || encoding == "gz") {
-#ifdef CORRLAP_HAVE_ZLIB
-    const std::uint64_t compressed = io_detail::bytes_left(in);
-    const auto most = io_detail::checked_mul(compressed, kMaxDeflateRatio);
-    if (most && n > *most + 1024)
-      fail(path, describe(s) + " need " + io_detail::readable_bytes(double(n)) + ", more than the " +
-                     io_detail::readable_bytes(double(*most + 1024)) + " that " +
-                     io_detail::readable_bytes(double(compressed)) +
-                     " of gzip data can hold (deflate expands at most " + std::to_string(kMaxDeflateRatio) + " times)");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    gunzip_payload(path, ss.str(), n, v);
-#else
-    fail(path, "encoding 'gzip' needs corrlap built with zlib (zlib1g-dev); re-save with encoding raw");
-#endif
+    read_compressed_payload(in, path, s, n, v, "gzip");
   } else {
     fail(path, "unsupported encoding '" + encoding + "' (supported: raw, ascii, gzip)");
   }
@@ -347,13 +402,15 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   fail(path, "unsupported extension '" + ext + "' (supported: .vol, .raw, .nrrd)");
 }
 
-void write_volume(const std::string& path, const Volume& volume) {
+void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options) {
   const std::string ext = extension_of(path);
   const auto n = voxel_count(volume.size);
   if (!n || volume.values.size() != *n)
     fail(path, "volume data (" + io_detail::readable_count(volume.values.size()) + " values) does not match its " +
                    describe(volume.size));
-  if (ext == "vol") return write_vol(path, volume);
+  if (options.compressed && ext != "vol")
+    fail(path, "compressed writing is for .vol files (Version 3); ." + ext + " is written uncompressed");
+  if (ext == "vol") return write_vol(path, volume, options.compressed);
   if (ext == "raw") return write_raw(path, volume);
   if (ext == "nrrd") return write_nrrd(path, volume);
   fail(path, "unsupported extension '" + ext + "' for writing (supported: .vol, .raw, .nrrd)");

@@ -1,7 +1,7 @@
 #pragma once
 // Grey-level volumes (uint8 voxels) and their conversion to voxel sets by a threshold.
-// Formats: DGtal .vol (read/write), raw uint8 with given dimensions (.raw), NRRD (.nrrd: 3D uint8
-// with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
+// Formats: DGtal .vol (read/write; Version 2 raw and Version 3 zlib), raw uint8 with given dimensions (.raw), NRRD
+// (.nrrd: 3D uint8 with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
 #include <Eigen/Core>
 #include <corrlap/core/voxel_grid.hpp>
 #include <cstdint>
@@ -29,9 +29,16 @@ struct VolumeReadOptions {
 /// Reads by extension. Throws IoError naming the file and the problem (missing header field,
 /// truncated data, absurd dimensions...).
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
+struct VolumeWriteOptions {
+  /// .vol only: Version 3, the voxels as one zlib stream (DGtal's VolWriter with compression);
+  /// needs zlib. Otherwise Version 2, raw bytes.
+  bool compressed = false;
+};
+
 /// Writes by extension (.vol, .raw, .nrrd). NRRD is written as uint8, raw encoding.
-void write_volume(const std::string& path, const Volume& volume);
-/// True when corrlap was built with zlib: NRRD files with "encoding: gzip" can be read.
+void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options = {});
+/// True when corrlap was built with zlib: NRRD files with "encoding: gzip" and .vol Version 3 files
+/// can be read (and .vol Version 3 written).
 bool nrrd_gzip_supported();
 
 /// Voxels with value > threshold; the box is [0, size-1] padded by one empty voxel on every side
