@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <string>
 
+#include "surface/icosahedron.hpp"
 #include "test_support.hpp"
 
 using namespace corrlap;
@@ -174,14 +175,11 @@ namespace {
 // An icosahedron as an OBJ file: the cotan study's reference after Loop subdivision.
 std::string icosahedron_obj() {
   const std::string path = test::tmp_path("icosahedron.obj");
-  const double t = (1 + std::sqrt(5.0)) / 2;
+  const TriangleMesh ico = test::icosahedron();
   PolygonMesh m;
-  m.positions.resize(12, 3);
-  m.positions << -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t,
-      0, -1, -t, 0, 1;
-  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  m.positions = ico.positions;
+  for (Eigen::Index f = 0; f < ico.triangles.rows(); ++f)
+    m.faces.push_back({ico.triangles(f, 0), ico.triangles(f, 1), ico.triangles(f, 2)});
   write_mesh(path, m);
   return path;
 }

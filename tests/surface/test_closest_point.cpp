@@ -8,6 +8,8 @@
 #include <corrlap/surface/loop_subdivision.hpp>
 #include <random>
 
+#include "surface/icosahedron.hpp"
+
 using namespace corrlap;
 
 TEST_CASE("closest point on a triangle: interior, edge and vertex regions; degenerate triangles") {
@@ -31,14 +33,7 @@ TEST_CASE("closest point on a triangle: interior, edge and vertex regions; degen
 }
 
 TEST_CASE("triangle locator: the grid search equals brute force, near and far from the surface") {
-  TriangleMesh m;
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  m.positions.resize(12, 3);
-  m.positions << -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t,
-      0, -1, -t, 0, 1;
-  m.triangles.resize(20, 3);
-  m.triangles << 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9,
-      4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1;
+  TriangleMesh m = corrlap::test::icosahedron();
   loop_refine(m, 600);
   const TriangleLocator locator(m.positions, m.triangles);
   std::mt19937 rng(5);

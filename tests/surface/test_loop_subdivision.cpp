@@ -6,7 +6,10 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/surface/loop_subdivision.hpp>
 
+#include "surface/icosahedron.hpp"
+
 using namespace corrlap;
+using corrlap::test::icosahedron;
 
 namespace {
 TriangleMesh tetrahedron() {
@@ -15,17 +18,6 @@ TriangleMesh tetrahedron() {
   m.positions << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
   m.triangles.resize(4, 3);
   m.triangles << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3;
-  return m;
-}
-TriangleMesh icosahedron() {
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  TriangleMesh m;
-  m.positions.resize(12, 3);
-  m.positions << -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t,
-      0, -1, -t, 0, 1;
-  m.triangles.resize(20, 3);
-  m.triangles << 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9,
-      4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1;
   return m;
 }
 }  // namespace
