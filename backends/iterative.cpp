@@ -3,24 +3,22 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
+#include <corrlap/backends/detail/block_cg.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <new>
+#include <optional>
 #include <sstream>
-#include <variant>
 
 namespace corrlap {
 
 using SpMat = Eigen::SparseMatrix<double>;
 
 namespace {
-// Full (both triangles) products: the input matrices are stored symmetric.
-constexpr int kUpLo = Eigen::Lower | Eigen::Upper;
-using CgNone = Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::IdentityPreconditioner>;
-using CgJacobi = Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::DiagonalPreconditioner<double>>;
-using CgIchol =
-    Eigen::ConjugateGradient<SpMat, kUpLo, Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>;
+using IncompleteCholesky = Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
 }  // namespace
 
+// The iteration is detail::block_conjugate_gradient (every right-hand side in one pass over A);
+// the preconditioners are applied to its k x n residual blocks.
 struct ConjugateGradientSolver::Impl {
   std::string preconditioner = "jacobi";
   double tolerance = 1e-10;
@@ -28,25 +26,27 @@ struct ConjugateGradientSolver::Impl {
   bool warn = false;
   bool check_symmetry = true;
 
-  std::variant<CgNone, CgJacobi, CgIchol> cg;
-  SpMat A;  // CG needs the matrix at solve time
+  SpMat A;                                  // CG needs the matrix at solve time
+  Eigen::RowVectorXd inverse_diagonal;      // jacobi
+  std::optional<IncompleteCholesky> ichol;  // ichol
   detail::Pattern pattern;
   SolverReport report;
   bool factored = false;
-  std::string built_preconditioner;
 
-  void make_solver() {
-    if (preconditioner == "none")
-      cg.emplace<CgNone>();
-    else if (preconditioner == "ichol")
-      cg.emplace<CgIchol>();
-    else
-      cg.emplace<CgJacobi>();
-    built_preconditioner = preconditioner;
+  void precondition(const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) const {
+    if (preconditioner == "none") {
+      Zt = Rt;
+    } else if (preconditioner == "jacobi") {
+      Zt = Rt.array().rowwise() * inverse_diagonal.array();
+    } else {
+      Zt.resize(Rt.rows(), Rt.cols());
+      for (Eigen::Index c = 0; c < Rt.rows(); ++c) Zt.row(c) = ichol->solve(Rt.row(c).transpose()).transpose();
+    }
   }
+  void factorize_kept_matrix();
 };
 
-ConjugateGradientSolver::ConjugateGradientSolver() : impl_(std::make_unique<Impl>()) { impl_->make_solver(); }
+ConjugateGradientSolver::ConjugateGradientSolver() : impl_(std::make_unique<Impl>()) {}
 ConjugateGradientSolver::~ConjugateGradientSolver() = default;
 
 std::vector<ParameterInfo> ConjugateGradientSolver::options() const {
@@ -55,7 +55,7 @@ std::vector<ParameterInfo> ConjugateGradientSolver::options() const {
       {"tolerance", "1e-10", "stop when |A x - b| <= tolerance |b| (per column)"},
       {"max_iterations", "0", "iteration limit per column (0: 2 n)"},
       {"on_no_convergence", "error", "error: throw SolverError; warn: return the last iterate, status no convergence"},
-      {"check_symmetry", "true", "reject matrices with |A - A^T| > 1e-10 |A|"},
+      {"check_symmetry", "true", "reject matrices with |A - A^T| > 1e-10 |A| (false: the caller vouches; A^T is used)"},
   };
 }
 
@@ -79,7 +79,6 @@ void ConjugateGradientSolver::configure(const Config& options) {
   s.check_symmetry = options.get_bool("check_symmetry", s.check_symmetry);
   if (pre != s.preconditioner) {
     s.preconditioner = pre;
-    s.make_solver();
     s.factored = false;
   }
 }
@@ -100,35 +99,59 @@ void ConjugateGradientSolver::factorize(const SpMat& A) {
   detail::check_same_pattern(s.pattern, A, "cg");
   detail::check_matrix(A, "cg", s.check_symmetry);
   s.factored = false;
-  detail::Stopwatch watch;
   try {
     s.A = A;
-    s.A.makeCompressed();
-    std::visit([&](auto& cg) { cg.compute(s.A); }, s.cg);
   } catch (const std::bad_alloc&) {
     s.report.status = SolverStatus::OutOfMemory;
-    throw SolverError(SolverStatus::OutOfMemory, "cg: out of memory while building the preconditioner");
+    throw SolverError(SolverStatus::OutOfMemory, "cg: out of memory while keeping the matrix");
   }
-  if (std::visit([](auto& cg) { return cg.info(); }, s.cg) != Eigen::Success) {
-    s.report.status = SolverStatus::NotPositiveDefinite;
-    s.report.message =
-        "cg: the " + s.preconditioner + " preconditioner could not be built (matrix not positive definite?)";
-    throw SolverError(SolverStatus::NotPositiveDefinite, s.report.message);
-  }
+  s.factorize_kept_matrix();
+}
+
+void ConjugateGradientSolver::factorize_owned(SpMat&& A) {
+  auto& s = *impl_;
+  detail::check_same_pattern(s.pattern, A, "cg");
+  detail::check_matrix(A, "cg", s.check_symmetry);
+  s.factored = false;
+  s.A.swap(A);  // kept without a copy; the caller's matrix is left empty
+  A = SpMat();
+  s.factorize_kept_matrix();
+}
+
+void ConjugateGradientSolver::Impl::factorize_kept_matrix() {
+  detail::Stopwatch watch;
+  A.makeCompressed();
   // A non-positive diagonal entry makes A indefinite (and breaks the Jacobi preconditioner).
-  const Eigen::VectorXd d = s.A.diagonal();
+  const Eigen::VectorXd d = A.diagonal();
   for (Eigen::Index i = 0; i < d.size(); ++i)
     if (!(d[i] > 0.0)) {
       std::ostringstream os;
       os << "cg: matrix is not positive definite (diagonal entry " << d[i] << " at column " << i << ")";
-      s.report.status = SolverStatus::NotPositiveDefinite;
-      s.report.message = os.str();
+      report.status = SolverStatus::NotPositiveDefinite;
+      report.message = os.str();
       throw SolverError(SolverStatus::NotPositiveDefinite, os.str());
     }
-  s.report.factorize_seconds = watch.seconds();
-  s.report.status = SolverStatus::Success;
-  s.report.message.clear();
-  s.factored = true;
+  inverse_diagonal.resize(0);
+  ichol.reset();
+  try {
+    if (preconditioner == "jacobi") inverse_diagonal = d.cwiseInverse().transpose();
+    if (preconditioner == "ichol") {
+      ichol.emplace();
+      ichol->compute(A);
+      if (ichol->info() != Eigen::Success) {
+        report.status = SolverStatus::NotPositiveDefinite;
+        report.message = "cg: the ichol preconditioner could not be built (matrix not positive definite?)";
+        throw SolverError(SolverStatus::NotPositiveDefinite, report.message);
+      }
+    }
+  } catch (const std::bad_alloc&) {
+    report.status = SolverStatus::OutOfMemory;
+    throw SolverError(SolverStatus::OutOfMemory, "cg: out of memory while building the preconditioner");
+  }
+  report.factorize_seconds = watch.seconds();
+  report.status = SolverStatus::Success;
+  report.message.clear();
+  factored = true;
 }
 
 Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
@@ -137,34 +160,37 @@ Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
   detail::check_rhs(B, s.A.rows(), "cg");
   detail::Stopwatch watch;
   const int maxit = s.max_iterations > 0 ? s.max_iterations : int(2 * s.A.rows());
-  Eigen::MatrixXd X(B.rows(), B.cols());
-  int iterations = 0;
+  const detail::BlockCgResult cg = detail::block_conjugate_gradient(
+      s.A, B, [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { s.precondition(Rt, Zt); }, s.tolerance, maxit);
+  if (cg.breakdown_column >= 0) {
+    std::ostringstream os;
+    os << "cg: matrix is not positive definite (p^T A p = " << cg.breakdown_value << " in column "
+       << cg.breakdown_column << " of the right-hand side, iteration " << cg.iterations + 1 << ")";
+    s.report.status = SolverStatus::NotPositiveDefinite;
+    s.report.message = os.str();
+    throw SolverError(SolverStatus::NotPositiveDefinite, os.str());
+  }
+  const Eigen::MatrixXd& X = cg.X;
+  const int iterations = cg.iterations;
+  const bool converged = cg.converged;
+  // The true residuals, not CG's recurrence estimates.
+  Eigen::MatrixXd AXt;
+  detail::symmetric_product_transposed(s.A, X.transpose(), AXt);
   double worst = 0.0;
-  bool eigen_converged = true;
   Eigen::Index worst_column = 0;
-  std::visit(
-      [&](auto& cg) {
-        cg.setTolerance(s.tolerance);
-        cg.setMaxIterations(maxit);
-        for (Eigen::Index j = 0; j < B.cols(); ++j) {
-          X.col(j) = cg.solve(B.col(j));
-          iterations = std::max(iterations, int(cg.iterations()));
-          eigen_converged = eigen_converged && cg.info() == Eigen::Success;
-          // The true residual, not CG's recurrence estimate.
-          const double nb = B.col(j).norm();
-          const double r = nb > 0 ? (s.A * X.col(j) - B.col(j)).norm() / nb : (s.A * X.col(j)).norm();
-          if (r >= worst) {
-            worst = r;
-            worst_column = j;
-          }
-        }
-      },
-      s.cg);
+  for (Eigen::Index j = 0; j < B.cols(); ++j) {
+    const double nb = B.col(j).norm();
+    const double r = nb > 0 ? (AXt.row(j).transpose() - B.col(j)).norm() / nb : AXt.row(j).norm();
+    if (r >= worst) {
+      worst = r;
+      worst_column = j;
+    }
+  }
   s.report.solve_seconds = watch.seconds();
   s.report.iterations = iterations;
   s.report.residual = worst;
-  // Eigen stops on its recurrence residual; allow a small slack for the true one.
-  if (!eigen_converged || !std::isfinite(worst) || worst > 10.0 * s.tolerance) {
+  // CG stops on its recurrence residual; allow a small slack for the true one.
+  if (!converged || !std::isfinite(worst) || worst > 10.0 * s.tolerance) {
     std::ostringstream os;
     os << "cg: no convergence: relative residual " << worst << " > tolerance " << s.tolerance << " after " << iterations
        << " iterations (column " << worst_column << ", limit " << maxit << ", preconditioner " << s.preconditioner

@@ -60,10 +60,22 @@ class LinearSolver {
   virtual void analyze(const Eigen::SparseMatrix<double>& A) = 0;
   /// Numeric factorization of A (same pattern as the analyzed one). Throws SolverError.
   virtual void factorize(const Eigen::SparseMatrix<double>& A) = 0;
+  /// factorize() of a matrix the caller gives away (A is left empty). A backend that must keep the
+  /// matrix until solve() (cg) keeps this one instead of a copy: the heat kernel's ~2000 entries
+  /// per row made that copy the memory peak of a study. The default factorizes and drops A.
+  virtual void factorize_owned(Eigen::SparseMatrix<double>&& A) {
+    factorize(A);
+    A = Eigen::SparseMatrix<double>();
+  }
   /// analyze + factorize.
   void compute(const Eigen::SparseMatrix<double>& A) {
     analyze(A);
     factorize(A);
+  }
+  /// analyze + factorize_owned: compute(std::move(A)) leaves A empty.
+  void compute(Eigen::SparseMatrix<double>&& A) {
+    analyze(A);
+    factorize_owned(std::move(A));
   }
   /// Solves A X = B for every column of B. Throws SolverError.
   virtual Eigen::MatrixXd solve(const Eigen::MatrixXd& B) = 0;

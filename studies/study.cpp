@@ -399,7 +399,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
               const double dt = o.naive ? 0.0 : o.diffusion * h;
               const Eigen::MatrixXd LF = ops.L * F;
               make_forward_system(ops.L, ops.M, dt);  // ops.L is now A = M - dt L
-              solver->compute(ops.L);
+              solver->compute(std::move(ops.L));      // cg keeps A instead of a copy
               const Eigen::MatrixXd X = solver->solve(LF);
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = error_norms(ops.M, X.col(Eigen::Index(j)) - Lap.col(Eigen::Index(j)));

@@ -1,11 +1,36 @@
 #include "solver_support.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 
 namespace corrlap::detail {
+
+namespace {
+// Columns are split into this many blocks, whatever the thread count: per-block results combined
+// in block order do not depend on how TBB schedules the blocks.
+constexpr Eigen::Index kColumnBlocks = 64;
+
+Eigen::Index block_begin(Eigen::Index n, Eigen::Index b) { return n * b / kColumnBlocks; }
+
+// f(j) summed over the columns of each block, in parallel; one sum per block.
+template <class PerColumn>
+std::vector<double> column_block_sums(const Eigen::SparseMatrix<double>& A, const PerColumn& f) {
+  const Eigen::Index n = A.outerSize();
+  std::vector<double> sums(static_cast<std::size_t>(kColumnBlocks), 0.0);
+  tbb::parallel_for(Eigen::Index(0), kColumnBlocks, [&](Eigen::Index b) {
+    double s = 0.0;
+    for (Eigen::Index j = block_begin(n, b); j < block_begin(n, b + 1); ++j) s += f(j);
+    sums[std::size_t(b)] = s;
+  });
+  return sums;
+}
+}  // namespace
 
 void check_matrix(const Eigen::SparseMatrix<double>& A, const std::string& solver, bool check_symmetry) {
   if (A.rows() != A.cols() || A.rows() == 0) {
@@ -13,17 +38,28 @@ void check_matrix(const Eigen::SparseMatrix<double>& A, const std::string& solve
     os << solver << ": matrix must be square and non-empty, got " << A.rows() << " x " << A.cols();
     throw SolverError(SolverStatus::InvalidInput, os.str());
   }
-  for (Eigen::Index j = 0; j < A.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
-      if (!std::isfinite(it.value())) {
-        std::ostringstream os;
-        os << solver << ": matrix entry (" << it.row() << ", " << it.col() << ") is " << it.value();
-        throw SolverError(SolverStatus::NumericalIssue, os.str());
-      }
+  // One parallel pass: squared norms per fixed block of columns (summed in block order, so the
+  // norm does not depend on the thread count); a NaN or infinity makes its block's sum non-finite.
+  const std::vector<double> squares = column_block_sums(A, [&](Eigen::Index j) {
+    double sum = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it) sum += it.value() * it.value();
+    return sum;
+  });
+  double norm2 = 0.0;
+  for (const double b : squares) norm2 += b;
+  if (!std::isfinite(norm2))  // find the entry to name (the rare path)
+    for (Eigen::Index j = 0; j < A.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
+        if (!std::isfinite(it.value())) {
+          std::ostringstream os;
+          os << solver << ": matrix entry (" << it.row() << ", " << it.col() << ") is " << it.value();
+          throw SolverError(SolverStatus::NumericalIssue, os.str());
+        }
   if (check_symmetry) {
     // A copy-free check: the heat kernel's matrices have ~2000 entries per row, and forming A^T
     // and A - A^T doubled the memory of a solve (bench/RESULTS.md, "corrlap study").
-    const double norm = A.norm();
+    const double norm = std::sqrt(norm2);  // large finite entries may still overflow the sum
+    if (!std::isfinite(norm)) throw SolverError(SolverStatus::NumericalIssue, solver + ": the matrix norm overflows");
     const double diff = symmetry_defect(A);
     if (diff > 1e-10 * norm) {
       std::ostringstream os;
@@ -44,28 +80,75 @@ double symmetry_defect(const Eigen::SparseMatrix<double>& A) {
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
   const double* value = A.valuePtr();
-  // Columns in ascending order j: the mirrors (j, i) of the lower entries (i, j), i > j, are the
-  // upper entries of column i, met in ascending row order j. A cursor per column walks its upper
-  // part: entries it skips have no mirror.
-  std::vector<int> cursor(outer, outer + n);
-  double sum = 0;
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (int k = outer[j]; k < outer[j + 1]; ++k) {
-      const int i = inner[k];
-      if (i <= int(j)) continue;  // the upper part is met through the cursors
-      int& c = cursor[std::size_t(i)];
-      for (; c < outer[i + 1] && inner[c] < int(j); ++c) sum += 2.0 * value[c] * value[c];
-      if (c < outer[i + 1] && inner[c] == int(j)) {
-        const double d = value[k] - value[c];
-        sum += 2.0 * d * d;  // (i, j) and (j, i)
-        ++c;
-      } else {
-        sum += 2.0 * value[k] * value[k];  // (i, j) without mirror
+  // Each pair {(i, j), (j, i)}, i > j, is counted once, by the block of columns holding j:
+  //  - the lower entries (i, j) of the block's columns, in ascending j, meet their mirrors (j, i)
+  //    in column i in ascending row order j. A cursor per column i walks its rows from the
+  //    block's first column j0 on (started by a binary search); rows it skips have no mirror;
+  //  - then the upper entries (r, i), r < i, with rows r in the block that no cursor reached
+  //    have no mirror either.
+  // Blocks run in parallel, each with its own cursors; their sums are added in block order.
+  struct Cursors {
+    std::vector<int> position, block;
+  };
+  tbb::enumerable_thread_specific<Cursors> scratch([n] {
+    return Cursors{std::vector<int>(std::size_t(n)), std::vector<int>(std::size_t(n), -1)};
+  });
+  // The block's sum; `sweep`: also the unreached upper entries. `reached` counts the upper entries
+  // the cursors met (matched or skipped), `upper` the upper entries of the block's columns.
+  struct BlockResult {
+    double sum = 0.0;
+    std::int64_t reached = 0, upper = 0;
+  };
+  const auto block_defect = [&](Eigen::Index b, bool sweep) {
+    Cursors& cur = scratch.local();
+    const int j0 = int(block_begin(n, b)), j1 = int(block_begin(n, b + 1));
+    const auto start = [&](int i) {  // first entry of column i with row >= j0
+      if (cur.block[std::size_t(i)] != int(b) + (sweep ? int(kColumnBlocks) : 0)) {
+        cur.block[std::size_t(i)] = int(b) + (sweep ? int(kColumnBlocks) : 0);
+        cur.position[std::size_t(i)] = int(std::lower_bound(inner + outer[i], inner + outer[i + 1], j0) - inner);
       }
-    }
-  // Upper entries the cursors did not reach (rows < i, unmatched).
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (int c = cursor[std::size_t(i)]; c < outer[i + 1] && inner[c] < int(i); ++c) sum += 2.0 * value[c] * value[c];
+      return cur.position[std::size_t(i)];
+    };
+    BlockResult r;
+    for (int j = j0; j < j1; ++j)
+      for (int k = outer[j]; k < outer[j + 1]; ++k) {
+        const int i = inner[k];
+        r.upper += i < j;
+        if (i <= j) continue;  // the upper part is met through the cursors
+        int c = start(i);
+        for (; c < outer[i + 1] && inner[c] < j; ++c, ++r.reached) r.sum += 2.0 * value[c] * value[c];
+        if (c < outer[i + 1] && inner[c] == j) {
+          const double d = value[k] - value[c];
+          r.sum += 2.0 * d * d;  // (i, j) and (j, i)
+          ++c;
+          ++r.reached;
+        } else {
+          r.sum += 2.0 * value[k] * value[k];  // (i, j) without mirror
+        }
+        cur.position[std::size_t(i)] = c;
+      }
+    if (sweep)  // upper entries (r, i) with r in [j0, j1), r < i, that no cursor reached
+      for (int i = j0 + 1; i < int(n); ++i)
+        for (int c = start(i); c < outer[i + 1] && inner[c] < std::min(j1, i); ++c) r.sum += 2.0 * value[c] * value[c];
+    return r;
+  };
+  std::vector<BlockResult> blocks(static_cast<std::size_t>(kColumnBlocks));
+  tbb::parallel_for(Eigen::Index(0), kColumnBlocks,
+                    [&](Eigen::Index b) { blocks[std::size_t(b)] = block_defect(b, false); });
+  std::int64_t reached = 0, upper = 0;
+  for (const BlockResult& r : blocks) {
+    reached += r.reached;
+    upper += r.upper;
+  }
+  // Every upper entry reached (the usual case, a symmetric pattern): nothing left to sweep. Else
+  // the blocks again with the sweep (the counts are integers: the test is exact).
+  if (reached != upper)
+    tbb::parallel_for(Eigen::Index(0), kColumnBlocks,
+                      [&](Eigen::Index b) { blocks[std::size_t(b)] = block_defect(b, true); });
+  std::vector<double> sums;
+  for (const BlockResult& r : blocks) sums.push_back(r.sum);
+  double sum = 0.0;
+  for (const double s : sums) sum += s;
   return std::sqrt(sum);
 }
 
@@ -84,28 +167,46 @@ void check_rhs(const Eigen::MatrixXd& B, Eigen::Index n, const std::string& solv
       }
 }
 
+namespace {
+// FNV-1a over the 32-bit words of the pattern, column by column: the column lengths, then the row
+// indices. Stored entries are walked through the column lengths, so an uncompressed matrix hashes
+// like its compressed form without a copy.
+std::uint64_t pattern_hash(const Eigen::SparseMatrix<double>& A) {
+  constexpr std::uint64_t kBasis = 1469598103934665603ull, kPrime = 1099511628211ull;
+  const auto mix = [](std::uint64_t& h, std::uint64_t w) {
+    h ^= w;
+    h *= kPrime;
+  };
+  // One FNV-1a hash per fixed block of columns (in parallel), then a hash of the block hashes.
+  const Eigen::Index n = A.outerSize();
+  std::vector<std::uint64_t> blocks(static_cast<std::size_t>(kColumnBlocks));
+  tbb::parallel_for(Eigen::Index(0), kColumnBlocks, [&](Eigen::Index b) {
+    std::uint64_t h = kBasis;
+    const int* nnz = A.innerNonZeroPtr();
+    for (Eigen::Index j = block_begin(n, b); j < block_begin(n, b + 1); ++j) {
+      const Eigen::Index begin = A.outerIndexPtr()[j];
+      const Eigen::Index count = nnz ? nnz[j] : A.outerIndexPtr()[j + 1] - begin;
+      mix(h, std::uint32_t(count));
+      const int* rows = A.innerIndexPtr() + begin;
+      for (Eigen::Index e = 0; e < count; ++e) mix(h, std::uint32_t(rows[e]));
+    }
+    blocks[std::size_t(b)] = h;
+  });
+  std::uint64_t h = kBasis;
+  for (const std::uint64_t b : blocks) mix(h, b);
+  return h;
+}
+}  // namespace
+
 void Pattern::assign(const Eigen::SparseMatrix<double>& A) {
-  Eigen::SparseMatrix<double> C;
-  const Eigen::SparseMatrix<double>* a = &A;
-  if (!A.isCompressed()) {
-    C = A;
-    C.makeCompressed();
-    a = &C;
-  }
-  rows = a->rows();
-  outer.assign(a->outerIndexPtr(), a->outerIndexPtr() + a->outerSize() + 1);
-  inner.assign(a->innerIndexPtr(), a->innerIndexPtr() + a->nonZeros());
+  rows = A.rows();
+  cols = A.cols();
+  nonzeros = A.nonZeros();
+  hash = pattern_hash(A);
 }
 
 bool Pattern::matches(const Eigen::SparseMatrix<double>& A) const {
-  if (A.isCompressed()) {  // no copy on the refactorization path
-    if (A.rows() != rows || A.cols() != rows || std::size_t(A.nonZeros()) != inner.size()) return false;
-    return std::equal(outer.begin(), outer.end(), A.outerIndexPtr()) &&
-           std::equal(inner.begin(), inner.end(), A.innerIndexPtr());
-  }
-  Pattern other;
-  other.assign(A);
-  return other.rows == rows && other.outer == outer && other.inner == inner;
+  return A.rows() == rows && A.cols() == cols && A.nonZeros() == nonzeros && pattern_hash(A) == hash;
 }
 
 void check_same_pattern(const Pattern& analyzed, const Eigen::SparseMatrix<double>& A, const std::string& solver) {
@@ -113,8 +214,8 @@ void check_same_pattern(const Pattern& analyzed, const Eigen::SparseMatrix<doubl
   if (!analyzed.matches(A)) {
     std::ostringstream os;
     os << solver << ": factorize() got a matrix (" << A.rows() << " x " << A.cols() << ", " << A.nonZeros()
-       << " nonzeros) whose sparsity pattern differs from the analyzed one (" << analyzed.rows << " x " << analyzed.rows
-       << ", " << analyzed.inner.size() << " nonzeros); call analyze() again";
+       << " nonzeros) whose sparsity pattern differs from the analyzed one (" << analyzed.rows << " x " << analyzed.cols
+       << ", " << analyzed.nonzeros << " nonzeros); call analyze() again";
     throw SolverError(SolverStatus::InvalidInput, os.str());
   }
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <corrlap/backends/cholmod.hpp>
+#include <corrlap/backends/detail/block_cg.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <corrlap/backends/eigen_direct.hpp>
 #include <corrlap/backends/registry.hpp>
@@ -299,5 +300,81 @@ TEST_CASE("symmetry_defect equals |A - A^T|_F without forming A^T (mirrors prese
       CHECK(corrlap::detail::symmetry_defect(A) ==
             doctest::Approx((A - Eigen::SparseMatrix<double>(A.transpose())).norm()).epsilon(1e-12));
     }
+  }
+}
+
+TEST_CASE("symmetric_product_transposed equals (A X)^T for symmetric A (1, 2, 3, 5 columns, uncompressed)") {
+  SpMat A = test::shifted(sphere(), 1.0);
+  std::srand(5);
+  for (int k : {1, 2, 3, 5}) {  // the fixed-size paths and the general one
+    CAPTURE(k);
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(A.rows(), k);
+    const Eigen::MatrixXd readable = (A * X).transpose();
+    Eigen::MatrixXd fast;
+    corrlap::detail::symmetric_product_transposed(A, X.transpose(), fast);
+    REQUIRE(fast.rows() == k);
+    // Same terms summed in another order: round-off of a few ulps of the largest term.
+    CHECK((fast - readable).cwiseAbs().maxCoeff() <= 1e-12 * readable.cwiseAbs().maxCoeff());
+  }
+  A.coeffRef(3, 3) += 1.0;  // a stored entry: stays symmetric; force the uncompressed layout
+  A.reserve(Eigen::VectorXi::Constant(A.cols(), 2));
+  REQUIRE(!A.isCompressed());
+  const Eigen::MatrixXd X = Eigen::MatrixXd::Random(A.rows(), 3);
+  Eigen::MatrixXd fast;
+  corrlap::detail::symmetric_product_transposed(A, X.transpose(), fast);
+  CHECK((fast - (A * X).transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (A * X).cwiseAbs().maxCoeff());
+}
+
+TEST_CASE("block CG: every column as if solved alone, zero columns stay zero, breakdown is reported") {
+  const SpMat A = test::shifted(sphere(), 1e-2);
+  std::srand(9);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 3);
+  B.col(1).setZero();
+  const Eigen::VectorXd inverse_diagonal = A.diagonal().cwiseInverse();
+  const corrlap::detail::Preconditioner jacobi = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
+    Zt = Rt.array().rowwise() * inverse_diagonal.transpose().array();
+  };
+  const auto block = corrlap::detail::block_conjugate_gradient(A, B, jacobi, 1e-10, 10000);
+  REQUIRE(block.converged);
+  CHECK(block.breakdown_column == -1);
+  CHECK(block.X.col(1).isZero(0.0));
+  int slowest = 0;
+  for (Eigen::Index c : {0, 2}) {
+    const auto alone = corrlap::detail::block_conjugate_gradient(A, B.col(c), jacobi, 1e-10, 10000);
+    REQUIRE(alone.converged);
+    slowest = std::max(slowest, alone.iterations);
+    // The same recurrences, up to the order of the sums in the dot products: far closer than the
+    // cond(A) 1e-10 that two solutions with relative residuals 1e-10 may differ by.
+    CHECK((block.X.col(c) - alone.X).norm() <= 1e-9 * alone.X.norm());
+    CHECK((A * block.X.col(c) - B.col(c)).norm() <= 1e-9 * B.col(c).norm());
+  }
+  CHECK(block.iterations == slowest);
+  // diag(1, -1): p^T A p = 0 for b = (1, 1) in the first step.
+  SpMat D = diagonal({1.0, -1.0});
+  const auto none = [](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { Zt = Rt; };
+  const auto broken = corrlap::detail::block_conjugate_gradient(D, Eigen::MatrixXd::Ones(2, 1), none, 1e-10, 100);
+  CHECK(!broken.converged);
+  CHECK(broken.breakdown_column == 0);
+}
+
+TEST_CASE("cg: compute(std::move(A)) keeps the matrix without a copy and solves as compute(A)") {
+  const SpMat A = test::shifted(sphere(), 1.0);
+  std::srand(3);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 2);
+  for (const char* cfg : {"solver=cg", "solver=cholmod"}) {
+    CAPTURE(cfg);
+    auto copied = make(cfg);
+    copied->compute(A);
+    const Eigen::MatrixXd X = copied->solve(B);
+    auto owned = make(cfg);
+    SpMat given = A;
+    owned->compute(std::move(given));
+    CHECK(given.nonZeros() == 0);  // the backend took it (cg) or dropped it (the default)
+    const Eigen::MatrixXd Y = owned->solve(B);
+    CHECK((X - Y).norm() <= 1e-14 * X.norm());
+    // A new matrix with the analyzed pattern refactorizes through the owned path too.
+    SpMat scaled = 2.0 * A;
+    owned->factorize_owned(std::move(scaled));
+    CHECK((owned->solve(B) - 0.5 * X).norm() <= 1e-9 * X.norm());
   }
 }

@@ -1,0 +1,37 @@
+#pragma once
+// Preconditioned conjugate gradient on every column of a right-hand side at once, with a parallel
+// product for symmetric matrices. Internal to backends/ (the "cg" backend, iterative.cpp).
+#include <Eigen/Core>
+#include <Eigen/Sparse>
+#include <functional>
+
+namespace corrlap::detail {
+
+/// Yt = (A X)^T for a symmetric n x n A stored with both triangles, column-major; Xt = X^T is
+/// k x n. Because A = A^T, row j of A X is column j of A dotted with X: the rows are independent
+/// and run in parallel (TBB), each summed in storage order, so the result does not depend on the
+/// thread count. Equals the readable (A * X).transpose() up to the order of the sums. The
+/// transposed layout makes each row of X that a column of A gathers contiguous.
+void symmetric_product_transposed(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt);
+
+/// Zt = P^{-1} Rt for k residuals stored as the rows of Rt (k x n).
+using Preconditioner = std::function<void(const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt)>;
+
+struct BlockCgResult {
+  Eigen::MatrixXd X;                   ///< n x k solution (the last iterate when not converged)
+  int iterations = 0;                  ///< of the slowest column
+  bool converged = false;              ///< every column reached |r| <= tolerance |b| (recurrence residual)
+  Eigen::Index breakdown_column = -1;  ///< column with p^T A p <= 0 (A not positive definite), or -1
+  double breakdown_value = 0.0;        ///< that p^T A p
+};
+
+/// Solves A X = B (A symmetric positive definite, both triangles stored) by preconditioned CG from
+/// X = 0 (Saad, Iterative Methods for Sparse Linear Systems, 2nd ed., Algorithm 9.1), every column
+/// with its own step lengths but one pass over A per iteration for all of them: the heat kernel's
+/// ~2000 entries per row make that pass the cost of an iteration. A column stops when its
+/// recurrence residual is <= tolerance |b|; iteration stops when every column has, at
+/// max_iterations, or at a breakdown (p^T A p <= 0 in a column not yet converged).
+BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
+                                       const Preconditioner& precondition, double tolerance, int max_iterations);
+
+}  // namespace corrlap::detail
