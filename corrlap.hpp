@@ -51,3 +51,6 @@
 // Problems: test functions of docs/math.md §10.2, Poisson (backward) and forward evaluation.
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/problems/test_functions.hpp>
+
+// Regularization: positions from the corrected Laplacian and Delta p = -2 H n (paper §4.1).
+#include <corrlap/regularization/laplacian_regularization.hpp>

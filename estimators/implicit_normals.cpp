@@ -51,4 +51,40 @@ Eigen::MatrixX3d true_vertex_normals(const ImplicitShape& shape, const SurfelMes
   return n;
 }
 
+namespace {
+ProjectionParams precise_projection() {
+  ProjectionParams p;
+  p.max_iterations = 200;
+  p.accuracy = 1e-12;
+  return p;
+}
+}  // namespace
+
+Eigen::VectorXd distances_to_surface(const ImplicitShape& shape, const Eigen::MatrixX3d& points) {
+  Eigen::VectorXd d(points.rows());
+  const double r = shape.sphere_radius();
+  const ProjectionParams params = precise_projection();
+  tbb::parallel_for(Eigen::Index(0), points.rows(), [&](Eigen::Index i) {
+    const Eigen::Vector3d x = points.row(i).transpose();
+    d[i] = r > 0.0 ? std::abs((x - shape.center).norm() - r) : (x - project_onto_surface(shape, x, params)).norm();
+  });
+  return d;
+}
+
+Eigen::VectorXd true_mean_curvatures(const ImplicitShape& shape, const Eigen::MatrixX3d& points) {
+  const Polynomial d[3] = {shape.polynomial.derivative(0), shape.polynomial.derivative(1),
+                           shape.polynomial.derivative(2)};
+  const ProjectionParams params = precise_projection();
+  Eigen::VectorXd H(points.rows());
+  tbb::parallel_for(Eigen::Index(0), points.rows(), [&](Eigen::Index i) {
+    const Eigen::Vector3d q = project_onto_surface(shape, points.row(i).transpose(), params) - shape.center;
+    const Eigen::Vector3d g(d[0](q), d[1](q), d[2](q));
+    Eigen::Matrix3d hessian;
+    for (int a = 0; a < 3; ++a) hessian.row(a) = d[a].gradient(q).transpose();
+    const double g2 = g.squaredNorm();
+    H[i] = (g2 * hessian.trace() - g.dot(hessian * g)) / (2.0 * g2 * std::sqrt(g2));
+  });
+  return H;
+}
+
 }  // namespace corrlap

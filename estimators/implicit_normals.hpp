@@ -28,4 +28,14 @@ Eigen::MatrixX3d true_face_normals(const ImplicitShape& shape, const SurfelMesh&
 Eigen::MatrixX3d true_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh,
                                      const ProjectionParams& params = {});
 
+/// Distance from each point (#P x 3) to the zero level set: exact on spheres, else |x - p(x)| with
+/// the Newton projection run to |P| < 1e-12 (the reference's 1e-4 would dominate the distances of
+/// regularized surfaces, ~1e-3 h). Used to measure surfaces, not by the operators.
+Eigen::VectorXd distances_to_surface(const ImplicitShape& shape, const Eigen::MatrixX3d& points);
+
+/// Mean curvature of the level set at the projection of each point (#P x 3), with outward normals
+/// (the unit sphere has H = 1, so that Delta x = -2 H n): H = (|g|^2 tr(D^2P) - g^T D^2P g) / (2 |g|^3),
+/// g = grad P, half the divergence of the unit normal field.
+Eigen::VectorXd true_mean_curvatures(const ImplicitShape& shape, const Eigen::MatrixX3d& points);
+
 }  // namespace corrlap

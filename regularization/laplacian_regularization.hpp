@@ -1,0 +1,41 @@
+#pragma once
+// The paper's Laplacian regularization (paper §4.1, docs/math.md §9.2): vertex positions p' whose
+// Laplacian matches -2 H n, the mean-curvature normal estimated on the staircased surface, while
+// staying close to the input positions p.
+#include <Eigen/Core>
+#include <Eigen/Sparse>
+#include <corrlap/core/linear_solver.hpp>
+
+namespace corrlap {
+
+/// The lumped mass M_l = diag(M 1) (#V x #V, diagonal). Throws InputError when a row sum is not
+/// positive (a vertex without area: M_l^{-1} would not exist).
+Eigen::SparseMatrix<double> lumped_mass(const Eigen::SparseMatrix<double>& M);
+
+/// The default weight of the attachment term: alpha = alpha0 / h^2 (docs/math.md §9.2, alpha0 = 10),
+/// so that both terms scale alike under refinement (L p' ~ h^2 per vertex, p' - p ~ h).
+double regularization_alpha(double h, double alpha0 = 10.0);
+
+/// docs/math.md §9.2: the minimizer p' (#V x 3) of |M_l^{-1} L p' + 2 H n|^2_{M_l} + alpha |p' - p|^2_{M_l},
+/// from its normal equations
+///     (L M_l^{-1} L + alpha M_l) p' = alpha M_l p - 2 L (H n),
+/// one factorization of the SPD matrix and three right-hand sides (the coordinates).
+/// L, M: #V x #V (L symmetric negative semi-definite, M the mass, lumped here); p, normals: #V x 3
+/// (normals unit); H: #V mean curvatures (the unit sphere has H = 1 with outward normals, so that
+/// Delta p = -2 H n). Throws InputError on mismatched sizes, non-finite inputs or alpha <= 0;
+/// SolverError from the solver. With exact data (L p = -2 M_l H n) it returns p.
+Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
+                                      const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                      const Eigen::VectorXd& H, double alpha, LinearSolver& solver);
+
+/// The two terms of the energy above at positions q (for reports): the Laplacian term
+/// |M_l^{-1} L q + 2 H n|^2_{M_l} and the attachment term |q - p|^2_{M_l} (without alpha).
+struct RegularizationEnergy {
+  double laplacian = 0.0;
+  double attachment = 0.0;
+};
+RegularizationEnergy regularization_energy(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
+                                           const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                           const Eigen::VectorXd& H, const Eigen::MatrixX3d& q);
+
+}  // namespace corrlap

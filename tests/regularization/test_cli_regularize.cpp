@@ -1,0 +1,68 @@
+// `corrlap regularize`: outputs with the input's vertex and face order, metrics that show the
+// surface moving towards the true one, and clear errors for surfaces it cannot take.
+#include <doctest/doctest.h>
+
+#include <corrlap/io/mesh_io.hpp>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+using corrlap::test::run_cli;
+
+TEST_CASE("regularize sphere1 (h = 0.1, fem, II normals): files, order kept, distance reduced") {
+  const std::string dir = corrlap::test::tmp_path("regularize_sphere");
+  std::string err;
+  const int rc = run_cli("regularize --shape sphere1 --h 0.1 --bbox -1.5 1.5 --out " + dir, nullptr, &err);
+  INFO(err);
+  REQUIRE(rc == 0);
+  const corrlap::PolygonMesh in = corrlap::read_mesh(dir + "/input.ply");
+  corrlap::MeshAttributes attr;
+  const corrlap::PolygonMesh out = corrlap::read_ply(dir + "/regularized.ply", &attr);
+  REQUIRE(out.positions.rows() == in.positions.rows());
+  REQUIRE(out.faces == in.faces);  // same faces, same vertex ids
+  CHECK(attr.vertex_scalars.count("H") == 1);
+  CHECK(attr.vertex_normals.rows() == out.positions.rows());
+  CHECK(corrlap::read_mesh(dir + "/regularized.obj").positions.rows() == in.positions.rows());
+  const auto m = nlohmann::json::parse(corrlap::test::read_text(dir + "/metrics.json"));
+  for (const char* key : {"vertices", "faces", "h", "method", "solver", "time_s", "distance_l1_before",
+                          "distance_l1_after", "normal_angle_deg_before", "normal_angle_deg_after",
+                          "mean_curvature_error_before", "mean_curvature_error_after"})
+    CHECK_MESSAGE(m.contains(key), key);
+  for (const char* stage : {"surface_s", "normals_s", "curvature_s", "operators_s", "solve_s", "write_s"})
+    CHECK_MESSAGE(m["time_s"].contains(stage), stage);
+  CHECK(m["method"] == "fem");
+  CHECK(m["normals"] == "ii");
+  const double before = m["distance_l1_before"], after = m["distance_l1_after"];
+  MESSAGE("distance " << before << " -> " << after << ", normal angle " << m["normal_angle_deg_before"] << " -> "
+                      << m["normal_angle_deg_after"] << " deg, |H - 1| " << m["mean_curvature_error_before"] << " -> "
+                      << m["mean_curvature_error_after"]);
+  // The staircase's pointels are ~h/4 off the sphere on average; the II normals and H are good to
+  // a few percent at h = 0.1, so the result must be several times closer.
+  CHECK(after < 0.3 * before);
+  CHECK(m["normal_angle_deg_after"].get<double>() < 0.5 * m["normal_angle_deg_before"].get<double>());
+}
+
+TEST_CASE("regularize: bad options and surfaces are named") {
+  std::string err;
+  const std::string dir = corrlap::test::tmp_path("regularize_bad");
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --method nosuch --out " + dir, nullptr, &err) == 1);
+  CHECK(err.find("fem") != std::string::npos);
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --method heat-kernel --out " + dir, nullptr,
+                &err) == 1);
+  CHECK(err.find("on faces") != std::string::npos);
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --alpha0 0 --out " + dir, nullptr, &err) != 0);
+  // An open surface: a flat 2 x 2 patch of quads.
+  const std::string patch = corrlap::test::tmp_path("regularize_patch.obj");
+  std::string obj;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) obj += "v " + std::to_string(i) + " " + std::to_string(j) + " 0\n";
+  obj += "f 1 2 5 4\nf 2 3 6 5\nf 4 5 8 7\nf 5 6 9 8\n";
+  corrlap::test::write_text(patch, obj);
+  CHECK(run_cli("regularize --mesh " + patch + " --normals trivial --out " + dir, nullptr, &err) == 1);
+  CHECK(err.find("open (8 boundary edges)") != std::string::npos);
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --solver nosuch --out " + dir, nullptr, &err) == 1);
+  CHECK(err.find("cholmod") != std::string::npos);
+  // The empty volume.
+  CHECK(run_cli("regularize --polynomial \"x^2+y^2+z^2+1\" --h 0.2 --bbox -1.5 1.5 --out " + dir, nullptr, &err) == 1);
+  CHECK(err.find("empty") != std::string::npos);
+}
