@@ -2,6 +2,7 @@
 // surface moving towards the true one, and clear errors for surfaces it cannot take.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <corrlap/io/mesh_io.hpp>
 #include <nlohmann/json.hpp>
 
@@ -24,9 +25,10 @@ TEST_CASE("regularize sphere1 (h = 0.1, fem, II normals): files, order kept, dis
   CHECK(attr.vertex_normals.rows() == out.positions.rows());
   CHECK(corrlap::read_mesh(dir + "/regularized.obj").positions.rows() == in.positions.rows());
   const auto m = nlohmann::json::parse(corrlap::test::read_text(dir + "/metrics.json"));
-  for (const char* key : {"vertices", "faces", "h", "method", "solver", "time_s", "distance_l1_before",
-                          "distance_l1_after", "normal_angle_deg_before", "normal_angle_deg_after",
-                          "mean_curvature_error_before", "mean_curvature_error_after"})
+  for (const char* key :
+       {"vertices", "faces", "h", "method", "solver", "time_s", "area_before", "area_after", "energy_initial",
+        "energy_final", "distance_l1_before", "distance_l1_after", "normal_angle_deg_before", "normal_angle_deg_after",
+        "mean_curvature_error_before", "mean_curvature_error_after"})
     CHECK_MESSAGE(m.contains(key), key);
   for (const char* stage : {"surface_s", "normals_s", "curvature_s", "operators_s", "solve_s", "write_s"})
     CHECK_MESSAGE(m["time_s"].contains(stage), stage);
@@ -40,6 +42,11 @@ TEST_CASE("regularize sphere1 (h = 0.1, fem, II normals): files, order kept, dis
   // a few percent at h = 0.1, so the result must be several times closer.
   CHECK(after < 0.3 * before);
   CHECK(m["normal_angle_deg_after"].get<double>() < 0.5 * m["normal_angle_deg_before"].get<double>());
+  // The staircase's area is about 1.5 times the sphere's (docs/math.md §1.4); the regularized
+  // surface's is within a few percent of 4 pi.
+  CHECK(m["area_before"].get<double>() > 1.4 * 4 * M_PI);
+  CHECK(std::abs(m["area_after"].get<double>() / (4 * M_PI) - 1.0) < 0.05);
+  CHECK(m["energy_final"].get<double>() < m["energy_initial"].get<double>());
 }
 
 TEST_CASE("regularize: bad options and surfaces are named") {

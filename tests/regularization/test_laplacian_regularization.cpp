@@ -106,3 +106,42 @@ TEST_CASE("bad inputs are named") {
   CHECK(message(s.ops.L, no_mass, p, n, H, 1.0).find("vertex 0 has mass") != std::string::npos);
   CHECK_THROWS_AS(regularization_alpha(0.0), InputError);
 }
+
+TEST_CASE("regularize_surface: H = +1 on the unit sphere, the surface gets closer, faces kept; bad inputs named") {
+  const Sphere& s = sphere();
+  const RegularizedSurface r = regularize_surface(s.mesh, s.normals);
+  // The corrected mean curvature with exact normals at h = 0.1: within a few percent of 1
+  // (docs/math.md §12.4 gives mean H 1.0026, max |H - 1| 0.045 on this surface).
+  CHECK(r.H.mean() == doctest::Approx(1.0).epsilon(0.01));
+  CHECK(r.mesh.faces == s.mesh.faces);
+  CHECK(r.h == doctest::Approx(0.1));
+  // Size: half the longest side of the pointels' box, 1 + h/2 for the digitized unit sphere.
+  CHECK(r.size == doctest::Approx(1.05).epsilon(1e-9));
+  CHECK(r.alpha == doctest::Approx(10.0 / (0.1 * 1.05 * 0.1 * 1.05)));
+  CHECK(r.curvature_radius == doctest::Approx(0.105));
+  CHECK(r.energy_after.laplacian < r.energy_before.laplacian);
+  const ImplicitShape shape = make_implicit_shape("sphere1");
+  const SurfaceQuality before = measure_against_shape(s.mesh, shape, 0.1);
+  const SurfaceQuality after = measure_against_shape(r.mesh, shape, 0.1);
+  MESSAGE("distance " << before.distance_l1 << " -> " << after.distance_l1 << ", angle " << before.normal_angle_deg
+                      << " -> " << after.normal_angle_deg << " deg, |H - 1| " << before.mean_curvature_error << " -> "
+                      << after.mean_curvature_error);
+  CHECK(after.distance_l1 < 0.25 * before.distance_l1);
+  CHECK(after.normal_angle_deg < 0.25 * before.normal_angle_deg);
+  CHECK(after.mean_curvature_error < 0.25 * before.mean_curvature_error);
+
+  RegularizationOptions faces;
+  faces.method = "heat-kernel";
+  CHECK_THROWS_WITH_AS(regularize_surface(s.mesh, s.normals, faces), doctest::Contains("on faces"), InputError);
+  RegularizationOptions unknown;
+  unknown.method = "nosuch";
+  CHECK_THROWS_AS(regularize_surface(s.mesh, s.normals, unknown), InputError);
+  // An open surface: the sphere without its first face.
+  SurfelMesh open = s.mesh;
+  open.faces = s.mesh.faces.bottomRows(s.mesh.num_faces() - 1);
+  if (open.has_surfels()) open.surfels.erase(open.surfels.begin());
+  NormalFields open_normals = s.normals;
+  open_normals.face = s.normals.face.bottomRows(s.mesh.num_faces() - 1);
+  CHECK_THROWS_WITH_AS(regularize_surface(open, open_normals), doctest::Contains("open (4 boundary edges)"),
+                       InputError);
+}

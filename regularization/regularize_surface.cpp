@@ -1,0 +1,74 @@
+#include "regularize_surface.hpp"
+
+#include <chrono>
+#include <corrlap/backends/registry.hpp>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/corrected_curvature.hpp>
+
+namespace corrlap {
+
+namespace {
+// Half the longest side of the bounding box: 1 for the unit sphere and for a volume scaled so that
+// its longest side spans 2 (the world units the paper's defaults assume).
+double object_size(const SurfelMesh& mesh) {
+  if (mesh.num_vertices() == 0) return 0.0;
+  return 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point& t0) {
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - t0).count();
+  t0 = now;
+  return s;
+}
+}  // namespace
+
+RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,
+                                      const RegularizationOptions& o) {
+  // Options first: a bad name fails before the curvature and the assembly.
+  auto solver = make_linear_solver(o.solver, kDefaultLinearSolver);
+  auto method = make_discretization(o.method);
+  int boundary_edges = 0;
+  for (const int n : build_edges(mesh).faces_per_edge) boundary_edges += n == 1;
+  if (boundary_edges > 0)
+    throw InputError("regularization: the surface is open (" + std::to_string(boundary_edges) +
+                     " boundary edges); it is defined for closed surfaces");
+  if (!normals.has_vertex()) throw InputError("regularization: vertex normals are needed");
+
+  RegularizedSurface r;
+  r.h = mesh.grid_step();
+  r.size = o.size ? *o.size : object_size(mesh);
+  if (!(r.size > 0.0) || !std::isfinite(r.size)) throw InputError("regularization: the size must be positive");
+  r.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * r.size;
+  if (!(r.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
+  r.alpha = regularization_alpha(r.h * r.size, o.alpha0);
+  r.solver = o.solver.get_string("solver", kDefaultLinearSolver);
+  auto t = std::chrono::steady_clock::now();
+  // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
+  r.H = CorrectedCurvature::interpolated(mesh, normals.vertex).at_vertices(r.curvature_radius).H;
+  for (Eigen::Index v = 0; v < r.H.size(); ++v)
+    if (!std::isfinite(r.H[v]))
+      throw NumericalError("regularization: the mean curvature of vertex " + std::to_string(v) +
+                           " is not finite (is the curvature radius larger than the mesh?)");
+  r.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
+  if (o.h_clamp) r.H = r.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
+  r.curvature_seconds = seconds_since(t);
+
+  Operators ops = method->assemble(mesh, normals, o.method_params);
+  r.warnings = ops.warnings;
+  if (ops.domain != Operators::Domain::Vertices)
+    throw InputError("regularization: method '" + o.method +
+                     "' defines operators on faces; positions live on vertices");
+  r.operators_seconds = seconds_since(t);
+
+  r.mesh = mesh;
+  r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, normals.vertex, r.H, r.alpha, *solver);
+  r.solve_seconds = seconds_since(t);
+  r.energy_before = regularization_energy(ops.L, ops.M, mesh.positions, normals.vertex, r.H, mesh.positions);
+  r.energy_after = regularization_energy(ops.L, ops.M, mesh.positions, normals.vertex, r.H, r.mesh.positions);
+  return r;
+}
+
+}  // namespace corrlap

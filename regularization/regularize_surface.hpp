@@ -1,0 +1,48 @@
+#pragma once
+// The whole regularization of paper §4.1 on a digital surface (docs/math.md §9.2): mean curvature
+// from the corrected curvature measures, a corrected L and M, one SPD solve. The CLI's
+// `corrlap regularize` and the demo call this; regularize_positions is the solve alone.
+#include <Eigen/Core>
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/normal_fields.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/regularization/laplacian_regularization.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace corrlap {
+
+struct RegularizationOptions {
+  std::string method = "fem";  ///< a vertex-based discretization of the registry
+  Config method_params;        ///< its parameters
+  /// The paper's defaults are stated for unit-sized shapes (sphere1). For others they apply to
+  /// the shape scaled by 1/size: alpha = alpha0 / (h size)^2 and a curvature radius of 0.1 size,
+  /// which gives the same p' as regularizing the scaled shape and scaling back (L is scale
+  /// invariant, M scales as size^2, H as 1/size). Unset: half the longest side of the bounding box.
+  std::optional<double> size;
+  std::optional<double> curvature_radius;  ///< ball radius of the corrected mean curvature (default 0.1 size)
+  double alpha0 = 10.0;                    ///< alpha = alpha0 / (h size)^2
+  double h_scale = 1.0;                    ///< curvature editing (paper §4.3): H <- h_scale H ...
+  std::optional<double> h_clamp;           ///< ... then clamped to [-h_clamp, h_clamp]
+  Config solver;                           ///< linear solver ("solver" key: backend name; default cholmod)
+};
+
+struct RegularizedSurface {
+  SurfelMesh mesh;    ///< the input's faces and vertex order, regularized positions
+  Eigen::VectorXd H;  ///< #V mean curvature used (after the edits)
+  double h = 0.0, size = 1.0, curvature_radius = 0.0, alpha = 0.0;
+  std::string solver;                                ///< backend name
+  RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
+  double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;
+  std::vector<std::string> warnings;  ///< from the operators
+};
+
+/// Regularizes a closed surface with unit vertex normals (#V x 3, normals.vertex; the method's
+/// own normals come from the same fields). Throws InputError for an open surface (naming its
+/// boundary edge count), a method defined on faces, bad options; NumericalError when H or the
+/// result is not finite; SolverError from the solve.
+RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,
+                                      const RegularizationOptions& options = {});
+
+}  // namespace corrlap
