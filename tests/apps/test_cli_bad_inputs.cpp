@@ -29,9 +29,10 @@ std::string expand(std::string s, const std::string& dir) {
 }
 
 // Scratch folder with the files the cases read: a valid small surfel mesh and its face normals,
-// and a set of broken files.
-std::string make_inputs() {
-  const std::string dir = tmp_path("bad_inputs_cli");
+// and a set of broken files. One folder per test case: ctest runs the cases as concurrent
+// processes, and one rewriting the files while another reads them failed now and then.
+std::string make_inputs(const std::string& folder) {
+  const std::string dir = tmp_path(folder);
   std::filesystem::create_directories(dir);
   REQUIRE(run_cli("digitize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --out " + dir + "/s.obj --face-normals " + dir +
                   "/fn.txt") == 0);
@@ -185,7 +186,7 @@ const std::vector<BadCall>& catalogue() {
 }  // namespace
 
 TEST_CASE("CLI bad-input catalogue: every case fails with a named error, never a crash or an internal error") {
-  const std::string dir = make_inputs();
+  const std::string dir = make_inputs("bad_inputs_cli");
   CHECK(catalogue().size() >= 50);
   for (const BadCall& call : catalogue()) {
     const std::string args = expand(call.args, dir);
@@ -202,7 +203,7 @@ TEST_CASE("CLI bad-input catalogue: every case fails with a named error, never a
 }
 
 TEST_CASE("JSON reports survive file names that are not UTF-8") {
-  const std::string dir = make_inputs();
+  const std::string dir = make_inputs("bad_inputs_cli_utf8");
   const std::string name = dir + "/latin1_\xe9t\xe9.obj";  // "été" in Latin-1: invalid UTF-8
   std::filesystem::copy_file(dir + "/s.obj", name, std::filesystem::copy_options::overwrite_existing);
   std::string out, err;
