@@ -1,6 +1,7 @@
 #include "normal_estimation.hpp"
 
 #include <corrlap/core/error.hpp>
+#include <corrlap/estimators/convolved_trivial_normals.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 
 namespace corrlap {
@@ -9,7 +10,8 @@ NormalEstimator parse_normal_estimator(const std::string& name) {
   if (name == "trivial") return NormalEstimator::Trivial;
   if (name == "true") return NormalEstimator::True;
   if (name == "ii") return NormalEstimator::II;
-  throw InputError("unknown normal estimator '" + name + "' (valid: trivial, true, ii)");
+  if (name == "convolved") return NormalEstimator::ConvolvedTrivial;
+  throw InputError("unknown normal estimator '" + name + "' (valid: trivial, true, ii, convolved)");
 }
 
 Eigen::MatrixX3d estimate_face_normals(NormalEstimator estimator, const SurfelMesh& mesh, const VoxelGrid* grid,
@@ -24,6 +26,8 @@ Eigen::MatrixX3d estimate_face_normals(NormalEstimator estimator, const SurfelMe
       if (!grid || !mesh.has_surfels())
         throw InputError("II normals need voxels (--shape, --polynomial or --volume), not a mesh file");
       return ii_face_normals(*grid, mesh, ii, IIMethod::Fast, progress);
+    case NormalEstimator::ConvolvedTrivial:
+      return convolved_trivial_normals(mesh);
   }
   throw InputError("unknown normal estimator");
 }

@@ -8,8 +8,8 @@
 
 namespace corrlap {
 
-enum class NormalEstimator { Trivial, True, II };
-/// "trivial", "true", "ii" -> estimator; InputError listing the valid names otherwise.
+enum class NormalEstimator { Trivial, True, II, ConvolvedTrivial };
+/// "trivial", "true", "ii", "convolved" -> estimator; InputError listing the valid names otherwise.
 NormalEstimator parse_normal_estimator(const std::string& name);
 
 /// Unit face normals (#F x 3). True needs `shape`; II needs `grid` (the voxels the mesh came from).

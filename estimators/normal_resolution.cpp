@@ -12,7 +12,8 @@ NormalSource parse_normal_source(const std::string& name) {
   if (name == "true") return NormalSource::True;
   if (name == "ii") return NormalSource::II;
   if (name == "trivial") return NormalSource::Trivial;
-  throw InputError("unknown normal source '" + name + "' (valid: auto, true, ii, trivial)");
+  if (name == "convolved") return NormalSource::ConvolvedTrivial;
+  throw InputError("unknown normal source '" + name + "' (valid: auto, true, ii, trivial, convolved)");
 }
 
 const char* to_string(NormalSource source) {
@@ -25,6 +26,8 @@ const char* to_string(NormalSource source) {
       return "ii";
     case NormalSource::Trivial:
       return "trivial";
+    case NormalSource::ConvolvedTrivial:
+      return "convolved";
   }
   return "?";
 }
@@ -65,6 +68,7 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
     NormalEstimator estimator = NormalEstimator::Trivial;
     if (source == NormalSource::True) estimator = NormalEstimator::True;
     if (source == NormalSource::II) estimator = NormalEstimator::II;
+    if (source == NormalSource::ConvolvedTrivial) estimator = NormalEstimator::ConvolvedTrivial;
     n.face = estimate_face_normals(estimator, mesh, grid, shape, request.ii, request.progress);
   }
   // docs/math.md §1.5: vertex normals = normalized sum of the incident face normals (one definition).

@@ -15,12 +15,13 @@ namespace corrlap {
 
 /// Where normals come from when no file gives them.
 enum class NormalSource {
-  Auto,     ///< true for implicit shapes, else II when voxels are given, else none (an error)
-  True,     ///< true face normals of the implicit shape (docs/math.md §1.5)
-  II,       ///< integral-invariant face normals of the voxels (docs/math.md §7)
-  Trivial,  ///< surfel normals (docs/math.md §1.3)
+  Auto,              ///< true for implicit shapes, else II when voxels are given, else none (an error)
+  True,              ///< true face normals of the implicit shape (docs/math.md §1.5)
+  II,                ///< integral-invariant face normals of the voxels (docs/math.md §7)
+  Trivial,           ///< surfel normals (docs/math.md §1.3)
+  ConvolvedTrivial,  ///< surfel normals averaged around each surfel (convolved_trivial_normals.hpp)
 };
-/// "auto", "true", "ii", "trivial" -> source; InputError listing the valid names otherwise.
+/// "auto", "true", "ii", "trivial", "convolved" -> source; InputError listing the valid names otherwise.
 NormalSource parse_normal_source(const std::string& name);
 const char* to_string(NormalSource source);
 

@@ -42,7 +42,7 @@ RegisterCommand reg(30, "normals", [](CLI::App& app) {
   args->source.add_options(*cmd, /*with_mesh=*/true);
   cmd->add_option("--estimator", args->estimator,
                   "ii (integral invariant, docs/math.md §7), true (implicit shapes), trivial")
-      ->check(CLI::IsMember({"ii", "true", "trivial"}));
+      ->check(CLI::IsMember({"ii", "true", "trivial", "convolved"}));
   cmd->add_option("--radius", args->radius, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
       ->check(positive_number());
   cmd->add_option("--alpha", args->alpha, "II: exponent alpha (default 0.33 as the reference; the paper uses 1/3)");

@@ -6,6 +6,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 #include <filesystem>
@@ -34,6 +35,8 @@ struct RegularizeArgs {
   std::string solver;
   std::vector<std::string> options;
   std::string out;
+  std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
+  bool clamp = false;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point& t0) {
@@ -41,6 +44,66 @@ double seconds_since(std::chrono::steady_clock::time_point& t0) {
   const double s = std::chrono::duration<double>(now - t0).count();
   t0 = now;
   return s;
+}
+
+// docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
+// face normals of --normals (the reference's test uses --normals convolved).
+void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, nlohmann::json& stages,
+                            std::chrono::steady_clock::time_point& t) {
+  const SurfelMesh& mesh = surface.mesh;
+  const NormalFields normals = a.normals.resolve(surface, NormalKind::Face, "regularize --baseline alignment");
+  stages["normals_s"] = seconds_since(t);
+  AlignmentParams params;
+  params.clamp = a.clamp;
+  const AlignmentResult r = alignment_regularization(mesh, normals.face, params);
+  stages["solve_s"] = seconds_since(t);
+  SurfelMesh result = mesh;
+  result.positions = r.positions;
+  std::filesystem::create_directories(a.out);
+  MeshAttributes input_attr;
+  input_attr.face_normals = normals.face;
+  write_mesh(a.out + "/input.ply", mesh, input_attr);
+  MeshAttributes result_attr;
+  result_attr.vertex_normals = geometric_vertex_normals(result);
+  const Eigen::VectorXd displacement = (result.positions - mesh.positions).rowwise().norm();
+  result_attr.vertex_scalars = {{"displacement", displacement}};
+  write_mesh(a.out + "/regularized.ply", result, result_attr);
+  write_mesh(a.out + "/regularized.obj", result);
+  stages["write_s"] = seconds_since(t);
+  nlohmann::json m;
+  m["surface"] = a.source.describe();
+  m["vertices"] = mesh.num_vertices();
+  m["faces"] = mesh.num_faces();
+  m["h"] = mesh.grid_step();
+  m["method"] = "alignment";
+  m["normals"] = a.normals.describe(surface);
+  m["alpha"] = params.alpha;
+  m["beta"] = params.beta;
+  m["gamma"] = params.gamma;
+  m["clamp"] = params.clamp;
+  m["iterations"] = r.iterations;
+  m["energy_initial"] = r.energy_initial;
+  m["energy_final"] = r.energy_final;
+  m["time_s"] = stages;
+  m["displacement_max"] = displacement.maxCoeff();
+  m["area_before"] = surface_area(mesh);
+  m["area_after"] = surface_area(result);
+  if (surface.shape) {
+    const double radius =
+        0.1 * 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff();
+    const SurfaceQuality qb = measure_against_shape(mesh, *surface.shape, radius);
+    const SurfaceQuality qa = measure_against_shape(result, *surface.shape, radius);
+    m["distance_l1_before"] = qb.distance_l1;
+    m["distance_l1_after"] = qa.distance_l1;
+    m["normal_angle_deg_before"] = qb.normal_angle_deg;
+    m["normal_angle_deg_after"] = qa.normal_angle_deg;
+    m["mean_curvature_error_before"] = qb.mean_curvature_error;
+    m["mean_curvature_error_after"] = qa.mean_curvature_error;
+  }
+  std::ofstream(a.out + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  std::cerr << "regularize --baseline alignment: energy " << r.energy_initial << " -> " << r.energy_final << " in "
+            << r.iterations << " iterations\n  wrote " << a.out
+            << "/regularized.ply, regularized.obj, input.ply, metrics.json\n";
 }
 
 void run(const RegularizeArgs& a) {
@@ -69,6 +132,10 @@ void run(const RegularizeArgs& a) {
   stages["surface_s"] = seconds_since(t);
   std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces, h = " << mesh.grid_step() << "\n";
+  if (!a.baseline.empty()) {
+    run_alignment_baseline(a, surface, stages, t);
+    return;
+  }
   // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Vertex, "regularize");
   stages["normals_s"] = seconds_since(t);
@@ -158,6 +225,11 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
   cmd->add_option("options", args->options, "backend options key=value");
+  cmd->add_option("--baseline", args->baseline,
+                  "alignment: the paper's baseline [17] (the reference's DigitalSurfaceRegularization, docs/math.md "
+                  "§9.1) with the face normals of --normals (its test: --normals convolved)")
+      ->check(CLI::IsMember({"alignment"}));
+  cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_option("--out", args->out, "output directory (regularized.ply/.obj, input.ply, metrics.json)")->required();
   cmd->callback([args] { run(*args); });
 });

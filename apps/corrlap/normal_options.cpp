@@ -29,12 +29,12 @@ ProgressFn stderr_progress(const std::string& what) {
 void NormalOptions::add_options(CLI::App& cmd) {
   cmd.add_option("--face-normals", face_file, "one unit normal per face (text, nx ny nz, file order)");
   cmd.add_option("--vertex-normals", vertex_file, "one unit normal per vertex (text, nx ny nz, file order)");
-  cmd.add_option(
-         "--normals", source,
-         "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
-         "docs/math.md §7), trivial (surfel normals), auto (true for shapes, ii for volumes); vertex normals are "
-         "the normalized sum of the face normals (docs/math.md §1.5)")
-      ->check(CLI::IsMember({"auto", "true", "ii", "trivial"}))
+  cmd.add_option("--normals", source,
+                 "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
+                 "docs/math.md §7), trivial (surfel normals), convolved (surfel normals averaged over a 3-voxel "
+                 "neighbourhood), auto (true for shapes, ii for volumes); vertex normals are the normalized sum of the "
+                 "face normals (docs/math.md §1.5)")
+      ->check(CLI::IsMember({"auto", "true", "ii", "trivial", "convolved"}))
       ->capture_default_str();
   cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
       ->check(positive_number());
