@@ -1,5 +1,6 @@
 #include "alignment_regularization.hpp"
 
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 #include <corrlap/core/error.hpp>
@@ -117,6 +118,61 @@ AlignmentResult alignment_regularization(const SurfelMesh& mesh, const Eigen::Ma
     r.iterations = it + 1;
   }
   r.energy_final = energy;
+  r.positions = q * h;
+  return r;
+}
+
+AlignmentResult alignment_minimizer(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals, LinearSolver& solver,
+                                    const AlignmentParams& params) {
+  const double h = mesh.grid_step();
+  const Eigen::MatrixX3d p = mesh.positions / h;  // grid units, as the energy
+  const Problem pr = make_problem(mesh, face_normals, p, params);
+  const int V = mesh.num_vertices();
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(std::size_t(V) * 3 + std::size_t(mesh.num_faces()) * 4 * 36);
+  for (int i = 0; i < 3 * V; ++i) t.emplace_back(i, i, params.alpha);
+  // Alignment: beta ((q_a - q_b) . n)^2 for the edge (a, b) of a surfel of normal n.
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3d n = face_normals.row(f).transpose();
+    const Eigen::Matrix3d nn = params.beta * n * n.transpose();
+    for (int j = 0; j < 4; ++j) {
+      const int a = mesh.faces(f, j), b = mesh.faces(f, (j + 1) % 4);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          t.emplace_back(3 * a + r, 3 * a + c, nn(r, c));
+          t.emplace_back(3 * b + r, 3 * b + c, nn(r, c));
+          t.emplace_back(3 * a + r, 3 * b + c, -nn(r, c));
+          t.emplace_back(3 * b + r, 3 * a + c, -nn(r, c));
+        }
+    }
+  }
+  // Fairness: gamma |(I - W) q|^2 per coordinate.
+  std::vector<Eigen::Triplet<double>> w;
+  for (int v = 0; v < V; ++v) {
+    const int begin = pr.neighbours.start[std::size_t(v)], end = pr.neighbours.start[std::size_t(v) + 1];
+    w.emplace_back(v, v, 1.0);
+    for (int k = begin; k < end; ++k) w.emplace_back(v, pr.neighbours.ids[std::size_t(k)], -1.0 / double(end - begin));
+  }
+  Eigen::SparseMatrix<double> IW(V, V);
+  IW.setFromTriplets(w.begin(), w.end());
+  const Eigen::SparseMatrix<double> G = Eigen::SparseMatrix<double>(IW.transpose()) * IW;
+  for (int j = 0; j < G.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(G, j); it; ++it)
+      for (int k = 0; k < 3; ++k)
+        t.emplace_back(3 * int(it.row()) + k, 3 * int(it.col()) + k, params.gamma * it.value());
+  Eigen::SparseMatrix<double> H(3 * V, 3 * V);
+  H.setFromTriplets(t.begin(), t.end());
+  Eigen::VectorXd rhs(3 * V);
+  for (int v = 0; v < V; ++v)
+    for (int k = 0; k < 3; ++k) rhs[3 * v + k] = params.alpha * p(v, k);
+  AlignmentResult r;
+  r.energy_initial = energy_and_gradient(pr, p, nullptr);
+  solver.compute(std::move(H));
+  const Eigen::VectorXd x = solver.solve(rhs);
+  if (!x.allFinite()) throw NumericalError("alignment minimizer: the solver returned non-finite positions");
+  Eigen::MatrixX3d q(V, 3);
+  for (int v = 0; v < V; ++v) q.row(v) = x.segment<3>(3 * v).transpose();
+  r.energy_final = energy_and_gradient(pr, q, nullptr);
   r.positions = q * h;
   return r;
 }

@@ -4,6 +4,7 @@
 // orthogonal to given normals, by the reference's gradient descent, or by a direct sparse solve of
 // the same quadratic energy.
 #include <Eigen/Core>
+#include <corrlap/core/linear_solver.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 
 namespace corrlap {
@@ -37,5 +38,15 @@ double alignment_energy(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_nor
 /// Throws InputError for mismatched normals or an open surface.
 AlignmentResult alignment_regularization(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals,
                                          const AlignmentParams& params = {});
+
+/// The exact minimizer of alignment_energy: E is quadratic in the 3 #V coordinates, so its minimum
+/// solves H q = alpha p with the sparse SPD
+///   H = alpha I + beta sum over surfel edges (a, b) of (e_a - e_b)(e_a - e_b)^T (x) n n^T
+///       + gamma ((I - W)^T (I - W)) (x) I_3,
+/// W the averaging over edge neighbours; one factorization and solve by `solver`. Not the
+/// reference's result: its descent direction is not E's gradient (docs/math.md §9.1), so it
+/// stops elsewhere, at a higher E. iterations is 0; positions in world units.
+AlignmentResult alignment_minimizer(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals, LinearSolver& solver,
+                                    const AlignmentParams& params = {});
 
 }  // namespace corrlap

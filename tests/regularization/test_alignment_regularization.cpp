@@ -32,6 +32,24 @@ TEST_CASE("alignment regularization reproduces the reference's test (goursat, h 
   CHECK(c.energy_final < c.energy_initial);
 }
 
+TEST_CASE("alignment_minimizer: the exact minimum of E, below the reference's descent") {
+  const SurfelMesh mesh = goursat();
+  const Eigen::MatrixX3d n = convolved_trivial_normals(mesh);
+  auto solver = make_linear_solver("cholmod");
+  const AlignmentResult direct = alignment_minimizer(mesh, n, *solver);
+  const AlignmentResult descent = alignment_regularization(mesh, n);
+  MESSAGE("E: descent " << descent.energy_final << ", exact minimum " << direct.energy_final);
+  CHECK(direct.energy_initial == doctest::Approx(descent.energy_initial));
+  CHECK(direct.energy_final < descent.energy_final);
+  CHECK(direct.energy_final == doctest::Approx(alignment_energy(mesh, n, mesh.positions, direct.positions)));
+  // A quadratic's minimum: perturbations raise E (by d^T H d > 0, far above round-off here).
+  std::srand(2);
+  for (double eps : {1e-2, 1e-4}) {
+    const Eigen::MatrixX3d d = eps * Eigen::MatrixX3d::Random(mesh.num_vertices(), 3);
+    CHECK(alignment_energy(mesh, n, mesh.positions, direct.positions + d) > direct.energy_final);
+  }
+}
+
 TEST_CASE("convolved trivial normals: unit, outward, closer to the true normals than the trivial ones") {
   const ImplicitShape sphere = make_implicit_shape("sphere1");
   const SurfelMesh mesh = extract_surface(digitize(sphere, {.h = 0.1, .min_aabb = -1.5, .max_aabb = 1.5}));
