@@ -21,8 +21,9 @@ struct Volume {
 };
 
 struct VolumeReadOptions {
-  double threshold = 0.0;                         ///< inside iff value > threshold
-  double h = 1.0;                                 ///< grid step given to the voxel grid
+  double threshold = 0.0;  ///< inside iff value > threshold
+  /// Grid step given to the voxel grid; 0: unit_size_grid_step (the longest side spans 2).
+  double h = 1.0;
   std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
 };
 
@@ -44,7 +45,10 @@ bool nrrd_gzip_supported();
 /// Voxels with value > threshold; the box is [0, size-1] padded by one empty voxel on every side
 /// so that the surface is closed. Throws InputError for an empty or full volume.
 VoxelGrid threshold_volume(const Volume& volume, double threshold, double h);
-/// read_volume + threshold_volume.
+/// 2 / (the longest side in voxels): the step at which the volume's longest side spans 2, the world
+/// units of the unit-sized shapes the paper's defaults are stated for (II radius, curvature radius).
+double unit_size_grid_step(const Eigen::Vector3i& size);
+/// read_volume + threshold_volume (options.h = 0: unit_size_grid_step of the volume).
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options);
 /// 255 inside, 0 outside, over the grid's box.
 Volume voxels_to_volume(const VoxelGrid& grid);

@@ -31,8 +31,8 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   (void)m;
   (void)mf;
   h_option = cmd.add_option("--h", h,
-                            "grid step (shapes: world units per voxel; volumes: voxel size; mesh files: "
-                            "voxel size in mesh units)")
+                            "grid step (shapes: world units per voxel; volumes: voxel size, default 2/N so that the "
+                            "longest side (N voxels) spans 2; mesh files: voxel size in mesh units)")
                  ->check(positive_number());
   cmd.add_option("--resolution", resolution, "mesh files: longest bounding-box side = N voxels")
       ->check(positive_number());
@@ -68,7 +68,9 @@ VoxelGrid SurfaceSource::voxels() const {
   if (!volume.empty()) {
     VolumeReadOptions opt;
     opt.threshold = threshold;
-    opt.h = h;
+    // World units by default (docs/io.md): the longest side spans 2, h = 2 / N; --h overrides.
+    const bool h_given = h_option && h_option->count() > 0;
+    opt.h = h_given ? h : 0.0;
     if (raw_dimensions.size() == 3)
       opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
     return read_volume_as_voxels(volume, opt);

@@ -7,6 +7,7 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
 #include <limits>
 #include <random>
 
@@ -388,4 +389,24 @@ TEST_CASE("volume writers go through a temporary file: replaced whole, or untouc
   }
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     CHECK(entry.path().filename().string().find(".tmp-") == std::string::npos);
+}
+
+TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 2 / N); --h overrides") {
+  CHECK(unit_size_grid_step(Eigen::Vector3i(6, 5, 4)) == doctest::Approx(1.0 / 3.0));
+  const std::string vol = corrlap::test::reference_dir() + "/volumes/pattern_6x5x4_v3.vol";
+  if (!nrrd_gzip_supported()) return;
+  VolumeReadOptions o;
+  o.threshold = 100;
+  o.h = 0.0;
+  const SurfelMesh unit = extract_surface(read_volume_as_voxels(vol, o));
+  o.h = 1.0;
+  const SurfelMesh voxels = extract_surface(read_volume_as_voxels(vol, o));
+  REQUIRE(unit.num_vertices() == voxels.num_vertices());
+  CHECK((unit.positions - voxels.positions / 3.0).cwiseAbs().maxCoeff() < 1e-12);
+  // The CLI: no --h gives the same h = 1/3.
+  const std::string out = corrlap::test::tmp_path("unit_volume.obj");
+  REQUIRE(corrlap::test::run_cli("digitize --volume " + vol + " --threshold 100 --out " + out) == 0);
+  CHECK((read_mesh(out).positions - unit.positions).cwiseAbs().maxCoeff() < 1e-12);
+  o.h = -1.0;
+  CHECK_THROWS_AS(read_volume_as_voxels(vol, o), InputError);
 }
