@@ -1,6 +1,8 @@
 #include "regularize_surface.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
@@ -54,6 +56,24 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
                            " is not finite (is the curvature radius larger than the mesh?)");
   r.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
   if (o.h_clamp) r.H = r.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
+  // A curvature radius below one voxel cannot be resolved: |H| > 1/h means the normals are wrong
+  // there (II normals whose radius exceeds the shape's features). Solving with such H moves the
+  // surface by many voxels, silently; refuse unless the user clamps H.
+  if (!o.h_clamp) {
+    int absurd = 0;
+    double worst = 0.0;
+    for (Eigen::Index v = 0; v < r.H.size(); ++v)
+      if (std::abs(r.H[v]) > 1.0 / r.h) {
+        ++absurd;
+        worst = std::max(worst, std::abs(r.H[v]));
+      }
+    if (absurd > 0)
+      throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / r.h) + " at " +
+                       std::to_string(absurd) + " of " + std::to_string(r.H.size()) + " vertices (up to " +
+                       std::to_string(worst) +
+                       "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
+                       "features; give a smaller --ii-radius, other --normals, or --h-clamp MAX to clamp H");
+  }
   r.curvature_seconds = seconds_since(t);
 
   Operators ops = method->assemble(mesh, normals, o.method_params);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
@@ -37,6 +38,7 @@ struct RegularizeArgs {
   std::string out;
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
+  bool allow_nonmanifold = false;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point& t0) {
@@ -132,10 +134,17 @@ void run(const RegularizeArgs& a) {
   auto t = std::chrono::steady_clock::now();
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
-  const BoundaryCondition boundary = boundary_condition(mesh);
-  if (!boundary.closed())
-    throw InputError("regularize: the surface is open (" + std::to_string(boundary.boundary_edges) +
+  const MeshInfo info = compute_mesh_info(mesh);
+  if (!info.closed())
+    throw InputError("regularize: the surface is open (" + std::to_string(info.boundary_edges) +
                      " boundary edges); the regularization is defined for closed surfaces");
+  // Voxels that touch along an edge or at a corner only: the surface pinches there, its normals
+  // and curvature are unreliable nearby, and the solve moves it by several voxels (measured).
+  if (!info.manifold() && !a.allow_nonmanifold)
+    throw InputError("regularize: the surface is not manifold (" + std::to_string(info.nonmanifold_edges) +
+                     " non-manifold edges, " + std::to_string(info.nonmanifold_vertices) +
+                     " non-manifold vertices: voxels touching along an edge or a corner); clean the volume "
+                     "(e.g. a morphological opening) or give --allow-nonmanifold to regularize anyway");
   stages["surface_s"] = seconds_since(t);
   std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces, h = " << mesh.grid_step() << "\n";
@@ -237,6 +246,8 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                   "§9.1) with the face normals of --normals (its test: --normals convolved); alignment-direct: the "
                   "exact minimizer of the same energy by one sparse solve")
       ->check(CLI::IsMember({"alignment", "alignment-direct"}));
+  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
+                "regularize a surface with non-manifold edges or vertices (refused by default)");
   cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_option("--out", args->out, "output directory (regularized.ply/.obj, input.ply, metrics.json)")->required();
   cmd->callback([args] { run(*args); });

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/volume_io.hpp>
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
@@ -72,4 +73,49 @@ TEST_CASE("regularize: bad options and surfaces are named") {
   // The empty volume.
   CHECK(run_cli("regularize --polynomial \"x^2+y^2+z^2+1\" --h 0.2 --bbox -1.5 1.5 --out " + dir, nullptr, &err) == 1);
   CHECK(err.find("empty") != std::string::npos);
+}
+
+TEST_CASE("regularize: a volume whose features are thinner than the II radius is refused, not silently wrong") {
+  // A torus of tube radius 5 voxels in 48^3: in world units (h = 2/48) the default II radius
+  // 3 h^(1/3) is about 25 voxels, so the II normals and H are meaningless on the tube.
+  corrlap::Volume v;
+  v.size = {48, 48, 48};
+  v.values.assign(48 * 48 * 48, 0);
+  for (int z = 0; z < 48; ++z)
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 48; ++x) {
+        const double rho = std::hypot(x - 23.5, y - 23.5);
+        if ((rho - 14) * (rho - 14) + (z - 23.5) * (z - 23.5) < 25) v.values[std::size_t((z * 48 + y) * 48 + x)] = 255;
+      }
+  const std::string vol = corrlap::test::tmp_path("thin_torus.vol");
+  corrlap::write_volume(vol, v);
+  const std::string dir = corrlap::test::tmp_path("regularize_thin_torus");
+  std::string err;
+  CHECK(run_cli("regularize --volume " + vol + " --out " + dir, nullptr, &err) == 1);
+  CHECK(err.find("exceeds 1/h") != std::string::npos);
+  CHECK(err.find("--ii-radius") != std::string::npos);
+  // A radius below the tube's: the surface moves by less than a voxel.
+  REQUIRE(run_cli("regularize --volume " + vol + " --ii-radius 0.5 --out " + dir, nullptr, &err) == 0);
+  const auto m = nlohmann::json::parse(corrlap::test::read_text(dir + "/metrics.json"));
+  CHECK(m["displacement_max"].get<double>() < m["h"].get<double>());
+}
+
+TEST_CASE("regularize: a non-manifold surface is refused with the counts and the way out") {
+  // Two 2^3 blocks that touch along one edge only.
+  corrlap::Volume v;
+  v.size = {6, 6, 4};
+  v.values.assign(6 * 6 * 4, 0);
+  for (int z = 1; z < 3; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 2; ++x) {
+        v.values[std::size_t((z * 6 + y) * 6 + x)] = 255;
+        v.values[std::size_t((z * 6 + y + 2) * 6 + x + 2)] = 255;
+      }
+  const std::string vol = corrlap::test::tmp_path("edge_touching.vol");
+  corrlap::write_volume(vol, v);
+  std::string err;
+  CHECK(run_cli("regularize --volume " + vol + " --normals trivial --out " + corrlap::test::tmp_path("reg_nm"), nullptr,
+                &err) == 1);
+  CHECK(err.find("not manifold (2 non-manifold edges") != std::string::npos);
+  CHECK(err.find("--allow-nonmanifold") != std::string::npos);
 }
