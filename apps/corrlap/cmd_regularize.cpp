@@ -48,6 +48,25 @@ double seconds_since(std::chrono::steady_clock::time_point& t0) {
   return s;
 }
 
+// The geometry part of metrics.json, the same for both regularizations: the largest move, the
+// areas and, for implicit shapes, the quality before and after (docs/regularization.md).
+void add_geometry_metrics(nlohmann::json& m, const LoadedSurface& surface, const SurfelMesh& result,
+                          double curvature_radius) {
+  const SurfelMesh& mesh = surface.mesh;
+  m["displacement_max"] = (result.positions - mesh.positions).rowwise().norm().maxCoeff();
+  m["area_before"] = surface_area(mesh);
+  m["area_after"] = surface_area(result);
+  if (!surface.shape) return;
+  const SurfaceQuality qb = measure_against_shape(mesh, *surface.shape, curvature_radius);
+  const SurfaceQuality qa = measure_against_shape(result, *surface.shape, curvature_radius);
+  m["distance_l1_before"] = qb.distance_l1;
+  m["distance_l1_after"] = qa.distance_l1;
+  m["normal_angle_deg_before"] = qb.normal_angle_deg;
+  m["normal_angle_deg_after"] = qa.normal_angle_deg;
+  m["mean_curvature_error_before"] = qb.mean_curvature_error;
+  m["mean_curvature_error_after"] = qa.mean_curvature_error;
+}
+
 // docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
 // face normals of --normals (the reference's test uses --normals convolved).
 void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, nlohmann::json& stages,
@@ -94,21 +113,10 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   m["energy_initial"] = r.energy_initial;
   m["energy_final"] = r.energy_final;
   m["time_s"] = stages;
-  m["displacement_max"] = displacement.maxCoeff();
-  m["area_before"] = surface_area(mesh);
-  m["area_after"] = surface_area(result);
-  if (surface.shape) {
-    const double radius =
-        0.1 * 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff();
-    const SurfaceQuality qb = measure_against_shape(mesh, *surface.shape, radius);
-    const SurfaceQuality qa = measure_against_shape(result, *surface.shape, radius);
-    m["distance_l1_before"] = qb.distance_l1;
-    m["distance_l1_after"] = qa.distance_l1;
-    m["normal_angle_deg_before"] = qb.normal_angle_deg;
-    m["normal_angle_deg_after"] = qa.normal_angle_deg;
-    m["mean_curvature_error_before"] = qb.mean_curvature_error;
-    m["mean_curvature_error_after"] = qa.mean_curvature_error;
-  }
+  // The default curvature radius of the paper's regularization: 0.1 of the half bounding box.
+  add_geometry_metrics(
+      m, surface, result,
+      0.1 * 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff());
   std::ofstream(a.out + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << a.out
@@ -192,19 +200,7 @@ void run(const RegularizeArgs& a) {
   m["time_s"] = stages;
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
-  m["displacement_max"] = displacement.maxCoeff();
-  m["area_before"] = surface_area(mesh);
-  m["area_after"] = surface_area(r.mesh);
-  if (surface.shape) {
-    const SurfaceQuality qb = measure_against_shape(mesh, *surface.shape, r.curvature_radius);
-    const SurfaceQuality qa = measure_against_shape(r.mesh, *surface.shape, r.curvature_radius);
-    m["distance_l1_before"] = qb.distance_l1;
-    m["distance_l1_after"] = qa.distance_l1;
-    m["normal_angle_deg_before"] = qb.normal_angle_deg;
-    m["normal_angle_deg_after"] = qa.normal_angle_deg;
-    m["mean_curvature_error_before"] = qb.mean_curvature_error;
-    m["mean_curvature_error_after"] = qa.mean_curvature_error;
-  }
+  add_geometry_metrics(m, surface, r.mesh, r.curvature_radius);
   std::ofstream(a.out + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   std::cerr << "regularize: " << a.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
             << r.solver << ": max displacement " << displacement.maxCoeff();
