@@ -442,9 +442,9 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
 double unit_size_grid_step(const Eigen::Vector3i& size) { return size.maxCoeff() > 0 ? 2.0 / size.maxCoeff() : 1.0; }
 
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options) {
-  const Volume volume = read_volume(path, options);
   if (options.h < 0.0 || !std::isfinite(options.h))
     throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
+  const Volume volume = read_volume(path, options);
   const double h = options.h == 0.0 ? unit_size_grid_step(volume.size) : options.h;
   return threshold_volume(volume, options.threshold, h);
 }

@@ -11,14 +11,12 @@
 
 namespace corrlap {
 
-namespace {
-// Half the longest side of the bounding box: 1 for the unit sphere and for a volume scaled so that
-// its longest side spans 2 (the world units the paper's defaults assume).
-double object_size(const SurfelMesh& mesh) {
+double regularization_size(const SurfelMesh& mesh) {
   if (mesh.num_vertices() == 0) return 0.0;
   return 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff();
 }
 
+namespace {
 double seconds_since(std::chrono::steady_clock::time_point& t0) {
   const auto now = std::chrono::steady_clock::now();
   const double s = std::chrono::duration<double>(now - t0).count();
@@ -41,7 +39,7 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
 
   RegularizedSurface r;
   r.h = mesh.grid_step();
-  r.size = o.size ? *o.size : object_size(mesh);
+  r.size = o.size ? *o.size : regularization_size(mesh);
   if (!(r.size > 0.0) || !std::isfinite(r.size)) throw InputError("regularization: the size must be positive");
   r.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * r.size;
   if (!(r.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
@@ -54,11 +52,10 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     if (!std::isfinite(r.H[v]))
       throw NumericalError("regularization: the mean curvature of vertex " + std::to_string(v) +
                            " is not finite (is the curvature radius larger than the mesh?)");
-  r.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
-  if (o.h_clamp) r.H = r.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
-  // A curvature radius below one voxel cannot be resolved: |H| > 1/h means the normals are wrong
-  // there (II normals whose radius exceeds the shape's features). Solving with such H moves the
-  // surface by many voxels, silently; refuse unless the user clamps H.
+  // A curvature radius below one voxel cannot be resolved: an estimate |H| > 1/h means the normals
+  // are wrong there (II normals whose radius exceeds the shape's features). Solving with such H
+  // moves the surface by many voxels, silently; refuse unless the user clamps H. (The check is on
+  // the estimate, before the edits.)
   if (!o.h_clamp) {
     int absurd = 0;
     double worst = 0.0;
@@ -74,6 +71,8 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
                        "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
                        "features; give a smaller --ii-radius, other --normals, or --h-clamp MAX to clamp H");
   }
+  r.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
+  if (o.h_clamp) r.H = r.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
   r.curvature_seconds = seconds_since(t);
 
   Operators ops = method->assemble(mesh, normals, o.method_params);

@@ -38,6 +38,10 @@ struct RegularizedSurface {
   std::vector<std::string> warnings;  ///< from the operators
 };
 
+/// The default object size: half the longest side of the bounding box (1 for the unit sphere, and
+/// for a volume in world units, whose longest side spans 2).
+double regularization_size(const SurfelMesh& mesh);
+
 /// Regularizes a closed surface with unit vertex normals (#V x 3, normals.vertex; the method's
 /// own normals come from the same fields). Throws InputError for an open surface (naming its
 /// boundary edge count), a method defined on faces, bad options; NumericalError when H or the

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -39,6 +40,9 @@ struct RegularizeArgs {
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
   bool allow_nonmanifold = false;
+  // Options of the paper's regularization only: given with --baseline they would be ignored.
+  std::vector<CLI::Option*> laplacian_only;
+  CLI::Option* clamp_option = nullptr;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point& t0) {
@@ -67,6 +71,24 @@ void add_geometry_metrics(nlohmann::json& m, const LoadedSurface& surface, const
   m["mean_curvature_error_after"] = qa.mean_curvature_error;
 }
 
+// DIR/input.ply, regularized.ply (its geometric normals, the displacement and `scalars`),
+// regularized.obj; the input's own attributes in `input_attr`.
+void write_surfaces(const std::string& dir, const SurfelMesh& input, const MeshAttributes& input_attr,
+                    const SurfelMesh& result, std::map<std::string, Eigen::VectorXd> scalars) {
+  std::filesystem::create_directories(dir);
+  write_mesh(dir + "/input.ply", input, input_attr);
+  MeshAttributes result_attr;
+  result_attr.vertex_normals = geometric_vertex_normals(result);
+  scalars["displacement"] = (result.positions - input.positions).rowwise().norm();
+  result_attr.vertex_scalars = std::move(scalars);
+  write_mesh(dir + "/regularized.ply", result, result_attr);
+  write_mesh(dir + "/regularized.obj", result);
+}
+
+void write_metrics(const std::string& dir, const nlohmann::json& m) {
+  std::ofstream(dir + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+}
+
 // docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
 // face normals of --normals (the reference's test uses --normals convolved).
 void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, nlohmann::json& stages,
@@ -87,16 +109,9 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   stages["solve_s"] = seconds_since(t);
   SurfelMesh result = mesh;
   result.positions = r.positions;
-  std::filesystem::create_directories(a.out);
   MeshAttributes input_attr;
   input_attr.face_normals = normals.face;
-  write_mesh(a.out + "/input.ply", mesh, input_attr);
-  MeshAttributes result_attr;
-  result_attr.vertex_normals = geometric_vertex_normals(result);
-  const Eigen::VectorXd displacement = (result.positions - mesh.positions).rowwise().norm();
-  result_attr.vertex_scalars = {{"displacement", displacement}};
-  write_mesh(a.out + "/regularized.ply", result, result_attr);
-  write_mesh(a.out + "/regularized.obj", result);
+  write_surfaces(a.out, mesh, input_attr, result, {});
   stages["write_s"] = seconds_since(t);
   nlohmann::json m;
   m["surface"] = a.source.describe();
@@ -113,17 +128,20 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   m["energy_initial"] = r.energy_initial;
   m["energy_final"] = r.energy_final;
   m["time_s"] = stages;
-  // The default curvature radius of the paper's regularization: 0.1 of the half bounding box.
-  add_geometry_metrics(
-      m, surface, result,
-      0.1 * 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff());
-  std::ofstream(a.out + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  // Measured with the paper's default curvature radius, 0.1 of the object size.
+  add_geometry_metrics(m, surface, result, 0.1 * regularization_size(mesh));
+  write_metrics(a.out, m);
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << a.out
             << "/regularized.ply, regularized.obj, input.ply, metrics.json\n";
 }
 
 void run(const RegularizeArgs& a) {
+  if (!a.baseline.empty())
+    for (const CLI::Option* opt : a.laplacian_only)
+      if (opt->count() > 0)
+        throw InputError(opt->get_name() + " applies to the paper's regularization, not to --baseline " + a.baseline);
+  if (a.baseline.empty() && a.clamp_option->count() > 0) throw InputError("--clamp applies to --baseline alignment");
   RegularizationOptions o;
   o.method = a.method;
   o.method_params = Config::from_key_values(a.params);
@@ -170,17 +188,10 @@ void run(const RegularizeArgs& a) {
   stages["solve_s"] = r.solve_seconds;
   t = std::chrono::steady_clock::now();
 
-  std::filesystem::create_directories(a.out);
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
   input_attr.vertex_scalars = {{"H", r.H}};
-  write_mesh(a.out + "/input.ply", mesh, input_attr);
-  MeshAttributes result_attr;
-  result_attr.vertex_normals = geometric_vertex_normals(r.mesh);
-  const Eigen::VectorXd displacement = (r.mesh.positions - mesh.positions).rowwise().norm();
-  result_attr.vertex_scalars = {{"H", r.H}, {"displacement", displacement}};
-  write_mesh(a.out + "/regularized.ply", r.mesh, result_attr);
-  write_mesh(a.out + "/regularized.obj", r.mesh);
+  write_surfaces(a.out, mesh, input_attr, r.mesh, {{"H", r.H}});
   stages["write_s"] = seconds_since(t);
 
   nlohmann::json m;
@@ -201,9 +212,9 @@ void run(const RegularizeArgs& a) {
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
   add_geometry_metrics(m, surface, r.mesh, r.curvature_radius);
-  std::ofstream(a.out + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  write_metrics(a.out, m);
   std::cerr << "regularize: " << a.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
-            << r.solver << ": max displacement " << displacement.maxCoeff();
+            << r.solver << ": max displacement " << m["displacement_max"].get<double>();
   if (surface.shape)
     std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
               << m["distance_l1_after"].get<double>();
@@ -217,23 +228,27 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   args->source.add_options(*cmd);
   std::string names;
   for (const auto& n : discretization_registry().names()) names += (names.empty() ? "" : ", ") + n;
-  cmd->add_option("--method", args->method, "discretization: " + names)->capture_default_str();
+  auto& only = args->laplacian_only;
+  only.push_back(cmd->add_option("--method", args->method, "discretization: " + names)->capture_default_str());
   args->normals.source = "ii";  // the paper's normals (alpha = 1/3), for shapes as for volumes
   args->normals.add_options(*cmd);
-  cmd->add_option("--param", args->params, "method parameter key=value (repeatable)");
-  cmd->add_option("--size", args->size,
-                  "object size s: the paper's defaults are for unit-sized shapes and apply to the shape scaled by "
-                  "1/s (default: half the longest side of the bounding box; 1 for sphere1)")
-      ->check(positive_number());
-  cmd->add_option("--curvature-radius", args->curvature_radius,
-                  "ball radius of the corrected mean curvature H, world units (default 0.1 s)")
-      ->check(positive_number());
-  cmd->add_option("--alpha0", args->alpha0, "attachment weight: alpha = alpha0 / (h s)^2")
-      ->check(positive_number())
-      ->capture_default_str();
-  cmd->add_option("--h-scale", args->h_scale, "curvature editing: H <- S H (paper §4.3)")->capture_default_str();
-  cmd->add_option("--h-clamp", args->h_clamp, "curvature editing: clamp H to [-MAX, MAX] (after --h-scale)")
-      ->check(positive_number());
+  only.push_back(cmd->add_option("--param", args->params, "method parameter key=value (repeatable)"));
+  only.push_back(
+      cmd->add_option("--size", args->size,
+                      "object size s: the paper's defaults are for unit-sized shapes and apply to the shape scaled by "
+                      "1/s (default: half the longest side of the bounding box; 1 for sphere1)")
+          ->check(positive_number()));
+  only.push_back(cmd->add_option("--curvature-radius", args->curvature_radius,
+                                 "ball radius of the corrected mean curvature H, world units (default 0.1 s)")
+                     ->check(positive_number()));
+  only.push_back(cmd->add_option("--alpha0", args->alpha0, "attachment weight: alpha = alpha0 / (h s)^2")
+                     ->check(positive_number())
+                     ->capture_default_str());
+  only.push_back(
+      cmd->add_option("--h-scale", args->h_scale, "curvature editing: H <- S H (paper §4.3)")->capture_default_str());
+  only.push_back(
+      cmd->add_option("--h-clamp", args->h_clamp, "curvature editing: clamp H to [-MAX, MAX] (after --h-scale)")
+          ->check(positive_number()));
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
   cmd->add_option("options", args->options, "backend options key=value");
@@ -244,7 +259,8 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
       ->check(CLI::IsMember({"alignment", "alignment-direct"}));
   cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
                 "regularize a surface with non-manifold edges or vertices (refused by default)");
-  cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
+  args->clamp_option =
+      cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_option("--out", args->out, "output directory (regularized.ply/.obj, input.ply, metrics.json)")->required();
   cmd->callback([args] { run(*args); });
 });

@@ -70,6 +70,13 @@ TEST_CASE("regularize: bad options and surfaces are named") {
   CHECK(err.find("open (8 boundary edges)") != std::string::npos);
   CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --solver nosuch --out " + dir, nullptr, &err) == 1);
   CHECK(err.find("cholmod") != std::string::npos);
+  // Options the chosen regularization would ignore.
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --baseline alignment --method interpolated --out " +
+                    dir,
+                nullptr, &err) == 1);
+  CHECK(err.find("--method applies to the paper's regularization") != std::string::npos);
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --clamp --out " + dir, nullptr, &err) == 1);
+  CHECK(err.find("--clamp applies to --baseline alignment") != std::string::npos);
   // The empty volume.
   CHECK(run_cli("regularize --polynomial \"x^2+y^2+z^2+1\" --h 0.2 --bbox -1.5 1.5 --out " + dir, nullptr, &err) == 1);
   CHECK(err.find("empty") != std::string::npos);
