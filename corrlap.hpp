@@ -56,3 +56,7 @@
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
+
+// Pictures: a headless z-buffer rendering of a surface with a colour map, written as PNG.
+#include <corrlap/render/image.hpp>
+#include <corrlap/render/render_mesh.hpp>

@@ -67,4 +67,17 @@ class Polynomial {
   std::vector<double> c_ = {0.0};
 };
 
+/// grad P with its three derivative polynomials formed once: operator()(p) equals P.gradient(p) bit
+/// for bit without differentiating at every call (Newton projections call it millions of times).
+class PolynomialGradient {
+ public:
+  explicit PolynomialGradient(const Polynomial& p) : d_{p.derivative(0), p.derivative(1), p.derivative(2)} {}
+  Eigen::Vector3d operator()(const Eigen::Vector3d& p) const { return {d_[0](p), d_[1](p), d_[2](p)}; }
+  /// d/d(axis) P.
+  const Polynomial& derivative(int axis) const { return d_[axis]; }
+
+ private:
+  Polynomial d_[3];
+};
+
 }  // namespace corrlap

@@ -15,6 +15,7 @@
 #include <corrlap/problems/test_functions.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
+#include <corrlap/render/render_mesh.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <corrlap/surface/extract_surface.hpp>
@@ -165,10 +166,19 @@ void regularization_section(const ImplicitShape& sphere) {
     attr.vertex_normals = geometric_vertex_normals(r.mesh);
     attr.vertex_scalars = {{"H", r.H}};
     write_mesh(out, r.mesh, attr);
+    // Pictures coloured by H on one range: the staircase once, each result.
+    const ScalarField H{"H", r.H, false};
+    RenderOptions view;
+    view.range_min = 0.5;
+    view.range_max = 1.5;
+    if (std::string(method) == "fem") write_png(dir + "/before.png", render_mesh(to_polygon_mesh(mesh), &H, view));
+    write_png(dir + "/after_" + std::string(method) + ".png", render_mesh(to_polygon_mesh(r.mesh), &H, view));
     std::printf("%18s %7.3f %12.3e %12.3e %10.2f deg %10.2f deg %10.3f  -> %s\n", method, h, before.distance_l1,
                 after.distance_l1, before.normal_angle_deg, after.normal_angle_deg, since(t0), out.c_str());
   }
   std::printf("   (mean distance of the vertices to the sphere, mean angle of the surface's own normals)\n");
+  std::printf("   pictures: %s/before.png (the staircase), %s/after_fem.png, %s/after_polydec.png\n", dir.c_str(),
+              dir.c_str(), dir.c_str());
   std::fflush(stdout);
 }
 

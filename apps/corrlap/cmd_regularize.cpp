@@ -19,6 +19,7 @@
 
 #include "command.hpp"
 #include "normal_options.hpp"
+#include "render_output.hpp"
 #include "surface_source.hpp"
 #include "validators.hpp"
 
@@ -40,6 +41,7 @@ struct RegularizeArgs {
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
   bool allow_nonmanifold = false;
+  bool no_render = false;  // before.png / after.png are drawn unless --no-render
   // Options of the paper's regularization only: given with --baseline they would be ignored.
   std::vector<CLI::Option*> laplacian_only;
   CLI::Option* clamp_option = nullptr;
@@ -113,6 +115,8 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   input_attr.face_normals = normals.face;
   write_surfaces(a.out, mesh, input_attr, result, {});
   stages["write_s"] = seconds_since(t);
+  if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, result, "", {}, {});
+  t = std::chrono::steady_clock::now();
   nlohmann::json m;
   m["surface"] = a.source.describe();
   m["vertices"] = mesh.num_vertices();
@@ -133,7 +137,8 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   write_metrics(a.out, m);
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << a.out
-            << "/regularized.ply, regularized.obj, input.ply, metrics.json\n";
+            << "/regularized.ply, regularized.obj, input.ply, metrics.json"
+            << (a.no_render ? "" : ", before.png, after.png") << "\n";
 }
 
 void run(const RegularizeArgs& a) {
@@ -193,6 +198,8 @@ void run(const RegularizeArgs& a) {
   input_attr.vertex_scalars = {{"H", r.H}};
   write_surfaces(a.out, mesh, input_attr, r.mesh, {{"H", r.H}});
   stages["write_s"] = seconds_since(t);
+  if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, r.mesh, "H", r.H, r.H);
+  t = std::chrono::steady_clock::now();
 
   nlohmann::json m;
   m["surface"] = a.source.describe();
@@ -218,7 +225,8 @@ void run(const RegularizeArgs& a) {
   if (surface.shape)
     std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
               << m["distance_l1_after"].get<double>();
-  std::cerr << "\n  wrote " << a.out << "/regularized.ply, regularized.obj, input.ply, metrics.json\n";
+  std::cerr << "\n  wrote " << a.out << "/regularized.ply, regularized.obj, input.ply, metrics.json"
+            << (a.no_render ? "" : ", before.png, after.png") << "\n";
 }
 
 RegisterCommand reg(42, "regularize", [](CLI::App& app) {
@@ -261,7 +269,10 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                 "regularize a surface with non-manifold edges or vertices (refused by default)");
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
-  cmd->add_option("--out", args->out, "output directory (regularized.ply/.obj, input.ply, metrics.json)")->required();
+  cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");
+  cmd->add_option("--out", args->out,
+                  "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png)")
+      ->required();
   cmd->callback([args] { run(*args); });
 });
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/render/image.hpp>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
@@ -25,13 +27,19 @@ TEST_CASE("regularize sphere1 (h = 0.1, fem, II normals): files, order kept, dis
   CHECK(attr.vertex_scalars.count("H") == 1);
   CHECK(attr.vertex_normals.rows() == out.positions.rows());
   CHECK(corrlap::read_mesh(dir + "/regularized.obj").positions.rows() == in.positions.rows());
+  // The pictures, one view and one colour range: the staircase and the smooth surface differ.
+  const corrlap::Image picture_before = corrlap::read_png(dir + "/before.png"),
+                       picture_after = corrlap::read_png(dir + "/after.png");
+  CHECK(picture_before.width == 800);
+  CHECK(picture_after.height == 800);
+  CHECK(picture_before.rgb != picture_after.rgb);
   const auto m = nlohmann::json::parse(corrlap::test::read_text(dir + "/metrics.json"));
   for (const char* key :
        {"vertices", "faces", "h", "method", "solver", "time_s", "area_before", "area_after", "energy_initial",
         "energy_final", "distance_l1_before", "distance_l1_after", "normal_angle_deg_before", "normal_angle_deg_after",
         "mean_curvature_error_before", "mean_curvature_error_after"})
     CHECK_MESSAGE(m.contains(key), key);
-  for (const char* stage : {"surface_s", "normals_s", "curvature_s", "operators_s", "solve_s", "write_s"})
+  for (const char* stage : {"surface_s", "normals_s", "curvature_s", "operators_s", "solve_s", "write_s", "render_s"})
     CHECK_MESSAGE(m["time_s"].contains(stage), stage);
   CHECK(m["method"] == "fem");
   CHECK(m["normals"] == "ii");
@@ -102,8 +110,12 @@ TEST_CASE("regularize: a volume whose features are thinner than the II radius is
   CHECK(err.find("exceeds 1/h") != std::string::npos);
   CHECK(err.find("--ii-radius") != std::string::npos);
   // A radius below the tube's: the surface moves by less than a voxel.
-  REQUIRE(run_cli("regularize --volume " + vol + " --ii-radius 0.5 --out " + dir, nullptr, &err) == 0);
+  std::filesystem::remove_all(dir);
+  REQUIRE(run_cli("regularize --volume " + vol + " --ii-radius 0.5 --no-render --out " + dir, nullptr, &err) == 0);
+  CHECK(!std::filesystem::exists(dir + "/before.png"));  // --no-render
+  CHECK(!std::filesystem::exists(dir + "/after.png"));
   const auto m = nlohmann::json::parse(corrlap::test::read_text(dir + "/metrics.json"));
+  CHECK(!m["time_s"].contains("render_s"));
   CHECK(m["displacement_max"].get<double>() < m["h"].get<double>());
 }
 

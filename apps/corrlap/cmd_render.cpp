@@ -1,0 +1,112 @@
+// corrlap render: a PNG picture of a mesh file, shaded and coloured by one of its scalars
+// (render/render_mesh.hpp). Headless and deterministic.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/render/render_mesh.hpp>
+#include <iostream>
+#include <sstream>
+
+#include "command.hpp"
+#include "render_output.hpp"
+
+namespace corrlap::cli {
+namespace {
+
+struct RenderArgs {
+  std::string mesh, scalar = "auto", view, up, size, range, colormap, out;
+  int supersampling = 2;
+  bool no_legend = false;
+};
+
+std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double x = 0.0;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(x))
+      throw InputError(option + " '" + text + "': '" + item + "' is not a number");
+    v.push_back(x);
+  }
+  if (v.size() != count)
+    throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " comma-separated numbers");
+  return v;
+}
+
+void run(const RenderArgs& a) {
+  RenderOptions o;
+  o.supersampling = a.supersampling;
+  o.legend = !a.no_legend;
+  if (!a.view.empty()) {
+    const auto v = parse_numbers(a.view, "--view", 3);
+    o.view_direction = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  if (!a.up.empty()) {
+    const auto v = parse_numbers(a.up, "--up", 3);
+    o.up = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  if (!a.size.empty()) {
+    const std::size_t x = a.size.find('x');
+    const std::string w = a.size.substr(0, x), h = x == std::string::npos ? w : a.size.substr(x + 1);
+    const auto wv = parse_numbers(w, "--size", 1), hv = parse_numbers(h, "--size", 1);
+    if (wv[0] != std::floor(wv[0]) || hv[0] != std::floor(hv[0]))
+      throw InputError("--size '" + a.size + "': expected W or WxH in whole pixels");
+    o.width = int(std::clamp(wv[0], -1.0, 1e6));
+    o.height = int(std::clamp(hv[0], -1.0, 1e6));
+  }
+  if (!a.range.empty()) {
+    const auto r = parse_numbers(a.range, "--range", 2);
+    o.range_min = r[0];
+    o.range_max = r[1];
+  }
+  if (!a.colormap.empty()) o.colormap = parse_colormap(a.colormap);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  MeshAttributes attributes;
+  const bool ply = a.mesh.size() > 4 && a.mesh.substr(a.mesh.size() - 4) == ".ply";
+  const PolygonMesh mesh = ply ? read_ply(a.mesh, &attributes) : read_mesh(a.mesh);
+  const std::optional<ScalarField> field = select_scalar(attributes, a.scalar, a.mesh);
+  const auto t1 = std::chrono::steady_clock::now();
+  const Image image = render_mesh(mesh, field ? &*field : nullptr, o);
+  const auto t2 = std::chrono::steady_clock::now();
+  write_png(a.out, image);
+  std::cerr << "render: " << mesh.faces.size() << " faces" << (field ? ", coloured by '" + field->name + "'" : "")
+            << ", " << image.width << " x " << image.height << " in " << std::chrono::duration<double>(t2 - t1).count()
+            << " s (read " << std::chrono::duration<double>(t1 - t0).count() << " s)\n  wrote " << a.out << "\n";
+}
+
+RegisterCommand reg(43, "render", [](CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  auto* cmd = app.add_subcommand("render", "a PNG picture of a mesh (OBJ, PLY, OFF), coloured by a PLY scalar");
+  cmd->add_option("mesh", args->mesh, "mesh file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--scalar", args->scalar,
+                  "vertex or face scalar of a PLY file to colour by; auto: H if present, else the first vertex "
+                  "scalar, else none; none: grey")
+      ->capture_default_str();
+  cmd->add_option("--view", args->view, "direction from the object towards the viewer, x,y,z (default 1,-1.4,0.9)");
+  cmd->add_option("--up", args->up, "direction drawn upwards, x,y,z (default 0,0,1)");
+  cmd->add_option("--size", args->size, "picture size in pixels, W or WxH (default 800x800; legend included)");
+  cmd->add_option("--range", args->range,
+                  "colour range MIN,MAX (default: the 2nd-98th percentiles, symmetric about 0 for signed fields)");
+  cmd->add_option("--colormap", args->colormap,
+                  "sequential | diverging (default: diverging when the range contains 0, else sequential)")
+      ->check(CLI::IsMember({"sequential", "diverging"}));
+  cmd->add_option("--supersampling", args->supersampling, "s x s samples per pixel (1..4)")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
+  cmd->add_flag("--no-legend", args->no_legend, "no colour bar");
+  cmd->add_option("--out", args->out, "output PNG file")->required();
+  cmd->callback([args] { run(*args); });
+});
+
+}  // namespace
+}  // namespace corrlap::cli

@@ -1,0 +1,48 @@
+#include "render_output.hpp"
+
+#include <chrono>
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/polygon_mesh.hpp>
+
+namespace corrlap::cli {
+
+std::optional<ScalarField> select_scalar(const MeshAttributes& attributes, const std::string& name,
+                                         const std::string& file) {
+  if (name == "none") return std::nullopt;
+  const auto vertex = [&](const std::string& n) { return ScalarField{n, attributes.vertex_scalars.at(n), false}; };
+  if (name == "auto") {
+    if (attributes.vertex_scalars.count("H")) return vertex("H");
+    if (!attributes.vertex_scalars.empty()) return vertex(attributes.vertex_scalars.begin()->first);
+    return std::nullopt;
+  }
+  if (attributes.vertex_scalars.count(name)) return vertex(name);
+  if (attributes.face_scalars.count(name)) return ScalarField{name, attributes.face_scalars.at(name), true};
+  std::string names;
+  for (const auto& [n, v] : attributes.vertex_scalars) names += " " + n;
+  for (const auto& [n, v] : attributes.face_scalars) names += " " + n + "(face)";
+  throw InputError(file + " has no scalar '" + name + "'" +
+                   (names.empty() ? std::string(" (it has none; only PLY files carry scalars)") : "; it has:" + names));
+}
+
+double render_before_after(const std::string& dir, const SurfelMesh& before, const SurfelMesh& after,
+                           const std::string& name, const Eigen::VectorXd& scalar_before,
+                           const Eigen::VectorXd& scalar_after) {
+  const auto t0 = std::chrono::steady_clock::now();
+  RenderOptions o;
+  std::optional<ScalarField> b, a;
+  if (scalar_before.size() > 0) {
+    b = ScalarField{name, scalar_before, false};
+    a = ScalarField{name, scalar_after, false};
+    // One range for both pictures: the automatic range of the values after (the smooth surface's
+    // values; before, the staircase's are noisier and would widen it).
+    const ColourScale scale = colour_scale(*a, o);
+    o.range_min = scale.min;
+    o.range_max = scale.max;
+    o.colormap = scale.map;
+  }
+  write_png(dir + "/before.png", render_mesh(to_polygon_mesh(before), b ? &*b : nullptr, o));
+  write_png(dir + "/after.png", render_mesh(to_polygon_mesh(after), a ? &*a : nullptr, o));
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace corrlap::cli

@@ -1,0 +1,25 @@
+#pragma once
+// Pictures written by the commands: the scalar a user names, and the before/after pair of
+// `regularize` drawn with one view and one colour range.
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/render/render_mesh.hpp>
+#include <optional>
+#include <string>
+
+namespace corrlap::cli {
+
+/// The scalar `name` of a mesh file's attributes (vertex scalars first, then face scalars); "auto":
+/// H if present, else the first vertex scalar, else none; "none": none. InputError listing the
+/// scalars the file has when `name` is not among them.
+std::optional<ScalarField> select_scalar(const MeshAttributes& attributes, const std::string& name,
+                                         const std::string& file);
+
+/// DIR/before.png and DIR/after.png: the two surfaces from the same direction, coloured by
+/// `name` (vertex scalars before and after, or grey when empty) on one colour range. Returns the
+/// seconds spent.
+double render_before_after(const std::string& dir, const SurfelMesh& before, const SurfelMesh& after,
+                           const std::string& name, const Eigen::VectorXd& scalar_before,
+                           const Eigen::VectorXd& scalar_after);
+
+}  // namespace corrlap::cli
