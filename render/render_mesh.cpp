@@ -133,6 +133,14 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
   check_size("width", options.width, 16, 8192);
   check_size("height", options.height, 16, 8192);
   check_size("supersampling", options.supersampling, 1, 4);
+  // 20 bytes per sample (depth and colour): 2^26 samples are 1.3 GB.
+  const double samples = double(options.width) * options.height * options.supersampling * options.supersampling;
+  if (samples > double(1 << 26))
+    throw InputError("render: " + std::to_string(options.width) + " x " + std::to_string(options.height) +
+                     " pixels with " + std::to_string(options.supersampling) + " x " +
+                     std::to_string(options.supersampling) + " supersampling are " +
+                     std::to_string(std::int64_t(samples)) +
+                     " samples, more than 67 M (1.3 GB); lower the size or the supersampling");
   const Eigen::Index nv = mesh.positions.rows();
   if (nv == 0) throw InputError("render: the mesh has no vertex");
   if (mesh.faces.empty()) throw InputError("render: the mesh has no face");

@@ -44,7 +44,8 @@ ColourScale colour_scale(const ScalarField& field, const RenderOptions& options)
 /// Renders `mesh` (any polygons, fanned into triangles) seen along -view_direction, scaled to fill
 /// the picture. `field` (optional) colours it; without it the surface is light grey. Throws
 /// InputError on an empty mesh, non-finite positions, a face with a missing vertex, a scalar of the
-/// wrong size or with NaN, a zero view direction or sizes outside [16, 8192] pixels.
+/// wrong size or with NaN, a zero view direction, sizes outside [16, 8192] pixels or more than 2^26
+/// samples (width x height x supersampling^2; 20 bytes each).
 Image render_mesh(const PolygonMesh& mesh, const ScalarField* field = nullptr, const RenderOptions& options = {});
 
 }  // namespace corrlap

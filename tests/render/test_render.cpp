@@ -173,6 +173,10 @@ TEST_CASE("render: bad input is named") {
   RenderOptions huge = o;
   huge.width = 100000;
   CHECK(message(sphere, nullptr, huge).find("width 100000") != std::string::npos);
+  RenderOptions too_many = o;
+  too_many.width = too_many.height = 8192;
+  too_many.supersampling = 4;
+  CHECK(message(sphere, nullptr, too_many).find("more than 67 M") != std::string::npos);
   RenderOptions empty_range = o;
   empty_range.range_min = 1.0;
   empty_range.range_max = 1.0;
