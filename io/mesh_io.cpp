@@ -17,10 +17,11 @@ std::string extension(const std::string& path) {
 }
 }  // namespace
 
-PolygonMesh read_mesh(const std::string& path) {
+PolygonMesh read_mesh(const std::string& path, MeshAttributes* attributes) {
   const std::string ext = extension(path);
+  if (ext == "ply") return read_ply(path, attributes);
+  if (attributes) *attributes = MeshAttributes{};  // OBJ and OFF carry no attributes here
   if (ext == "obj") return read_obj(path);
-  if (ext == "ply") return read_ply(path);
   if (ext == "off") return read_off(path);
   throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' (supported: .obj, .ply, .off)");
 }

@@ -18,9 +18,10 @@ struct MeshAttributes {
   Eigen::MatrixX3d vertex_normals, face_normals;  // empty = absent
 };
 
-/// Reads OBJ (v / f lines; "f a/b/c" forms, negative indices), PLY or OFF by extension.
-/// Throws IoError naming the file, the line (or element) and the problem.
-PolygonMesh read_mesh(const std::string& path);
+/// Reads OBJ (v / f lines; "f a/b/c" forms, negative indices), PLY or OFF by extension (any case).
+/// `attributes`, when given, receives a PLY file's normals and scalars (see read_ply) and is emptied
+/// for the other formats. Throws IoError naming the file, the line (or element) and the problem.
+PolygonMesh read_mesh(const std::string& path, MeshAttributes* attributes = nullptr);
 PolygonMesh read_obj(const std::string& path);
 /// PLY, ASCII or binary little-endian: vertex x y z (any numeric type), face list
 /// "vertex_indices" or "vertex_index". Other elements are skipped. When `attributes` is given,

@@ -72,8 +72,7 @@ void run(const RenderArgs& a) {
 
   const auto t0 = std::chrono::steady_clock::now();
   MeshAttributes attributes;
-  const bool ply = a.mesh.size() > 4 && a.mesh.substr(a.mesh.size() - 4) == ".ply";
-  const PolygonMesh mesh = ply ? read_ply(a.mesh, &attributes) : read_mesh(a.mesh);
+  const PolygonMesh mesh = read_mesh(a.mesh, &attributes);
   const std::optional<ScalarField> field = select_scalar(attributes, a.scalar, a.mesh);
   const auto t1 = std::chrono::steady_clock::now();
   const Image image = render_mesh(mesh, field ? &*field : nullptr, o);

@@ -204,6 +204,11 @@ TEST_CASE("corrlap render: a PLY scalar by name, clear errors for a missing one"
   CHECK(image.width == 120);
   CHECK(image.height == 100);
   CHECK(err.find("coloured by 'height'") != std::string::npos);
+  // The extension in any case, as read_mesh takes it: the scalars are still read.
+  const std::string upper = test::tmp_path("render_cli_upper.PLY");
+  write_mesh(upper, sphere, a);
+  REQUIRE(test::run_cli("render " + upper + " --scalar height --size 64 --out " + png, nullptr, &err) == 0);
+  CHECK(err.find("coloured by 'height'") != std::string::npos);
   CHECK(test::run_cli("render " + ply + " --scalar curvature --out " + png, nullptr, &err) == 1);
   CHECK(err.find("no scalar 'curvature'; it has: H height") != std::string::npos);
   CHECK(test::run_cli("render " + ply + " --view 1,2 --out " + png, nullptr, &err) == 1);
