@@ -53,6 +53,7 @@
 #include <corrlap/problems/test_functions.hpp>
 
 // Regularization: positions from the corrected Laplacian and Delta p = -2 H n (paper §4.1).
+#include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>

@@ -154,28 +154,26 @@ void ConjugateGradientSolver::Impl::factorize_kept_matrix() {
   factored = true;
 }
 
-Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
-  auto& s = *impl_;
-  if (!s.factored) throw SolverError(SolverStatus::NotAnalyzed, "cg: solve() called before a successful factorize()");
-  detail::check_rhs(B, s.A.rows(), "cg");
-  detail::Stopwatch watch;
-  const int maxit = s.max_iterations > 0 ? s.max_iterations : int(2 * s.A.rows());
-  const detail::BlockCgResult cg = detail::block_conjugate_gradient(
-      s.A, B, [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { s.precondition(Rt, Zt); }, s.tolerance, maxit);
+namespace {
+
+// Block CG on A X = B from X = 0, then the true residuals |A X - B| / |B| (not CG's recurrence
+// estimates) checked against the tolerance. Fills `report` (iterations, residual, status, message);
+// throws SolverError on a breakdown or no convergence (warn: returns the last finite iterate).
+Eigen::MatrixXd run_block_cg(const detail::TransposedProduct& multiply, const Eigen::MatrixXd& B,
+                             const detail::Preconditioner& precondition, double tolerance, int maxit,
+                             const std::string& preconditioner, bool warn, SolverReport& report) {
+  const detail::BlockCgResult cg = detail::block_conjugate_gradient(multiply, B, precondition, tolerance, maxit);
   if (cg.breakdown_column >= 0) {
     std::ostringstream os;
     os << "cg: matrix is not positive definite (p^T A p = " << cg.breakdown_value << " in column "
        << cg.breakdown_column << " of the right-hand side, iteration " << cg.iterations + 1 << ")";
-    s.report.status = SolverStatus::NotPositiveDefinite;
-    s.report.message = os.str();
+    report.status = SolverStatus::NotPositiveDefinite;
+    report.message = os.str();
     throw SolverError(SolverStatus::NotPositiveDefinite, os.str());
   }
   const Eigen::MatrixXd& X = cg.X;
-  const int iterations = cg.iterations;
-  const bool converged = cg.converged;
-  // The true residuals, not CG's recurrence estimates.
   Eigen::MatrixXd AXt;
-  detail::symmetric_product_transposed(s.A, X.transpose(), AXt);
+  multiply(X.transpose(), AXt);
   double worst = 0.0;
   Eigen::Index worst_column = 0;
   for (Eigen::Index j = 0; j < B.cols(); ++j) {
@@ -186,22 +184,76 @@ Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
       worst_column = j;
     }
   }
-  s.report.solve_seconds = watch.seconds();
-  s.report.iterations = iterations;
-  s.report.residual = worst;
+  report.iterations = cg.iterations;
+  report.residual = worst;
   // CG stops on its recurrence residual; allow a small slack for the true one.
-  if (!converged || !std::isfinite(worst) || worst > 10.0 * s.tolerance) {
+  if (!cg.converged || !std::isfinite(worst) || worst > 10.0 * tolerance) {
     std::ostringstream os;
-    os << "cg: no convergence: relative residual " << worst << " > tolerance " << s.tolerance << " after " << iterations
-       << " iterations (column " << worst_column << ", limit " << maxit << ", preconditioner " << s.preconditioner
-       << ")";
-    s.report.status = SolverStatus::NoConvergence;
-    s.report.message = os.str();
-    if (!s.warn || !X.allFinite()) throw SolverError(SolverStatus::NoConvergence, os.str());
+    os << "cg: no convergence: relative residual " << worst << " > tolerance " << tolerance << " after "
+       << cg.iterations << " iterations (column " << worst_column << ", limit " << maxit << ", preconditioner "
+       << preconditioner << ")";
+    report.status = SolverStatus::NoConvergence;
+    report.message = os.str();
+    if (!warn || !X.allFinite()) throw SolverError(SolverStatus::NoConvergence, os.str());
     return X;
   }
-  s.report.status = SolverStatus::Success;
-  s.report.message.clear();
+  report.status = SolverStatus::Success;
+  report.message.clear();
+  return X;
+}
+
+}  // namespace
+
+Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
+  auto& s = *impl_;
+  if (!s.factored) throw SolverError(SolverStatus::NotAnalyzed, "cg: solve() called before a successful factorize()");
+  detail::check_rhs(B, s.A.rows(), "cg");
+  detail::Stopwatch watch;
+  const int maxit = s.max_iterations > 0 ? s.max_iterations : int(2 * s.A.rows());
+  try {
+    Eigen::MatrixXd X = run_block_cg(
+        [&](const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Qt) { detail::symmetric_product_transposed(s.A, Pt, Qt); }, B,
+        [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { s.precondition(Rt, Zt); }, s.tolerance, maxit,
+        s.preconditioner, s.warn, s.report);
+    s.report.solve_seconds = watch.seconds();
+    return X;
+  } catch (const SolverError&) {
+    s.report.solve_seconds = watch.seconds();
+    throw;
+  }
+}
+
+Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::MatrixXd& B, const Config& options,
+                                   SolverReport* report) {
+  options.check_keys({"tolerance", "max_iterations"}, "conjugate_gradient");
+  const double tol = options.get_double("tolerance", 1e-10);
+  if (!(tol > 0.0 && tol < 1.0)) throw InputError("conjugate_gradient: config key 'tolerance' must be in (0, 1)");
+  const int maxit_option = options.get_int("max_iterations", 0);
+  if (maxit_option < 0) throw InputError("conjugate_gradient: config key 'max_iterations' must be >= 0");
+  if (!A.multiply_transposed) throw InputError("conjugate_gradient: the operator has no product");
+  if (A.diagonal.size() != A.rows)
+    throw InputError("conjugate_gradient: diagonal of size " + std::to_string(A.diagonal.size()) + " for " +
+                     std::to_string(A.rows) + " rows");
+  detail::check_rhs(B, A.rows, "cg");
+  SolverReport local;
+  SolverReport& r = report ? *report : local;
+  r = SolverReport{};
+  for (Eigen::Index i = 0; i < A.rows; ++i)
+    if (!(A.diagonal[i] > 0.0)) {
+      std::ostringstream os;
+      os << "cg: operator is not positive definite (diagonal entry " << A.diagonal[i] << " at row " << i << ")";
+      r.status = SolverStatus::NotPositiveDefinite;
+      r.message = os.str();
+      throw SolverError(SolverStatus::NotPositiveDefinite, os.str());
+    }
+  const Eigen::RowVectorXd inverse_diagonal = A.diagonal.cwiseInverse().transpose();
+  detail::Stopwatch watch;
+  const int maxit = maxit_option > 0 ? maxit_option : int(2 * A.rows);
+  Eigen::MatrixXd X = run_block_cg(
+      A.multiply_transposed, B,
+      [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { Zt = Rt.array().rowwise() * inverse_diagonal.array(); },
+      tol, maxit, "jacobi", false, r);
+  r.solve_seconds = watch.seconds();
   return X;
 }
 

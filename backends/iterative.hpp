@@ -7,6 +7,7 @@
 // Non-convergence throws SolverError(NoConvergence) unless on_no_convergence = "warn", in which
 // case info().status is NoConvergence and info().message explains it.
 #include <corrlap/core/linear_solver.hpp>
+#include <functional>
 #include <memory>
 
 namespace corrlap {
@@ -29,5 +30,22 @@ class ConjugateGradientSolver : public LinearSolver {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// A symmetric positive definite n x n operator known by its product (Spectra's operator concept),
+/// for operators too large to store as a matrix (the heat kernel's compact lattice form).
+struct SymmetricOperator {
+  Eigen::Index rows = 0;
+  /// Yt = (A X)^T for Xt = X^T (k by rows): the transposed layout keeps a row's k values together.
+  std::function<void(const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt)> multiply_transposed;
+  Eigen::VectorXd diagonal;  ///< diag(A) (> 0): the Jacobi preconditioner
+};
+
+/// Solves A X = B (#rows by k) with the "cg" backend's iteration and checks (Jacobi preconditioner,
+/// every column in one product per iteration, the true residual checked at the end). Options:
+/// tolerance (1e-10) and max_iterations (0: 2 n), as for "cg"; other keys are InputErrors. Throws
+/// SolverError (NotPositiveDefinite, NoConvergence) like the backend; `report` gets iterations,
+/// residual and solve time.
+Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::MatrixXd& B, const Config& options = {},
+                                   SolverReport* report = nullptr);
 
 }  // namespace corrlap

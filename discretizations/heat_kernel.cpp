@@ -312,6 +312,31 @@ class HeatKernel final : public Discretization {
   }
 
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+    Setup s = setup(mesh, normals, params);
+    // swap, not assign: Eigen 3.4's SparseMatrix has no move assignment, and a copy would double
+    // the peak memory of the largest operator (9 GB at h = 0.01).
+    Eigen::SparseMatrix<double> L = heat_kernel_matrix(
+        s.points, s.mu, s.t, s.cutoff, s.symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise,
+        HeatKernelStorage::Full, s.tangent ? &s.normals : nullptr);
+    s.ops.L.swap(L);
+    Eigen::SparseMatrix<double> D(s.mu.size(), s.mu.size());
+    D.reserve(Eigen::VectorXi::Ones(s.mu.size()));
+    for (Eigen::Index i = 0; i < s.mu.size(); ++i) D.insert(i, i) = s.symmetric ? s.mu[i] : 1.0;
+    D.makeCompressed();
+    s.ops.M = D;
+    return std::move(s.ops);
+  }
+
+  // Everything but the matrix: points, measures, t, cut-off and the Operators' other fields.
+  struct Setup {
+    Eigen::MatrixX3d points, normals;
+    Eigen::VectorXd mu;
+    double t = 0, cutoff = 0;
+    bool symmetric = true, dual = true, tangent = false;
+    Operators ops;
+  };
+
+  Setup setup(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const {
     params.check_parameters(parameters(), name());
     mesh.validate("heat-kernel");
     const std::string variant = params.get_string("variant", "dual");
@@ -335,8 +360,13 @@ class HeatKernel final : public Discretization {
     if (distance == "tangent" && variant != "dual")
       throw InputError("heat-kernel: distance=tangent needs variant=dual (one normal per surfel)");
 
-    Operators ops;
-    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, name(), ops);
+    Setup s;
+    s.t = t;
+    s.cutoff = cutoff;
+    s.symmetric = mass == "measure";
+    s.dual = variant == "dual";
+    s.tangent = distance == "tangent";
+    const PreparedNormals prepared = prepare_normals(mesh, normals, NormalKind::Face, params, name(), s.ops);
     const Eigen::MatrixX3d& u = prepared.matrix();
     const Eigen::MatrixX3d n = trivial_face_normals(mesh);
     const int F = mesh.num_faces();
@@ -352,40 +382,39 @@ class HeatKernel final : public Discretization {
         throw InputError(os.str());
       }
     }
-    Eigen::MatrixX3d points;
-    Eigen::VectorXd m;
-    if (variant == "dual") {
-      points = mesh.face_centroids();
-      m = mu;
-      ops.domain = Operators::Domain::Faces;
+    if (s.dual) {
+      s.points = mesh.face_centroids();
+      s.mu = mu;
+      s.ops.domain = Operators::Domain::Faces;
+      if (s.tangent) s.normals = u;
     } else {
       // docs/math.md §6 PRIMAL: vertices, mu(v) = sum_{s ni v} mu(s)/4
-      points = mesh.positions;
-      m = Eigen::VectorXd::Zero(mesh.num_vertices());
+      s.points = mesh.positions;
+      s.mu = Eigen::VectorXd::Zero(mesh.num_vertices());
       for (int f = 0; f < F; ++f)
-        for (int k = 0; k < 4; ++k) m[mesh.faces(f, k)] += 0.25 * mu[f];
+        for (int k = 0; k < 4; ++k) s.mu[mesh.faces(f, k)] += 0.25 * mu[f];
       for (int v = 0; v < mesh.num_vertices(); ++v)
-        if (!(m[v] > 0)) throw InputError("heat-kernel: vertex " + std::to_string(v) + " belongs to no face");
-      ops.domain = Operators::Domain::Vertices;
+        if (!(s.mu[v] > 0)) throw InputError("heat-kernel: vertex " + std::to_string(v) + " belongs to no face");
+      s.ops.domain = Operators::Domain::Vertices;
     }
-    const bool symmetric = mass == "measure";
-    // swap, not assign: Eigen 3.4's SparseMatrix has no move assignment, and a copy would double
-    // the peak memory of the largest operator (9 GB at h = 0.01).
-    Eigen::SparseMatrix<double> L =
-        heat_kernel_matrix(points, m, t, cutoff, symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise,
-                           HeatKernelStorage::Full, distance == "tangent" ? &u : nullptr);
-    ops.L.swap(L);
-    Eigen::SparseMatrix<double> D(m.size(), m.size());
-    D.reserve(Eigen::VectorXi::Ones(m.size()));
-    for (Eigen::Index i = 0; i < m.size(); ++i) D.insert(i, i) = symmetric ? m[i] : 1.0;
-    D.makeCompressed();
-    ops.M = D;
-    return ops;
+    return s;
   }
 };
 
 }  // namespace
 
 std::unique_ptr<Discretization> make_heat_kernel() { return std::make_unique<HeatKernel>(); }
+
+std::optional<LatticeHeatKernelPair> assemble_heat_kernel_lattice(const SurfelMesh& mesh, const NormalFields& normals,
+                                                                  const Config& params, LatticeHeatKernel* recycle) {
+  HeatKernel method;
+  HeatKernel::Setup s = method.setup(mesh, normals, params);
+  if (!s.dual || !s.symmetric || s.tangent) return std::nullopt;
+  // Surfel centres are corners + h/2 in two axes: the lattice of step h/2 (up to rounding).
+  std::optional<LatticeHeatKernel> L =
+      LatticeHeatKernel::build(s.points, s.mu, s.t, s.cutoff, 0.5 * mesh.grid_step(), recycle);
+  if (!L) return std::nullopt;
+  return LatticeHeatKernelPair{std::move(*L), std::move(s.mu), std::move(s.ops.contract_risk)};
+}
 
 }  // namespace corrlap

@@ -17,7 +17,10 @@
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <corrlap/core/discretization.hpp>
+#include <corrlap/discretizations/heat_kernel_lattice.hpp>
 #include <memory>
+#include <optional>
+#include <string>
 
 namespace corrlap {
 
@@ -63,5 +66,21 @@ std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, doub
 /// values, mu(v) = sum_{s ni v} mu(s)/4), mass = measure | identity, and the normal policy keys.
 /// Needs one normal per face: mu(s) = (face area) |u_s . n_s| (h^2 |u_s . n_s| on surfels).
 std::unique_ptr<Discretization> make_heat_kernel();
+
+/// The registered method's pair with L in compact lattice form (heat_kernel_lattice.hpp): L equals
+/// make_heat_kernel()->assemble(mesh, normals, params).L up to rounding, M = diag(mass).
+struct LatticeHeatKernelPair {
+  LatticeHeatKernel L;
+  Eigen::VectorXd mass;       ///< the diagonal of M (#F)
+  std::string contract_risk;  ///< as Operators::contract_risk
+};
+
+/// That pair for the parameters where it applies (variant = dual, mass = measure, distance =
+/// euclidean, surfel centres on the lattice of step h/2: digitized surfaces), std::nullopt for any
+/// other; throws what assemble() throws on bad parameters or normals.
+/// `recycle`: as LatticeHeatKernel::build.
+std::optional<LatticeHeatKernelPair> assemble_heat_kernel_lattice(const SurfelMesh& mesh, const NormalFields& normals,
+                                                                  const Config& params,
+                                                                  LatticeHeatKernel* recycle = nullptr);
 
 }  // namespace corrlap

@@ -8,6 +8,7 @@
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
+#include <numbers>
 
 namespace corrlap {
 
@@ -47,7 +48,10 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   r.solver = o.solver.get_string("solver", kDefaultLinearSolver);
   auto t = std::chrono::steady_clock::now();
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
-  r.H = CorrectedCurvature::interpolated(mesh, normals.vertex).at_vertices(r.curvature_radius).H;
+  const bool principal_edits = o.k1_edit.active() || o.k2_edit.active();
+  const CurvatureEstimates estimates =
+      CorrectedCurvature::interpolated(mesh, normals.vertex).at_vertices(r.curvature_radius);
+  r.H = estimates.H;
   for (Eigen::Index v = 0; v < r.H.size(); ++v)
     if (!std::isfinite(r.H[v]))
       throw NumericalError("regularization: the mean curvature of vertex " + std::to_string(v) +
@@ -71,6 +75,20 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
                        "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
                        "features; give a smaller --ii-radius, other --normals, or --h-clamp MAX to clamp H");
   }
+  r.normals = normals.vertex;
+  if (principal_edits) {
+    // Paper §4.3: edit k1, k2 in S, integrate dn = S' into n', H' = tr(S') / 2 (curvature_editing.hpp).
+    const std::vector<Eigen::Matrix3d> S =
+        edited_shape_operators(estimates.k1, estimates.k2, estimates.d1, estimates.d2, o.k1_edit, o.k2_edit);
+    auto integration_solver = make_linear_solver(o.solver, kDefaultLinearSolver);
+    r.normals = integrate_shape_operator(mesh, S, normals.vertex, r.size, o.normal_attachment, *integration_solver);
+    double angles = 0.0;
+    for (Eigen::Index v = 0; v < r.H.size(); ++v) {
+      r.H[v] = 0.5 * S[std::size_t(v)].trace();
+      angles += std::acos(std::clamp(r.normals.row(v).dot(normals.vertex.row(v)), -1.0, 1.0));
+    }
+    r.normal_angle_change_deg = r.H.size() > 0 ? angles / double(r.H.size()) * 180.0 / std::numbers::pi : 0.0;
+  }
   r.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
   if (o.h_clamp) r.H = r.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
   r.curvature_seconds = seconds_since(t);
@@ -83,10 +101,10 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   r.operators_seconds = seconds_since(t);
 
   r.mesh = mesh;
-  r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, normals.vertex, r.H, r.alpha, *solver);
+  r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver);
   r.solve_seconds = seconds_since(t);
-  r.energy_before = regularization_energy(ops.L, ops.M, mesh.positions, normals.vertex, r.H, mesh.positions);
-  r.energy_after = regularization_energy(ops.L, ops.M, mesh.positions, normals.vertex, r.H, r.mesh.positions);
+  r.energy_before = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, mesh.positions);
+  r.energy_after = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, r.mesh.positions);
   return r;
 }
 

@@ -6,6 +6,7 @@
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <optional>
 #include <string>
@@ -25,17 +26,24 @@ struct RegularizationOptions {
   double alpha0 = 10.0;                    ///< alpha = alpha0 / (h size)^2
   double h_scale = 1.0;                    ///< curvature editing (paper §4.3): H <- h_scale H ...
   std::optional<double> h_clamp;           ///< ... then clamped to [-h_clamp, h_clamp]
-  Config solver;                           ///< linear solver ("solver" key: backend name; default cholmod)
+  /// Principal-curvature edits (paper §4.3, curvature_editing.hpp; k1 <= k2). When either is
+  /// active, the regularization uses n' integrated from the edited S' and H = tr(S') / 2, to
+  /// which h_scale and h_clamp then apply.
+  PrincipalCurvatureEdit k1_edit, k2_edit;
+  double normal_attachment = 1.0;  ///< attachment of n' to n (integrate_shape_operator)
+  Config solver;                   ///< linear solver ("solver" key: backend name; default cholmod)
 };
 
 struct RegularizedSurface {
-  SurfelMesh mesh;    ///< the input's faces and vertex order, regularized positions
-  Eigen::VectorXd H;  ///< #V mean curvature used (after the edits)
+  SurfelMesh mesh;           ///< the input's faces and vertex order, regularized positions
+  Eigen::VectorXd H;         ///< #V mean curvature used (after the edits)
+  Eigen::MatrixX3d normals;  ///< #V x 3 unit normals n used: the input's, or n' after principal edits
   double h = 0.0, size = 1.0, curvature_radius = 0.0, alpha = 0.0;
   std::string solver;                                ///< backend name
   RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
   double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;
-  std::vector<std::string> warnings;  ///< from the operators
+  double normal_angle_change_deg = 0.0;  ///< mean angle between n' and n (0 without principal edits)
+  std::vector<std::string> warnings;     ///< from the operators
 };
 
 /// The default object size: half the longest side of the bounding box (1 for the unit sphere, and

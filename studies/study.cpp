@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <corrlap/backends/iterative.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/assembly/quad_pattern.hpp>
+#include <corrlap/discretizations/heat_kernel.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/io/mesh_io.hpp>
@@ -268,10 +270,14 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
 
 // The backend for one method's systems. "auto": CHOLMOD, except for operators with many nonzeros per
 // row: the heat kernel couples every surfel within K sqrt(2t) (~2000 per row at h = 0.0125, §6), and
-// the Cholesky factor of such a matrix fills in far beyond it, while Jacobi CG needs a few products
-// (forward: M - dt L is diagonally dominant for dt = 0.035 h). Measured in bench/RESULTS.md.
-std::string solver_for(const std::string& choice, const Eigen::SparseMatrix<double>& L) {
+// the Cholesky factor of such a matrix fills in far beyond it, while Jacobi CG needs a few products.
+// And except for the forward systems A = M - dt L (docs/math.md §10.3): dt = 0.035 h keeps them close
+// to the mass matrix, kappa(A) ~ kappa(M) (1 + dt lambda_max(M^-1 L)) = O(1/h) with lambda_max ~ 1/h^2,
+// so Jacobi CG converges in a few dozen cheap products where CHOLMOD factorizes (measured 1.5x faster
+// for the five mesh methods at h = 0.0125, the same errors to 10 digits: bench/RESULTS.md).
+std::string solver_for(const std::string& choice, const Eigen::SparseMatrix<double>& L, StudyKind kind) {
   if (choice != "auto") return choice;
+  if (kind == StudyKind::Forward || kind == StudyKind::Cotan) return "cg";
   return L.nonZeros() > 64 * L.rows() ? "cg" : "cholmod";
 }
 
@@ -298,6 +304,42 @@ void make_forward_system(Eigen::SparseMatrix<double>& L, const Eigen::SparseMatr
   for (Eigen::Index k = 0; k < L.nonZeros(); ++k) L.valuePtr()[k] *= -dt;
   for (Eigen::Index j = 0; j < M.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(M, j); it; ++it) *diagonal[std::size_t(j)] += it.value();
+}
+
+// Forward evaluation (docs/math.md §10.3) X = (M - dt L)^{-1} L F with the heat kernel in compact
+// lattice form (heat_kernel_lattice.hpp) and the Jacobi CG of the "cg" backend: what the "auto"
+// solver does with the assembled matrix (solver_for), at half the memory traffic per product and
+// without assembling values. nullopt when the lattice form does not apply to the parameters.
+// `storage`: the previous unit's kernel, whose memory this one reuses; it then holds this one's.
+std::optional<Eigen::MatrixXd> heat_kernel_forward(const SharedSurface& s, const Config& params,
+                                                   const Eigen::MatrixXd& F, double dt, Eigen::VectorXd& mass,
+                                                   std::optional<LatticeHeatKernel>& storage) {
+  std::optional<LatticeHeatKernelPair> pair =
+      assemble_heat_kernel_lattice(s.mesh, s.normals, params, storage ? &*storage : nullptr);
+  if (!pair) return std::nullopt;
+  struct KeepStorage {  // on every exit, errors included
+    std::optional<LatticeHeatKernelPair>& pair;
+    std::optional<LatticeHeatKernel>& storage;
+    ~KeepStorage() {
+      storage.reset();
+      storage.emplace(std::move(pair->L));
+    }
+  } keep{pair, storage};
+  if (!pair->contract_risk.empty())
+    throw NumericalError("the operators may break their contract: " + pair->contract_risk);
+  const LatticeHeatKernel& L = pair->L;
+  mass = pair->mass;
+  Eigen::MatrixXd LFt;
+  L.multiply_transposed(F.transpose(), LFt);
+  if (dt == 0.0) return Eigen::MatrixXd(mass.cwiseInverse().asDiagonal() * LFt.transpose());  // naive: A = M
+  SymmetricOperator A;                                                                        // A = M - dt L
+  A.rows = L.rows();
+  A.diagonal = mass - dt * L.diagonal();
+  A.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
+    L.multiply_transposed(Xt, Yt);
+    Yt = (Xt * mass.asDiagonal()) - dt * Yt;
+  };
+  return conjugate_gradient(A, LFt.transpose());
 }
 
 // "fem at h = 0.05, centre 3: <what>" for errors raised inside a unit.
@@ -340,6 +382,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
     if (cb.progress) cb.progress(progress);
   };
 
+  std::optional<LatticeHeatKernel> heat_kernel_storage;  // reused from unit to unit (no fresh pages)
   for (double h : hs)
     for (int center = 0; center < o.centers; ++center) {
       std::vector<std::string> to_compute;
@@ -353,16 +396,57 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
       const SharedSurface s = reference ? build_mesh_surface(o, h, c, *reference) : build_surface(o, h, c, functions);
       for (const std::string& method : to_compute) {
         const auto t0 = std::chrono::steady_clock::now();
+        // One row per function of a forward or backward unit.
+        const auto emit_rows = [&](const std::vector<ErrorNorms>& errors, double t) {
+          std::vector<StudyRow> rows;
+          for (std::size_t j = 0; j < functions.size(); ++j) {
+            StudyRow row;
+            row.study = to_string(o.kind);
+            row.method = method;
+            row.normals = o.normals;
+            row.function = functions[j]->name;
+            row.h = h;
+            row.center = center;
+            row.c = c;
+            row.vertices = s.mesh.num_vertices();
+            row.faces = s.mesh.num_faces();
+            row.error_linf = errors[j].linf;
+            row.error_l2 = errors[j].l2;
+            row.time_s = t;
+            if (!std::isfinite(row.error_linf) || !std::isfinite(row.error_l2))
+              throw NumericalError("the error of " + row.function + " is not finite");
+            rows.push_back(row);
+          }
+          if (cb.rows) cb.rows(rows);
+        };
         try {
           const auto d = make_discretization(method);
-          Operators ops = d->assemble(s.mesh, s.normals, params_for(*d, o.method_params), *s.pattern);
+          const Config params = params_for(*d, o.method_params);
+          if ((o.kind == StudyKind::Forward || o.kind == StudyKind::Cotan) && method == "heat-kernel" &&
+              (o.linear_solver == "auto" || o.linear_solver == "cg")) {
+            Eigen::VectorXd mass;
+            const std::optional<Eigen::MatrixXd> X =
+                heat_kernel_forward(s, params, s.face_f, o.naive ? 0.0 : o.diffusion * h, mass, heat_kernel_storage);
+            if (X) {
+              Eigen::SparseMatrix<double> M(mass.size(), mass.size());
+              M.setIdentity();
+              M.diagonal() = mass;
+              std::vector<ErrorNorms> errors(functions.size());
+              for (std::size_t j = 0; j < functions.size(); ++j)
+                errors[j] = error_norms(M, X->col(Eigen::Index(j)) - s.face_laplacian.col(Eigen::Index(j)));
+              emit_rows(errors, seconds_since(t0));
+              report(h, center, method);
+              continue;
+            }
+          }
+          Operators ops = d->assemble(s.mesh, s.normals, params, *s.pattern);
           if (!ops.contract_risk.empty())
             throw NumericalError("the operators may break their contract: " + ops.contract_risk);
           // Values live where the operator does: vertices, or surfel centres (heat kernel, §6).
           const bool on_faces = ops.domain == Operators::Domain::Faces;
           if (o.kind == StudyKind::Eigen) {
             Config config;
-            config.set("solver", solver_for(o.linear_solver, ops.L));
+            config.set("solver", solver_for(o.linear_solver, ops.L, o.kind));
             const EigenResult r = make_eigen_solver(kDefaultEigenSolver, config)->solve(ops.L, ops.M, o.k);
             const double t = seconds_since(t0);
             std::vector<EigenRow> rows;
@@ -386,7 +470,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
             // Every function at once: one factorization per method and unit.
             const Eigen::MatrixXd& F = on_faces ? s.face_f : s.vertex_f;
             const Eigen::MatrixXd& Lap = on_faces ? s.face_laplacian : s.vertex_laplacian;
-            auto solver = make_linear_solver(solver_for(o.linear_solver, ops.L));
+            auto solver = make_linear_solver(solver_for(o.linear_solver, ops.L, o.kind));
             std::vector<ErrorNorms> errors(functions.size());
             if (o.kind == StudyKind::Backward) {
               // docs/math.md §10.4: L g = M b_c, vertex 0 pinned to f(q_0), errors with means removed.
@@ -404,27 +488,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = error_norms(ops.M, X.col(Eigen::Index(j)) - Lap.col(Eigen::Index(j)));
             }
-            const double t = seconds_since(t0);
-            std::vector<StudyRow> rows;
-            for (std::size_t j = 0; j < functions.size(); ++j) {
-              StudyRow row;
-              row.study = to_string(o.kind);
-              row.method = method;
-              row.normals = o.normals;
-              row.function = functions[j]->name;
-              row.h = h;
-              row.center = center;
-              row.c = c;
-              row.vertices = s.mesh.num_vertices();
-              row.faces = s.mesh.num_faces();
-              row.error_linf = errors[j].linf;
-              row.error_l2 = errors[j].l2;
-              row.time_s = t;
-              if (!std::isfinite(row.error_linf) || !std::isfinite(row.error_l2))
-                throw NumericalError("the error of " + row.function + " is not finite");
-              rows.push_back(row);
-            }
-            if (cb.rows) cb.rows(rows);
+            emit_rows(errors, seconds_since(t0));
           }
         } catch (const Error& e) {
           rethrow_in_unit(e, method, h, center);

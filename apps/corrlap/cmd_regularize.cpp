@@ -35,6 +35,8 @@ struct RegularizeArgs {
   double alpha0 = 10.0;
   double h_scale = 1.0;
   std::optional<double> h_clamp;
+  std::string k1_edit, k2_edit;  // principal-curvature edits (paper §4.3), parsed by PrincipalCurvatureEdit
+  double normal_attachment = 1.0;
   std::string solver;
   std::vector<std::string> options;
   std::string out;
@@ -155,6 +157,9 @@ void run(const RegularizeArgs& a) {
   o.alpha0 = a.alpha0;
   o.h_scale = a.h_scale;
   o.h_clamp = a.h_clamp;
+  if (!a.k1_edit.empty()) o.k1_edit = PrincipalCurvatureEdit::parse(a.k1_edit);
+  if (!a.k2_edit.empty()) o.k2_edit = PrincipalCurvatureEdit::parse(a.k2_edit);
+  o.normal_attachment = a.normal_attachment;
   o.solver = Config::from_key_values(a.options);
   if (!a.solver.empty()) o.solver.set("solver", a.solver);
   // The backend and the method first: a bad name fails before the (possibly long) normals.
@@ -214,6 +219,12 @@ void run(const RegularizeArgs& a) {
   m["alpha"] = r.alpha;
   m["h_scale"] = a.h_scale;
   m["h_clamp"] = a.h_clamp ? nlohmann::json(*a.h_clamp) : nlohmann::json(nullptr);
+  m["k1_edit"] = o.k1_edit.describe();
+  m["k2_edit"] = o.k2_edit.describe();
+  if (o.k1_edit.active() || o.k2_edit.active()) {
+    m["normal_attachment"] = o.normal_attachment;
+    m["normal_angle_change_deg"] = r.normal_angle_change_deg;
+  }
   m["solver"] = r.solver;
   m["time_s"] = stages;
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
@@ -257,6 +268,16 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   only.push_back(
       cmd->add_option("--h-clamp", args->h_clamp, "curvature editing: clamp H to [-MAX, MAX] (after --h-scale)")
           ->check(positive_number()));
+  only.push_back(cmd->add_option("--k1", args->k1_edit,
+                                 "principal-curvature editing (paper §4.3) of the smaller principal curvature k1: "
+                                 "scale:S, set:V or clamp:V; the normals are re-integrated from the edited shape "
+                                 "operator S' and H = tr(S')/2 (docs/regularization.md)"));
+  only.push_back(cmd->add_option("--k2", args->k2_edit, "the same for the larger principal curvature k2"));
+  only.push_back(cmd->add_option("--normal-attachment", args->normal_attachment,
+                                 "with --k1/--k2: weight of the new normals' attachment to the old ones, relative to "
+                                 "the object size")
+                     ->check(positive_number())
+                     ->capture_default_str());
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
   cmd->add_option("options", args->options, "backend options key=value");

@@ -295,7 +295,8 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
   cmd->add_option("--offset", args->options.offset, "extra voxels around the box")->capture_default_str();
   cmd->add_option(
          "--solver", args->options.linear_solver,
-         "linear solver backend, or auto (cholmod; cg for operators with > 64 nonzeros per row: the heat kernel)")
+         "linear solver backend, or auto (forward and cotan: Jacobi cg; backward and eigen: cholmod, cg for operators "
+         "with > 64 nonzeros per row: the heat kernel)")
       ->capture_default_str();
   cmd->add_option("--param", args->options.method_params,
                   "method parameter key=value for the methods that have the key (repeatable)");

@@ -63,7 +63,14 @@ void symmetric_product_transposed(const Eigen::SparseMatrix<double>& A, const Ei
 
 BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
                                        const Preconditioner& precondition, double tolerance, int max_iterations) {
-  const Eigen::Index n = A.rows(), k = B.cols();
+  return block_conjugate_gradient(
+      [&](const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Qt) { symmetric_product_transposed(A, Pt, Qt); }, B, precondition,
+      tolerance, max_iterations);
+}
+
+BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const Eigen::MatrixXd& B,
+                                       const Preconditioner& precondition, double tolerance, int max_iterations) {
+  const Eigen::Index n = B.rows(), k = B.cols();
   BlockCgResult result;
   // Rows are the k columns of the system (the transposed layout of symmetric_product_transposed).
   Eigen::MatrixXd Xt = Eigen::MatrixXd::Zero(k, n);
@@ -86,7 +93,7 @@ BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, con
   bool any_active = update_active();
   int iterations = 0;
   while (any_active && iterations < max_iterations) {
-    symmetric_product_transposed(A, Pt, Qt);
+    multiply(Pt, Qt);
     const Eigen::ArrayXd pq = (Pt.array() * Qt.array()).rowwise().sum();
     Eigen::ArrayXd alpha = Eigen::ArrayXd::Zero(k);
     for (Eigen::Index c = 0; c < k; ++c) {

@@ -34,4 +34,12 @@ struct BlockCgResult {
 BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
                                        const Preconditioner& precondition, double tolerance, int max_iterations);
 
+/// Qt = (A P)^T for Pt = P^T (k x n): an operator known only by its product.
+using TransposedProduct = std::function<void(const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Qt)>;
+
+/// The same iteration on an operator given by its product (the matrix overload passes
+/// symmetric_product_transposed).
+BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const Eigen::MatrixXd& B,
+                                       const Preconditioner& precondition, double tolerance, int max_iterations);
+
 }  // namespace corrlap::detail
