@@ -23,8 +23,10 @@
 #include <corrlap/core/voxel_grid.hpp>
 
 // Voxels -> digital surface.
+#include <corrlap/surface/closest_point.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <corrlap/surface/loop_subdivision.hpp>
 #include <corrlap/surface/mesh_voxelization.hpp>
 
 // Files: meshes, volumes, normals, scalars, Matrix Market.
@@ -55,6 +57,7 @@
 // Regularization: positions from the corrected Laplacian and Delta p = -2 H n (paper §4.1).
 #include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
+#include <corrlap/regularization/normal_map_reconstruction.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 

@@ -1,6 +1,7 @@
 #include "volume_io.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <corrlap/core/error.hpp>
@@ -58,7 +59,8 @@ std::string describe(const Eigen::Vector3i& s) {
   return os.str();
 }
 
-// Positive sizes within the memory budget (--max-memory); returns the voxel count (= bytes of uint8 data).
+// Positive sizes below the hard limit; returns the voxel count (= bytes of uint8 data). The memory
+// budget is checked by the sink, which knows what it will hold (bytes or bits).
 std::size_t checked_voxels(const std::string& path, const Eigen::Vector3i& s) {
   if ((s.array() <= 0).any()) fail(path, describe(s) + ": dimensions must be positive");
   const auto n = voxel_count(s);
@@ -66,9 +68,25 @@ std::size_t checked_voxels(const std::string& path, const Eigen::Vector3i& s) {
     fail(path, describe(s) + (n ? " need " + io_detail::readable_bytes(double(*n)) : std::string(" overflow 64 bits")) +
                    ", more than the " + io_detail::readable_bytes(double(kMaxVoxels)) +
                    " a volume may hold (dimensions are absurdly large)");
-  io_detail::check_budget("volume file '" + path + "'", double(*n), describe(s));
   return std::size_t(*n);
 }
+
+// Where the readers put the voxel values: begin() once the header gave the sizes, then consume()
+// with the values in file order (x fastest), in chunks of any length. A sink that holds the bytes
+// (read_volume) or one that thresholds them into bits as they come (read_volume_as_voxels: a 1024^3
+// volume is 1 GiB as bytes, 128 MiB as bits).
+class VoxelSink {
+ public:
+  virtual ~VoxelSink() = default;
+  /// The memory budget for what the sink will hold (IoError naming the file), before the reader
+  /// checks that the file holds the data and before begin() allocates.
+  virtual void check(const std::string& path, const Eigen::Vector3i& size) const = 0;
+  virtual void begin(const std::string& path, const Eigen::Vector3i& size) = 0;
+  virtual void consume(const std::uint8_t* values, std::size_t n) = 0;
+};
+
+// Chunk of the streamed reads: large enough for fast reads, small enough to be nothing in memory.
+constexpr std::size_t kChunk = std::size_t{1} << 20;
 
 // The announced sizes need `needed` bytes of the file, which holds `available` after the header.
 void check_holds(const std::string& path, const Eigen::Vector3i& s, std::uint64_t needed, std::uint64_t available,
@@ -78,23 +96,31 @@ void check_holds(const std::string& path, const Eigen::Vector3i& s, std::uint64_
                  ", more than the " + io_detail::readable_bytes(double(available)) + " the file holds");
 }
 
-void read_payload(std::istream& in, const std::string& path, Volume& v) {
-  const std::size_t n = checked_voxels(path, v.size);
-  // Checked before allocating, so that a corrupt header cannot make us allocate gigabytes.
-  check_holds(path, v.size, n, io_detail::bytes_left(in), "");
-  v.values.resize(n);
-  in.read(reinterpret_cast<char*>(v.values.data()), std::streamsize(n));
-  if (std::size_t(in.gcount()) != n)
-    fail(path, "truncated data: expected " + io_detail::readable_count(n) + " bytes, got " +
-                   io_detail::readable_count(std::uint64_t(in.gcount())));
+void read_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, VoxelSink& sink) {
+  const std::size_t n = checked_voxels(path, s);
+  // Checked before the sink allocates, so that a corrupt header cannot make us allocate gigabytes.
+  sink.check(path, s);
+  check_holds(path, s, n, io_detail::bytes_left(in), "");
+  sink.begin(path, s);
+  std::vector<std::uint8_t> buffer(std::min(n, kChunk));
+  std::size_t done = 0;
+  while (done < n) {
+    const std::size_t k = std::min(kChunk, n - done);
+    in.read(reinterpret_cast<char*>(buffer.data()), std::streamsize(k));
+    const std::size_t got = std::size_t(in.gcount());
+    if (got != k)
+      fail(path, "truncated data: expected " + io_detail::readable_count(n) + " bytes, got " +
+                     io_detail::readable_count(done + got));
+    sink.consume(buffer.data(), k);
+    done += k;
+  }
 }
 
 #ifdef CORRLAP_HAVE_ZLIB
-// Inflates exactly n bytes into v.values. The output buffer grows with what inflate really
-// produces (chunks of at most 1 MiB), so that the announced size alone never allocates memory;
-// producing more than n bytes is an error as soon as it happens.
+// Inflates exactly n bytes into the sink, 1 MiB at a time: the announced size alone never allocates
+// memory, and producing more than n bytes is an error as soon as it happens.
 // `format` names the data in messages ("gzip", "zlib").
-void inflate_payload(const std::string& path, const std::string& compressed, std::size_t n, Volume& v,
+void inflate_payload(const std::string& path, const std::string& compressed, std::size_t n, VoxelSink& sink,
                      const std::string& format) {
   // RAII so that every fail() below releases zlib's state.
   struct Stream {
@@ -107,10 +133,10 @@ void inflate_payload(const std::string& path, const std::string& compressed, std
   // 15 + 32: accept gzip and zlib headers (NRRD "gzip" files are gzip streams, .vol Version 3 zlib).
   if (inflateInit2(&s.zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
   s.live = true;
-  constexpr std::size_t kChunk = std::size_t{1} << 20;
   constexpr std::size_t kMaxIn = std::numeric_limits<uInt>::max();
+  // One byte of room beyond n detects a stream longer than the sizes announce.
+  std::vector<std::uint8_t> buffer(std::min(kChunk, n + 1));
   std::size_t fed = 0, produced = 0;
-  v.values.clear();
   int rc = Z_OK;
   while (rc != Z_STREAM_END) {
     if (s.zs.avail_in == 0 && fed < compressed.size()) {
@@ -119,16 +145,15 @@ void inflate_payload(const std::string& path, const std::string& compressed, std
       s.zs.avail_in = uInt(k);
       fed += k;
     }
-    // One byte of room beyond n detects a stream longer than the sizes announce.
-    const std::size_t room = std::min(kChunk, n + 1 - produced);
-    v.values.resize(produced + room);
-    s.zs.next_out = v.values.data() + produced;
+    const std::size_t room = std::min(buffer.size(), n + 1 - produced);
+    s.zs.next_out = buffer.data();
     s.zs.avail_out = uInt(room);
     rc = inflate(&s.zs, Z_NO_FLUSH);
-    produced += room - s.zs.avail_out;
-    v.values.resize(produced);
-    if (produced > n)
+    const std::size_t got = room - s.zs.avail_out;
+    if (produced + got > n)
       fail(path, format + " data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
+    if (got > 0) sink.consume(buffer.data(), got);
+    produced += got;
     if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
     if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
       fail(path, "corrupt " + format + " data" + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
@@ -142,8 +167,9 @@ void inflate_payload(const std::string& path, const std::string& compressed, std
 // The rest of `in` as compressed voxel data: refused before inflating when even the densest deflate
 // stream of that length could not hold n bytes.
 void read_compressed_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, std::size_t n,
-                             Volume& v, const std::string& format) {
+                             VoxelSink& sink, const std::string& format) {
 #ifdef CORRLAP_HAVE_ZLIB
+  sink.check(path, s);
   const std::uint64_t compressed = io_detail::bytes_left(in);
   const auto most = io_detail::checked_mul(compressed, kMaxDeflateRatio);
   if (most && n > *most + 1024)
@@ -152,20 +178,21 @@ void read_compressed_payload(std::istream& in, const std::string& path, const Ei
                    io_detail::readable_bytes(double(compressed)) + " of " + format +
                    " data can hold (deflate expands at most " + std::to_string(kMaxDeflateRatio) + " times)");
   std::ostringstream ss;
-  ss << in.rdbuf();
-  inflate_payload(path, ss.str(), n, v, format);
+  ss << in.rdbuf();  // the compressed bytes only: a few MB for a 1024^3 segmentation
+  sink.begin(path, s);
+  inflate_payload(path, ss.str(), n, sink, format);
 #else
   (void)in;
   (void)s;
   (void)n;
-  (void)v;
+  (void)sink;
   fail(path, format + "-compressed data needs corrlap built with zlib (zlib1g-dev)");
 #endif
 }
 
 // DGtal .vol: "Key: value" lines ended by a line "."; then X*Y*Z bytes, x fastest: raw
 // (Version 2, or no Version field) or one zlib stream (Version 3, DGtal's VolWriter with compression).
-Volume read_vol(const std::string& path) {
+void read_vol(const std::string& path, VoxelSink& sink) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
   std::map<std::string, std::string> fields;
@@ -198,17 +225,14 @@ Volume read_vol(const std::string& path) {
     s[a] = int(d);
   }
   const std::size_t n = checked_voxels(path, s);
-  Volume v;
-  v.size = s;
   const auto version = fields.find("Version");
   const std::string ver = version == fields.end() ? "2" : version->second;
   if (ver == "2")
-    read_payload(in, path, v);
+    read_payload(in, path, s, sink);
   else if (ver == "3")
-    read_compressed_payload(in, path, s, n, v, "zlib");
+    read_compressed_payload(in, path, s, n, sink, "zlib");
   else
     fail(path, "unsupported Version '" + ver.substr(0, 20) + "' (supported: 2 raw, 3 zlib)");
-  return v;
 }
 
 // The voxel values, then commit: a failed write leaves no half-written volume (io/detail/output_file.hpp).
@@ -239,7 +263,6 @@ void write_vol(const std::string& path, const Volume& v, bool compressed) {
   } s;
   if (deflateInit(&s.zs, Z_DEFAULT_COMPRESSION) != Z_OK) fail(path, "zlib initialisation failed");
   s.live = true;
-  constexpr std::size_t kChunk = std::size_t{1} << 20;
   std::vector<unsigned char> buffer(kChunk);
   std::size_t fed = 0;
   int rc = Z_OK;
@@ -261,16 +284,15 @@ void write_vol(const std::string& path, const Volume& v, bool compressed) {
 #endif
 }
 
-Volume read_raw(const std::string& path, const VolumeReadOptions& options) {
+void read_raw(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink) {
   if (!options.raw_dimensions) fail(path, "raw volumes need their dimensions (--raw-dimensions NX NY NZ)");
   checked_voxels(path, *options.raw_dimensions);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
-  Volume v;
-  v.size = *options.raw_dimensions;
-  read_payload(in, path, v);
-  if (in.peek() != std::char_traits<char>::eof()) fail(path, "file is larger than the given dimensions");
-  return v;
+  // Checked before reading: the file must be exactly the given dimensions.
+  const std::uint64_t n = *voxel_count(*options.raw_dimensions), bytes = io_detail::bytes_left(in);
+  if (bytes > n) fail(path, "file is larger than the given dimensions");
+  read_payload(in, path, *options.raw_dimensions, sink);
 }
 
 void write_raw(const std::string& path, const Volume& v) {
@@ -294,7 +316,27 @@ std::string lower(std::string s) {
   return s;
 }
 
-Volume read_nrrd(const std::string& path) {
+// Forwards to another sink after checking that int8 data holds no negative values.
+class NonNegativeInt8 final : public VoxelSink {
+ public:
+  explicit NonNegativeInt8(VoxelSink& next) : next_(next) {}
+  void check(const std::string& path, const Eigen::Vector3i& size) const override { next_.check(path, size); }
+  void begin(const std::string& path, const Eigen::Vector3i& size) override {
+    path_ = path;
+    next_.begin(path, size);
+  }
+  void consume(const std::uint8_t* values, std::size_t n) override {
+    for (std::size_t i = 0; i < n; ++i)
+      if (values[i] > 127) fail(path_, "negative int8 values are not supported (grey levels must be 0..127 for int8)");
+    next_.consume(values, n);
+  }
+
+ private:
+  VoxelSink& next_;
+  std::string path_;
+};
+
+void read_nrrd(const std::string& path, VoxelSink& destination) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
   std::string line;
@@ -347,33 +389,111 @@ Volume read_nrrd(const std::string& path) {
     fail(path, "invalid endian '" + it->second + "' (little or big)");  // irrelevant for 1-byte types
   const std::string encoding = lower(field("encoding"));
   if (!ended) fail(path, "header not terminated by a blank line (truncated file?)");
-  Volume v;
-  v.size = s;
+  NonNegativeInt8 checked(destination);
+  VoxelSink& sink = s8 ? static_cast<VoxelSink&>(checked) : destination;
   if (encoding == "raw") {
-    read_payload(in, path, v);
-    if (in.peek() != std::char_traits<char>::eof()) fail(path, "file is larger than the announced sizes");
+    if (io_detail::bytes_left(in) > n) fail(path, "file is larger than the announced sizes");
+    read_payload(in, path, s, sink);
   } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
     // n values need at least n digits and n - 1 separators.
+    sink.check(path, s);
     check_holds(path, s, 2 * std::uint64_t(n) - 1, io_detail::bytes_left(in), "at least ");
-    v.values.resize(n);
+    sink.begin(path, s);
+    std::vector<std::uint8_t> buffer;
+    buffer.reserve(std::min(n, kChunk));
     for (std::size_t i = 0; i < n; ++i) {
       long long x = 0;
       if (!(in >> x)) fail(path, "truncated or malformed ascii data at value " + std::to_string(i));
       if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255))
         fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
-      v.values[i] = std::uint8_t(x);
+      buffer.push_back(std::uint8_t(x));
+      if (buffer.size() == kChunk || i + 1 == n) {
+        sink.consume(buffer.data(), buffer.size());
+        buffer.clear();
+      }
     }
     std::string extra;
     if (in >> extra) fail(path, "more ascii values than the announced sizes");
   } else if (encoding == "gzip" || encoding == "gz") {
-    read_compressed_payload(in, path, s, n, v, "gzip");
+    read_compressed_payload(in, path, s, n, sink, "gzip");
   } else {
     fail(path, "unsupported encoding '" + encoding + "' (supported: raw, ascii, gzip)");
   }
-  if (s8)
-    for (std::uint8_t& x : v.values)
-      if (x > 127) fail(path, "negative int8 values are not supported (grey levels must be 0..127 for int8)");
-  return v;
+}
+
+// The values as bytes (read_volume).
+class VolumeSink final : public VoxelSink {
+ public:
+  void check(const std::string& path, const Eigen::Vector3i& size) const override {
+    io_detail::check_budget("volume file '" + path + "'", double(checked_voxels(path, size)), describe(size));
+  }
+  void begin(const std::string& path, const Eigen::Vector3i& size) override {
+    const std::size_t n = checked_voxels(path, size);
+    volume.size = size;
+    volume.values.reserve(n);
+  }
+  void consume(const std::uint8_t* values, std::size_t n) override {
+    volume.values.insert(volume.values.end(), values, values + n);
+  }
+  Volume volume;
+};
+
+// The values thresholded into a voxel grid as they arrive, one (y, z) row of 64-bit words at a
+// time (read_volume_as_voxels): the bytes are never held. The box is [0, size - 1] - shift padded by
+// one empty voxel on every side.
+class ThresholdSink final : public VoxelSink {
+ public:
+  ThresholdSink(double threshold, double h, const Eigen::Vector3i& shift) : h_(h), shift_(shift) {
+    for (int v = 0; v < 256; ++v) inside_[std::size_t(v)] = double(v) > threshold;
+  }
+  void check(const std::string& path, const Eigen::Vector3i& size) const override {
+    // The grid's rows of 64-bit words over the padded box (core/voxel_grid.hpp).
+    const double words = std::ceil(double(size.x() + 2) / 64.0) * double(size.y() + 2) * double(size.z() + 2);
+    io_detail::check_budget("volume file '" + path + "'", 8.0 * words, describe(size) + " as a bit grid");
+  }
+  void begin(const std::string&, const Eigen::Vector3i& size) override {
+    size_ = size;
+    grid = VoxelGrid(Eigen::Vector3i::Constant(-1) - shift_, size - shift_, h_);  // checks the budget
+  }
+  void consume(const std::uint8_t* values, std::size_t n) override {
+    while (n > 0) {
+      // Voxel x_ of row (y_, z_) is bit x_ + 1 of the grid row (the box starts one voxel before).
+      const std::size_t k = std::min(n, std::size_t(size_.x() - x_));
+      std::uint64_t* words = grid.row(y_ - shift_.y(), z_ - shift_.z());
+      for (std::size_t i = 0; i < k; ++i) {
+        const std::uint64_t bit = inside_[values[i]];
+        const std::size_t b = std::size_t(x_) + i + 1;
+        words[b >> 6] |= bit << (b & 63);
+        inside += bit;
+      }
+      values += k;
+      n -= k;
+      x_ += int(k);
+      if (x_ == size_.x()) {
+        x_ = 0;
+        if (++y_ == size_.y()) {
+          y_ = 0;
+          ++z_;
+        }
+      }
+    }
+  }
+  VoxelGrid grid;
+  std::uint64_t inside = 0;
+
+ private:
+  double h_;
+  Eigen::Vector3i shift_, size_ = Eigen::Vector3i::Zero();
+  int x_ = 0, y_ = 0, z_ = 0;
+  std::array<bool, 256> inside_{};
+};
+
+void read_into(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink) {
+  const std::string ext = extension_of(path);
+  if (ext == "vol") return read_vol(path, sink);
+  if (ext == "raw") return read_raw(path, options, sink);
+  if (ext == "nrrd") return read_nrrd(path, sink);
+  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .raw, .nrrd)");
 }
 
 void write_nrrd(const std::string& path, const Volume& v) {
@@ -396,11 +516,9 @@ bool nrrd_gzip_supported() {
 }
 
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
-  const std::string ext = extension_of(path);
-  if (ext == "vol") return read_vol(path);
-  if (ext == "raw") return read_raw(path, options);
-  if (ext == "nrrd") return read_nrrd(path);
-  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .raw, .nrrd)");
+  VolumeSink sink;
+  read_into(path, options, sink);
+  return std::move(sink.volume);
 }
 
 void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options) {
@@ -441,12 +559,34 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
 
 double unit_size_grid_step(const Eigen::Vector3i& size) { return size.maxCoeff() > 0 ? 2.0 / size.maxCoeff() : 1.0; }
 
+Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size) { return (size - Eigen::Vector3i::Ones()) / 2; }
+
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options) {
   if (options.h < 0.0 || !std::isfinite(options.h))
     throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
-  const Volume volume = read_volume(path, options);
-  const double h = options.h == 0.0 ? unit_size_grid_step(volume.size) : options.h;
-  return threshold_volume(volume, options.threshold, h);
+  // The sizes decide h and the shift before the first value arrives: a sink that learns them in begin().
+  class Deferred final : public VoxelSink {
+   public:
+    explicit Deferred(const VolumeReadOptions& o) : o_(o) {}
+    void check(const std::string& p, const Eigen::Vector3i& size) const override {
+      ThresholdSink(o_.threshold, 1.0, Eigen::Vector3i::Zero()).check(p, size);
+    }
+    void begin(const std::string& p, const Eigen::Vector3i& size) override {
+      const double h = o_.h == 0.0 ? unit_size_grid_step(size) : o_.h;
+      sink.emplace(o_.threshold, h, o_.centered ? volume_centering_shift(size) : Eigen::Vector3i::Zero());
+      sink->begin(p, size);
+    }
+    void consume(const std::uint8_t* values, std::size_t n) override { sink->consume(values, n); }
+    std::optional<ThresholdSink> sink;
+
+   private:
+    const VolumeReadOptions& o_;
+  } deferred(options);
+  read_into(path, options, deferred);
+  if (deferred.sink->inside == 0)
+    throw InputError("volume '" + path + "': no voxel above the threshold " +
+                     io_detail::readable_number(options.threshold) + " (empty volume)");
+  return std::move(deferred.sink->grid);
 }
 
 Volume voxels_to_volume(const VoxelGrid& grid) {

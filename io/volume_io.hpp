@@ -25,6 +25,10 @@ struct VolumeReadOptions {
   /// Grid step given to the voxel grid; 0: unit_size_grid_step (the longest side spans 2).
   double h = 1.0;
   std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
+  /// read_volume_as_voxels: file voxel (x, y, z) becomes the digital point (x, y, z) - shift with
+  /// shift = volume_centering_shift(size), so that the volume's centre is at the origin (within
+  /// half a voxel: voxel centres sit at h Z^3). False: the corner voxel at the origin.
+  bool centered = false;
 };
 
 /// Reads by extension. Throws IoError naming the file and the problem (missing header field,
@@ -48,7 +52,13 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h);
 /// 2 / (the longest side in voxels): the step at which the volume's longest side spans 2, the world
 /// units of the unit-sized shapes the paper's defaults are stated for (II radius, curvature radius).
 double unit_size_grid_step(const Eigen::Vector3i& size);
-/// read_volume + threshold_volume (options.h = 0: unit_size_grid_step of the volume).
+/// (size - 1) / 2 per axis (integer division): the digital point of the volume's middle voxel.
+Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size);
+/// The same voxels as threshold_volume(read_volume(path), threshold, h) (options.h = 0:
+/// unit_size_grid_step of the volume), shifted by volume_centering_shift when options.centered,
+/// but streamed: the values are thresholded into the grid as they are read or inflated, so memory
+/// is the bit grid (1 bit per voxel) plus the compressed bytes of a .vol Version 3 / gzip NRRD file,
+/// never the 1 byte per voxel of the volume. Throws as read_volume, and InputError when no voxel is inside.
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options);
 /// 255 inside, 0 outside, over the grid's box.
 Volume voxels_to_volume(const VoxelGrid& grid);

@@ -44,7 +44,8 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   if (!(r.size > 0.0) || !std::isfinite(r.size)) throw InputError("regularization: the size must be positive");
   r.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * r.size;
   if (!(r.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
-  r.alpha = regularization_alpha(r.h * r.size, o.alpha0);
+  if (o.alpha_step && !(*o.alpha_step > 0.0)) throw InputError("regularization: the alpha step must be positive");
+  r.alpha = regularization_alpha((o.alpha_step ? *o.alpha_step : r.h) * r.size, o.alpha0);
   r.solver = o.solver.get_string("solver", kDefaultLinearSolver);
   auto t = std::chrono::steady_clock::now();
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).

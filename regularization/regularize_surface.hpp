@@ -24,8 +24,11 @@ struct RegularizationOptions {
   std::optional<double> size;
   std::optional<double> curvature_radius;  ///< ball radius of the corrected mean curvature (default 0.1 size)
   double alpha0 = 10.0;                    ///< alpha = alpha0 / (h size)^2
-  double h_scale = 1.0;                    ///< curvature editing (paper §4.3): H <- h_scale H ...
-  std::optional<double> h_clamp;           ///< ... then clamped to [-h_clamp, h_clamp]
+  /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
+  /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.
+  std::optional<double> alpha_step;
+  double h_scale = 1.0;           ///< curvature editing (paper §4.3): H <- h_scale H ...
+  std::optional<double> h_clamp;  ///< ... then clamped to [-h_clamp, h_clamp]
   /// Principal-curvature edits (paper §4.3, curvature_editing.hpp; k1 <= k2). When either is
   /// active, the regularization uses n' integrated from the edited S' and H = tr(S') / 2, to
   /// which h_scale and h_clamp then apply.

@@ -54,6 +54,7 @@ METHOD_COLORS = {
     "heat-kernel": "#8c564b",
     "vrm": "#e377c2",
     "cotan": "#7f7f7f",
+    "alignment": "#17becf",
 }
 FALLBACK_COLORS = ["#bcbd22", "#17becf", "#000000", "#aec7e8", "#ffbb78", "#98df8a", "#ff9896"]
 # Columns read from each file: (text columns, numeric columns); others are ignored.
@@ -61,6 +62,14 @@ SUMMARY_COLUMNS = (["study", "method", "normals", "function"],
                    ["h", "error_linf_mean", "error_linf_std", "error_l2_mean", "error_l2_std"])
 ORDERS_COLUMNS = (["study", "method", "normals", "function", "norm"], ["order"])
 EIGEN_COLUMNS = (["method", "normals"], ["h", "index", "relative_error"])
+REGULARIZATION_COLUMNS = (["shape", "method", "normals"],
+                          ["h", "distance_before", "distance_after", "curvature_error_before",
+                           "curvature_error_after", "area_before", "area_after"])
+# The regularization study's figures (paper Fig. 15): quantity -> (before column, after column, label).
+REGULARIZATION_QUANTITIES = {
+    "distance": ("distance_before", "distance_after", "mean distance to the true surface"),
+    "curvature": ("curvature_error_before", "curvature_error_after", "mean |H - H_true|"),
+}
 
 
 class InputError(Exception):
@@ -272,6 +281,53 @@ def plot_eigen_study(directory, eigen, colors, formats):
     return paths
 
 
+def plot_regularization(rows, shape, quantity, colors):
+    """One log-log figure of a quality against h for one shape: one line per method after the
+    regularization, the staircase (before) dashed; None when nothing is positive."""
+    before_column, after_column, label = REGULARIZATION_QUANTITIES[quantity]
+    by_method = {}
+    staircase = {}
+    for row in rows:
+        h = row["h"]
+        if not positive(h):
+            continue
+        if positive(row[after_column]):
+            by_method.setdefault(row["method"], []).append((h, row[after_column]))
+        if positive(row[before_column]):
+            staircase[h] = row[before_column]
+    if not by_method:
+        return None
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    if staircase:
+        hs = sorted(staircase)
+        ax.plot(hs, [staircase[h] for h in hs], linestyle="--", marker="s", color="grey", label="digital surface")
+    for method in sorted(by_method):
+        points = sorted(by_method[method])
+        ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", color=colors[method], label=method)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("grid step h")
+    ax.set_ylabel(label)
+    ax.set_title(f"regularization, {shape}: {label}")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def plot_regularization_study(directory, rows, colors, formats):
+    shapes = {}
+    for row in rows:
+        shapes.setdefault(row["shape"], []).append(row)
+    paths = []
+    for shape in sorted(shapes):
+        for quantity in REGULARIZATION_QUANTITIES:
+            fig = plot_regularization(shapes[shape], shape, quantity, colors)
+            if fig is not None:
+                paths += save(fig, directory, f"regularization_{safe_name(shape)}_{quantity}", formats)
+    return paths
+
+
 def plot_study(directory, formats=("png", "svg")):
     """Writes the figures of a study directory into DIR/plots/; returns the written paths."""
     if plt is None:
@@ -281,11 +337,14 @@ def plot_study(directory, formats=("png", "svg")):
         raise InputError(f"{directory}: not a directory")
     summary = read_table(os.path.join(directory, "summary.csv"), SUMMARY_COLUMNS)
     eigen = read_table(os.path.join(directory, "eigen.csv"), EIGEN_COLUMNS)
-    if summary is None and eigen is None:
-        raise InputError(f"no summary.csv or eigen.csv in {directory}")
+    regularization = read_table(os.path.join(directory, "regularization.csv"), REGULARIZATION_COLUMNS)
+    if summary is None and eigen is None and regularization is None:
+        raise InputError(f"no summary.csv, eigen.csv or regularization.csv in {directory}")
     orders = order_table(read_table(os.path.join(directory, "orders.csv"), ORDERS_COLUMNS))
-    colors = method_colors(row["method"] for row in (summary or []) + (eigen or []))
+    colors = method_colors(row["method"] for row in (summary or []) + (eigen or []) + (regularization or []))
     paths = []
+    if regularization is not None:
+        paths += plot_regularization_study(directory, regularization, colors, formats)
     if summary is not None:
         paths += plot_convergence_studies(directory, summary, orders, colors, formats)
     if eigen is not None:

@@ -26,6 +26,8 @@ class TriangleLocator {
   TriangleLocator(const Eigen::MatrixX3d& V, const TriangleIndices& T);
   /// Throws InputError when p is not finite.
   ClosestPoint closest(const Eigen::Vector3d& p) const;
+  const Eigen::MatrixX3d& vertices() const { return V_; }
+  const TriangleIndices& triangles() const { return T_; }
 
  private:
   Eigen::MatrixX3d V_;

@@ -1,11 +1,16 @@
 // corrlap digitize: implicit shape or volume -> digital surface mesh (+ optional normals).
+#include <algorithm>
+#include <cctype>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/io/volume_io.hpp>
+#include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "command.hpp"
 #include "surface_source.hpp"
@@ -16,11 +21,30 @@ namespace {
 struct DigitizeArgs {
   SurfaceSource source;
   std::string out, face_normals_out, vertex_normals_out, normals = "auto";
+  std::string output_units = "world";
+  std::string volume_out;  // the voxels as a volume file (255 inside)
 };
 
 void run(const DigitizeArgs& a) {
-  SurfelMesh mesh = a.source.surface();
-  const bool ply = a.out.size() > 4 && a.out.substr(a.out.size() - 4) == ".ply";
+  // Voxel units need the volume's centring shift, which load() records.
+  std::optional<LoadedSurface> loaded;
+  if (a.output_units != "world" || !a.volume_out.empty()) loaded = a.source.load();
+  if (!a.volume_out.empty()) {
+    if (!loaded->grid) throw InputError("--volume-out needs voxels (--shape, --polynomial, --volume or --mesh-file)");
+    VolumeWriteOptions options;
+    std::string ext = std::filesystem::path(a.volume_out).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    options.compressed = ext == ".vol" && nrrd_gzip_supported();  // Version 3, DGtal's current writer
+    write_volume(a.volume_out, voxels_to_volume(*loaded->grid), options);
+    std::cerr << "wrote " << a.volume_out << " (" << loaded->grid->size().x() << "x" << loaded->grid->size().y() << "x"
+              << loaded->grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", .vol Version 3" : "")
+              << ")\n";
+  }
+  SurfelMesh mesh = loaded ? loaded->mesh : a.source.surface();
+  std::string extension = std::filesystem::path(a.out).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  const bool ply = extension == ".ply";
   const bool want_normals = !a.face_normals_out.empty() || !a.vertex_normals_out.empty() || ply;
   MeshAttributes attributes;
   if (want_normals) {
@@ -36,7 +60,8 @@ void run(const DigitizeArgs& a) {
     attributes.face_normals = fn;  // PLY output carries them too
     attributes.vertex_normals = vn;
   }
-  if (!a.out.empty()) write_mesh(a.out, mesh, attributes);
+  if (!a.out.empty())
+    write_mesh(a.out, loaded ? OutputUnits::parse(a.output_units, *loaded).mesh(mesh) : mesh, attributes);
   std::cerr << "digitized " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces" << (a.out.empty() ? "" : " -> " + a.out) << "\n";
 }
@@ -47,6 +72,13 @@ RegisterCommand reg(10, "digitize", [](CLI::App& app) {
                                  "digitize an implicit shape, a volume or a closed triangle mesh into a surfel mesh");
   args->source.add_options(*cmd, /*with_mesh=*/false);
   cmd->add_option("--out", args->out, "output mesh (.obj, or .ply with face and vertex normals)");
+  cmd->add_option("--volume-out", args->volume_out,
+                  "also write the voxels as a volume (.vol: Version 3 with zlib, .nrrd, .raw; 255 inside, 0 outside)");
+  cmd->add_option("--output-units", args->output_units,
+                  "world: positions h z (volumes centred, docs/io.md); voxels: the input's voxel units (a volume "
+                  "file's voxel indices; pointels at half-integers)")
+      ->check(CLI::IsMember({"world", "voxels"}))
+      ->capture_default_str();
   cmd->add_option("--face-normals", args->face_normals_out, "write one normal per face (text, nx ny nz)");
   cmd->add_option("--vertex-normals", args->vertex_normals_out,
                   "write one normal per vertex: normalized sum of incident face normals");

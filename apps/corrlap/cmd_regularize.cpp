@@ -40,6 +40,7 @@ struct RegularizeArgs {
   std::string solver;
   std::vector<std::string> options;
   std::string out;
+  std::string output_units = "world";
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
   bool allow_nonmanifold = false;
@@ -77,16 +78,21 @@ void add_geometry_metrics(nlohmann::json& m, const LoadedSurface& surface, const
 
 // DIR/input.ply, regularized.ply (its geometric normals, the displacement and `scalars`),
 // regularized.obj; the input's own attributes in `input_attr`.
-void write_surfaces(const std::string& dir, const SurfelMesh& input, const MeshAttributes& input_attr,
-                    const SurfelMesh& result, std::map<std::string, Eigen::VectorXd> scalars) {
+// The meshes in the chosen units; `curvatures` (H) and the displacement scale with them.
+void write_surfaces(const std::string& dir, const SurfelMesh& input, MeshAttributes input_attr,
+                    const SurfelMesh& result, std::map<std::string, Eigen::VectorXd> curvatures,
+                    const OutputUnits& units) {
   std::filesystem::create_directories(dir);
-  write_mesh(dir + "/input.ply", input, input_attr);
+  for (auto& [name, v] : input_attr.vertex_scalars) v = units.curvatures(v);
+  write_mesh(dir + "/input.ply", units.mesh(input), input_attr);
   MeshAttributes result_attr;
   result_attr.vertex_normals = geometric_vertex_normals(result);
-  scalars["displacement"] = (result.positions - input.positions).rowwise().norm();
-  result_attr.vertex_scalars = std::move(scalars);
-  write_mesh(dir + "/regularized.ply", result, result_attr);
-  write_mesh(dir + "/regularized.obj", result);
+  for (auto& [name, v] : curvatures) v = units.curvatures(v);
+  curvatures["displacement"] = units.lengths((result.positions - input.positions).rowwise().norm());
+  result_attr.vertex_scalars = std::move(curvatures);
+  const SurfelMesh out = units.mesh(result);
+  write_mesh(dir + "/regularized.ply", out, result_attr);
+  write_mesh(dir + "/regularized.obj", out);
 }
 
 void write_metrics(const std::string& dir, const nlohmann::json& m) {
@@ -115,7 +121,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   result.positions = r.positions;
   MeshAttributes input_attr;
   input_attr.face_normals = normals.face;
-  write_surfaces(a.out, mesh, input_attr, result, {});
+  write_surfaces(a.out, mesh, input_attr, result, {}, OutputUnits::parse(a.output_units, surface));
   stages["write_s"] = seconds_since(t);
   if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, result, "", {}, {});
   t = std::chrono::steady_clock::now();
@@ -201,7 +207,7 @@ void run(const RegularizeArgs& a) {
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
   input_attr.vertex_scalars = {{"H", r.H}};
-  write_surfaces(a.out, mesh, input_attr, r.mesh, {{"H", r.H}});
+  write_surfaces(a.out, mesh, input_attr, r.mesh, {{"H", r.H}}, OutputUnits::parse(a.output_units, surface));
   stages["write_s"] = seconds_since(t);
   if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, r.mesh, "H", r.H, r.H);
   t = std::chrono::steady_clock::now();
@@ -219,6 +225,7 @@ void run(const RegularizeArgs& a) {
   m["alpha"] = r.alpha;
   m["h_scale"] = a.h_scale;
   m["h_clamp"] = a.h_clamp ? nlohmann::json(*a.h_clamp) : nlohmann::json(nullptr);
+  m["output_units"] = a.output_units;
   m["k1_edit"] = o.k1_edit.describe();
   m["k2_edit"] = o.k2_edit.describe();
   if (o.k1_edit.active() || o.k2_edit.active()) {
@@ -291,6 +298,11 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");
+  cmd->add_option("--output-units", args->output_units,
+                  "world: positions as computed; voxels: in the input's voxel units (a volume file's voxel "
+                  "indices), H and the displacement with them (metrics.json stays in world units)")
+      ->check(CLI::IsMember({"world", "voxels"}))
+      ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png)")
       ->required();

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/studies/regularization_study.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <cstdio>
@@ -38,6 +39,11 @@ struct StudyArgs {
   std::vector<double> bbox = {-2.0, 2.0};
   std::string out;
   bool resume = false, overwrite = false, no_plots = false;
+  // The regularization study (paper Fig. 15)
+  std::string shapes = "sphere1,torus,goursat";
+  double alpha0 = 10.0;
+  bool bbox_given = false;
+  CLI::Option *h_option = nullptr, *resolutions_option = nullptr;
 };
 
 std::vector<std::string> split_list(const std::string& text) {
@@ -104,7 +110,64 @@ std::string shell_quote(const std::string& s) {
   return q + "'";
 }
 
+// `corrlap study regularization` (paper §4.1, Fig. 15): its own options and table
+// (studies/regularization_study.hpp).
+void run_regularization(const StudyArgs& a) {
+  RegularizationStudyOptions o;
+  o.shapes = split_list(a.shapes);
+  o.methods = split_list(a.methods);
+  if (a.h_option->count() > 0) o.h = parse_grid_steps(a.h);
+  if (a.resolutions_option->count() > 0 || o.h.empty()) {
+    o.resolutions.clear();
+    const std::string list = a.resolutions_option->count() > 0 ? a.resolutions : "32,64,128";
+    for (const std::string& item : split_list(list)) {
+      char* end = nullptr;
+      const long n = std::strtol(item.c_str(), &end, 10);
+      if (end != item.c_str() + item.size() || n < 8 || n > 2048)
+        throw InputError("study regularization: --resolutions: '" + item + "' is not an integer in [8, 2048]");
+      o.resolutions.push_back(int(n));
+    }
+    if (a.h_option->count() > 0) throw InputError("study regularization: give --h or --resolutions, not both");
+  }
+  o.normals = a.normals_given ? a.options.normals : "ii";
+  o.alpha0 = a.alpha0;
+  if (a.bbox_given) {
+    o.min_aabb = a.bbox[0];
+    o.max_aabb = a.bbox[1];
+  }
+  o.offset = a.options.offset;
+  o.linear_solver = a.options.linear_solver == "auto" ? "cholmod" : a.options.linear_solver;
+  o.validate();
+  namespace fs = std::filesystem;
+  const fs::path dir(a.out);
+  const std::string table = (dir / "regularization.csv").string();
+  if (fs::exists(table) && !a.overwrite)
+    throw InputError("study: '" + a.out + "' already holds a regularization study (" + table +
+                     "); pass --overwrite to start again");
+  if (a.resume) throw InputError("study regularization: --resume is not supported (each unit takes seconds)");
+  fs::create_directories(dir);
+  std::vector<RegularizationStudyRow> rows;
+  const auto t0 = std::chrono::steady_clock::now();
+  run_regularization_study(
+      o,
+      [&](const RegularizationStudyRow& r) {
+        rows.push_back(r);
+        write_regularization_csv(table, rows);  // rewritten after each unit: an interrupted run keeps its rows
+      },
+      [&](const RegularizationStudyProgress& p) {
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::cerr << "study regularization " << p.done << "/" << p.total << "  " << p.shape << " h=" << p.h << " "
+                  << p.method << "  elapsed " << format_seconds(elapsed) << "\n";
+      });
+  std::cout << "study: " << table << "\n";
+  for (const RegularizationStudyRow& r : rows)
+    std::cout << "  " << r.shape << " h=" << r.h << " " << r.method << ": distance " << r.distance_before << " -> "
+              << r.distance_after << ", |dH| " << r.curvature_error_before << " -> " << r.curvature_error_after << "\n";
+  if (!a.no_plots) run_plot_script(a.out);
+}
+
 void run(StudyArgs& a) {
+  if (a.kind == "regularization") return run_regularization(a);
   StudyOptions& o = a.options;
   o.kind = parse_study_kind(a.kind);
   o.methods = split_list(a.methods);
@@ -233,6 +296,11 @@ void finish_study(const std::string& out, bool eigen, bool plots) {
                   << "\n";
   }
   if (!plots) return;
+  run_plot_script(out);
+}
+
+void run_plot_script(const std::string& out) {
+  namespace fs = std::filesystem;
   const std::string script = plot_script();
   const char* python_env = std::getenv("CORRLAP_PYTHON");
   const std::string python = python_env && *python_env        ? python_env
@@ -262,10 +330,11 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
       app.add_subcommand("study",
                          "the paper's evaluations: forward | backward | eigen errors of several methods over grid "
                          "steps and centres -> CSV tables and plots (docs/studies.md)");
-  cmd->add_option("study", args->kind, "forward | backward | eigen | cotan")->required();
+  cmd->add_option("study", args->kind, "forward | backward | eigen | cotan | regularization")->required();
   cmd->add_option("--methods", args->methods, "comma-separated discretizations")->capture_default_str();
-  cmd->add_option("--h", args->h, "grid steps: a comma list (0.1,0.05) or A:B:N (N log-spaced steps from A to B)")
-      ->capture_default_str();
+  args->h_option =
+      cmd->add_option("--h", args->h, "grid steps: a comma list (0.1,0.05) or A:B:N (N log-spaced steps from A to B)")
+          ->capture_default_str();
   cmd->add_option("--functions", args->functions, "forward/backward: test functions x2, expx, p6")
       ->capture_default_str();
   cmd->add_option("--normals", args->options.normals,
@@ -275,7 +344,14 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
       ->each([args](const std::string&) { args->normals_given = true; })
       ->capture_default_str();
   cmd->add_option("--mesh-file", args->options.mesh_file, "cotan: the triangle mesh (OBJ, PLY, OFF)");
-  cmd->add_option("--resolutions", args->resolutions, "cotan: voxels along the mesh's longest side (h = 2 / N)")
+  args->resolutions_option =
+      cmd->add_option("--resolutions", args->resolutions,
+                      "cotan: voxels along the mesh's longest side (h = 2 / N); regularization: along each shape's "
+                      "longest side (default 32,64,128)")
+          ->capture_default_str();
+  cmd->add_option("--shapes", args->shapes, "regularization: implicit shapes")->capture_default_str();
+  cmd->add_option("--alpha0", args->alpha0, "regularization: attachment weight alpha = alpha0 / (h size)^2")
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--refine-vertices", args->options.refine_vertices,
                   "cotan: Loop-subdivide the mesh to at least this many vertices (0: as given)")
@@ -291,7 +367,10 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
   cmd->add_option("-k", args->options.k, "eigen: number of eigenvalues")->capture_default_str();
   cmd->add_option("--shape", args->options.shape, "implicit shape (the errors assume the unit sphere)")
       ->capture_default_str();
-  cmd->add_option("--bbox", args->bbox, "digitization box MIN MAX")->expected(2)->capture_default_str();
+  cmd->add_option("--bbox", args->bbox, "digitization box MIN MAX (regularization: default -10 10)")
+      ->expected(2)
+      ->capture_default_str()
+      ->each([args](const std::string&) { args->bbox_given = true; });
   cmd->add_option("--offset", args->options.offset, "extra voxels around the box")->capture_default_str();
   cmd->add_option(
          "--solver", args->options.linear_solver,

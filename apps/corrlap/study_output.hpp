@@ -6,5 +6,8 @@
 namespace corrlap::cli {
 
 void finish_study(const std::string& dir, bool eigen, bool plots);
+/// Runs studies/plot_study.py on DIR (the figures of every table there); a missing script or
+/// matplotlib is a note on stderr, a failing script a warning: the tables stay.
+void run_plot_script(const std::string& dir);
 
 }  // namespace corrlap::cli

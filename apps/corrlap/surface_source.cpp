@@ -71,6 +71,7 @@ VoxelGrid SurfaceSource::voxels() const {
     // World units by default (docs/io.md): the longest side spans 2, h = 2 / N; --h overrides.
     const bool h_given = h_option && h_option->count() > 0;
     opt.h = h_given ? h : 0.0;
+    opt.centered = true;  // the volume's centre at the origin (docs/io.md)
     if (raw_dimensions.size() == 3)
       opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
     return read_volume_as_voxels(volume, opt);
@@ -108,8 +109,29 @@ LoadedSurface SurfaceSource::load() const {
   }
   s.grid = voxels();
   if (s.grid->count() == 0) throw InputError("the volume is empty: no voxel is inside (" + describe() + ")");
+  // A volume's box is the file's [0, size - 1] - shift, padded by one voxel (read_volume_as_voxels).
+  if (!volume.empty()) s.voxel_shift = -s.grid->lower() - Eigen::Vector3i::Ones();
   s.mesh = extract_surface(*s.grid);
   return s;
+}
+
+OutputUnits OutputUnits::parse(const std::string& name, const LoadedSurface& surface) {
+  OutputUnits u;
+  if (name == "world") return u;
+  if (name != "voxels") throw InputError("--output-units '" + name + "': expected world or voxels");
+  u.voxels = true;
+  u.h = surface.mesh.grid_step();
+  u.shift = surface.voxel_shift.cast<double>();
+  if (!(u.h > 0.0)) throw InputError("--output-units voxels: the surface has no grid step");
+  return u;
+}
+
+SurfelMesh OutputUnits::mesh(const SurfelMesh& m) const {
+  if (!voxels) return m;
+  SurfelMesh out = m;
+  out.positions = (m.positions / h).rowwise() + shift.transpose();
+  if (out.h > 0) out.h = m.h / h;
+  return out;
 }
 
 std::string SurfaceSource::describe() const {

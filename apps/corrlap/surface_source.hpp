@@ -17,6 +17,24 @@ struct LoadedSurface {
   SurfelMesh mesh;
   std::optional<VoxelGrid> grid;
   std::optional<ImplicitShape> shape;
+  /// Volumes are centred (docs/io.md): file voxel (x, y, z) is the digital point (x, y, z) - voxel_shift.
+  Eigen::Vector3i voxel_shift = Eigen::Vector3i::Zero();
+};
+
+/// --output-units: positions written in world units (default) or in the input's voxel units (the
+/// volume file's voxel indices, pointels at half-integers; digital coordinates for other sources):
+/// p / h + voxel_shift. Lengths scale by 1/h and curvatures by h with them.
+struct OutputUnits {
+  bool voxels = false;
+  double h = 1.0;
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+
+  /// "world" or "voxels"; anything else is an InputError.
+  static OutputUnits parse(const std::string& name, const LoadedSurface& surface);
+  const char* name() const { return voxels ? "voxels" : "world"; }
+  SurfelMesh mesh(const SurfelMesh& m) const;
+  Eigen::VectorXd lengths(const Eigen::VectorXd& v) const { return voxels ? Eigen::VectorXd(v / h) : v; }
+  Eigen::VectorXd curvatures(const Eigen::VectorXd& v) const { return voxels ? Eigen::VectorXd(v * h) : v; }
 };
 
 struct SurfaceSource {

@@ -75,7 +75,7 @@ const std::vector<BadCall>& catalogue() {
       {"--max-memory 64M digitize --shape sphere1 --h 0.004 --bbox -1.2 1.2 --offset 1 --out {D}/x.obj",
        "surface extraction of"},
       {"--max-memory 64M digitize --volume {D}/big.vol --threshold 0 --out {D}/x.obj",
-       "needs 1.0 GiB, more than the memory budget of 64.0 MiB"},
+       "voxels as a bit grid needs 136.5 MiB, more than the memory budget of 64.0 MiB"},
       // digitize: sources and parameters.
       {"digitize --out {D}/x.obj", "Exactly 1 option from [--shape,--polynomial,--volume,--mesh-file] is required"},
       {"digitize --shape sphere1 --volume {D}/trunc.vol --out {D}/x.obj", "2 were given"},

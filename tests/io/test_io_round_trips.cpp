@@ -410,3 +410,59 @@ TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 
   o.h = -1.0;
   CHECK_THROWS_AS(read_volume_as_voxels(vol, o), InputError);
 }
+
+TEST_CASE("read_volume_as_voxels streams every format into the same voxels as threshold_volume(read_volume)") {
+  // 70 x 3 x 4: rows longer than one 64-bit word, values on both sides of the threshold.
+  const Volume v = random_volume({70, 3, 4}, 11);
+  for (const char* ext : {"vol", "raw", "nrrd"})
+    for (bool compressed : {false, true}) {
+      if (compressed && (std::string(ext) != "vol" || !nrrd_gzip_supported())) continue;
+      CAPTURE(ext);
+      CAPTURE(compressed);
+      const std::string p = tmp_path(std::string("stream.") + ext);
+      VolumeWriteOptions w;
+      w.compressed = compressed;
+      write_volume(p, v, w);
+      VolumeReadOptions o;
+      o.raw_dimensions = v.size;
+      o.threshold = 127.5;
+      o.h = 0.5;
+      const VoxelGrid expected = threshold_volume(read_volume(p, o), o.threshold, o.h);
+      const VoxelGrid streamed = read_volume_as_voxels(p, o);
+      REQUIRE(streamed.lower() == expected.lower());
+      REQUIRE(streamed.upper() == expected.upper());
+      CHECK(streamed.h() == 0.5);
+      CHECK(streamed.count() == expected.count());
+      int differ = 0;
+      for (int z = -1; z <= v.size.z(); ++z)
+        for (int y = -1; y <= v.size.y(); ++y)
+          for (int x = -1; x <= v.size.x(); ++x) differ += streamed.get(x, y, z) != expected.get(x, y, z);
+      CHECK(differ == 0);
+      // Centred: file voxel (x, y, z) is the digital point (x, y, z) - (size - 1) / 2.
+      o.centered = true;
+      const VoxelGrid centred = read_volume_as_voxels(p, o);
+      const Eigen::Vector3i shift = volume_centering_shift(v.size);
+      CHECK(shift == Eigen::Vector3i(34, 1, 1));
+      CHECK(centred.lower() == expected.lower() - shift);
+      CHECK(centred.count() == expected.count());
+      differ = 0;
+      for (int z = 0; z < v.size.z(); ++z)
+        for (int y = 0; y < v.size.y(); ++y)
+          for (int x = 0; x < v.size.x(); ++x)
+            differ += centred.get(x - shift.x(), y - shift.y(), z - shift.z()) != expected.get(x, y, z);
+      CHECK(differ == 0);
+    }
+  // An NRRD in ascii encoding goes through the same sink.
+  const std::string ascii = tmp_path("stream_ascii.nrrd");
+  write_text(ascii, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 1 2\nencoding: ascii\n\n0 200\n255 3\n");
+  VolumeReadOptions o;
+  o.threshold = 100;
+  const VoxelGrid g = read_volume_as_voxels(ascii, o);
+  CHECK(g.count() == 2);
+  CHECK(g.get(1, 0, 0));
+  CHECK(g.get(0, 0, 1));
+  CHECK(g.h() == 1.0);
+  // Nothing above the threshold: named.
+  o.threshold = 255;
+  CHECK_THROWS_WITH_AS(read_volume_as_voxels(ascii, o), doctest::Contains("empty volume"), InputError);
+}

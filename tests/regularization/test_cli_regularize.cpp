@@ -58,6 +58,38 @@ TEST_CASE("regularize sphere1 (h = 0.1, fem, II normals): files, order kept, dis
   CHECK(m["energy_final"].get<double>() < m["energy_initial"].get<double>());
 }
 
+TEST_CASE("regularize --k1/--k2: principal-curvature edits reach the metrics, the shape follows") {
+  // The torus (R = 6, r = 2) has k2 = 1/r on its tube everywhere; k1 = cos / (R + r cos) changes sign.
+  const std::string plain = corrlap::test::tmp_path("regularize_k_plain"),
+                    edited = corrlap::test::tmp_path("regularize_k_edited");
+  std::string err;
+  const std::string base = "regularize --shape torus --h 0.25 --normals true --no-render --out ";
+  REQUIRE(run_cli(base + plain, nullptr, &err) == 0);
+  REQUIRE(run_cli(base + edited + " --k1 set:0 --k2 scale:1", nullptr, &err) == 0);
+  const auto a = nlohmann::json::parse(corrlap::test::read_text(plain + "/metrics.json"));
+  const auto b = nlohmann::json::parse(corrlap::test::read_text(edited + "/metrics.json"));
+  CHECK(a["k1_edit"] == "none");
+  CHECK(b["k1_edit"] == "set:0");
+  CHECK(b["k2_edit"] == "scale:1");
+  CHECK(b.contains("normal_angle_change_deg"));
+  CHECK(b["normal_attachment"] == 1.0);
+  corrlap::MeshAttributes pa, pb;
+  (void)corrlap::read_ply(plain + "/regularized.ply", &pa);
+  (void)corrlap::read_ply(edited + "/regularized.ply", &pb);
+  // H' = (0 + k2) / 2 = 1 / (2 r) = 0.25 all over the tube, where the plain H = (k1 + k2) / 2 runs
+  // from 0.125 (inside, k1 = -1/4) to 0.3125 (outside, k1 = 1/8): the edit removes that spread.
+  const Eigen::VectorXd &Ha = pa.vertex_scalars.at("H"), &Hb = pb.vertex_scalars.at("H");
+  const auto spread = [](const Eigen::VectorXd& v) { return std::sqrt((v.array() - v.mean()).square().mean()); };
+  MESSAGE("H: plain mean " << Ha.mean() << " spread " << spread(Ha) << "; k1 set to 0: mean " << Hb.mean() << " spread "
+                           << spread(Hb));
+  CHECK(Hb.mean() == doctest::Approx(0.25).epsilon(0.1));
+  CHECK(spread(Hb) < 0.5 * spread(Ha));
+  CHECK(run_cli(base + edited + " --k1 double:2", nullptr, &err) == 1);
+  CHECK(err.find("expected scale:S, set:V or clamp:V") != std::string::npos);
+  CHECK(run_cli(base + edited + " --k2 clamp:1 --baseline alignment", nullptr, &err) == 1);
+  CHECK(err.find("--k2 applies to the paper's regularization") != std::string::npos);
+}
+
 TEST_CASE("regularize: bad options and surfaces are named") {
   std::string err;
   const std::string dir = corrlap::test::tmp_path("regularize_bad");

@@ -1,0 +1,175 @@
+// corrlap reconstruct: the paper's reconstruction from a normal map (§4.2, Fig. 16). A fine
+// triangle mesh is the normal map of a coarse voxelization of itself: the surfels are subdivided,
+// the fine normals sampled at the subdivided surface by closest-point projection, the mean
+// curvature estimated from them (clamped), and the geometry regularized (docs/regularization.md).
+#include <chrono>
+#include <corrlap/backends/registry.hpp>
+#include <corrlap/core/error.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/regularization/normal_map_reconstruction.hpp>
+#include <corrlap/regularization/regularize_surface.hpp>
+#include <corrlap/render/image.hpp>
+#include <corrlap/render/render_mesh.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/mesh_voxelization.hpp>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "command.hpp"
+#include "validators.hpp"
+
+namespace corrlap::cli {
+namespace {
+
+struct ReconstructArgs {
+  std::string mesh_file, out, solver;
+  int resolution = 64, subdivide = 3;
+  std::string methods = "fem,polydec";
+  std::optional<double> curvature_radius, h_clamp;
+  double alpha0 = 10.0;
+  bool no_render = false;
+};
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) items.push_back(item);
+  return items;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point& t0) {
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - t0).count();
+  t0 = now;
+  return s;
+}
+
+void run(const ReconstructArgs& a) {
+  const std::vector<std::string> methods = split_list(a.methods);
+  if (methods.empty()) throw InputError("reconstruct: no method (--methods)");
+  for (const std::string& m : methods) (void)make_discretization(m);  // a bad name fails first
+  Config solver_config;
+  if (!a.solver.empty()) solver_config.set("solver", a.solver);
+  (void)make_linear_solver(solver_config, kDefaultLinearSolver);
+
+  nlohmann::json stages, m;
+  auto t = std::chrono::steady_clock::now();
+  const PolygonMesh fine = read_mesh(a.mesh_file);
+  const TriangleIndices triangles = triangulate(fine);
+  const TriangleLocator locator(fine.positions, triangles);
+  const Eigen::MatrixX3d fine_normals = triangle_mesh_vertex_normals(fine.positions, triangles);
+  // The coarse voxelization, its surfels subdivided 2^n times along each side.
+  MeshVoxelizationParams params;
+  params.resolution = a.resolution;
+  MeshVoxelizationReport report;
+  const VoxelGrid grid = voxelize_mesh(fine, params, &report);
+  for (const std::string& w : report.warnings()) std::cerr << "warning: " << a.mesh_file << ": " << w << "\n";
+  const SurfelMesh coarse = extract_surface(grid);
+  if (coarse.num_faces() == 0) throw InputError("reconstruct: the voxelization of '" + a.mesh_file + "' is empty");
+  const SurfelMesh mesh = subdivide_quads(coarse, a.subdivide);
+  stages["voxelize_s"] = seconds_since(t);
+  // The normal map at the subdivided surface: the fine mesh's normals at the closest points.
+  const NormalFields normals = sample_normal_map(mesh, locator, fine_normals);
+  stages["normal_map_s"] = seconds_since(t);
+  const double size = regularization_size(mesh);
+  std::cerr << "reconstruct: " << a.mesh_file << " (" << fine.positions.rows() << " vertices), voxelized at "
+            << a.resolution << " (h = " << report.h << ", " << coarse.num_faces() << " surfels), subdivided "
+            << a.subdivide << " times: " << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces\n";
+
+  RegularizationOptions o;
+  o.size = size;
+  // Paper Fig. 16: curvature radius 0.2 and |H| <= 10 for a unit-sized model.
+  o.curvature_radius = a.curvature_radius ? *a.curvature_radius : 0.2 * size;
+  o.h_clamp = a.h_clamp ? *a.h_clamp : 10.0 / size;
+  o.alpha0 = a.alpha0;
+  // The positions are wrong by up to a coarse voxel, not a subdivided one: alpha from the coarse h.
+  o.alpha_step = report.h;
+  o.solver = solver_config;
+  std::filesystem::create_directories(a.out);
+  const DistanceToMesh before = distance_to_mesh(mesh, locator);
+  MeshAttributes input_attr;
+  input_attr.vertex_normals = normals.vertex;
+  write_mesh(a.out + "/input.ply", mesh, input_attr);
+  m["mesh_file"] = a.mesh_file;
+  m["fine_vertices"] = fine.positions.rows();
+  m["resolution"] = a.resolution;
+  m["h"] = report.h;
+  m["subdivide"] = a.subdivide;
+  m["vertices"] = mesh.num_vertices();
+  m["faces"] = mesh.num_faces();
+  m["size"] = size;
+  m["curvature_radius"] = *o.curvature_radius;
+  m["h_clamp"] = *o.h_clamp;
+  m["alpha0"] = a.alpha0;
+  m["distance_mean_before"] = before.mean;
+  m["distance_max_before"] = before.max;
+  RenderOptions view;
+  if (!a.no_render) {
+    write_png(a.out + "/fine.png", render_mesh(fine, nullptr, view));
+    write_png(a.out + "/before.png", render_mesh(to_polygon_mesh(mesh), nullptr, view));
+  }
+  for (const std::string& method : methods) {
+    o.method = method;
+    t = std::chrono::steady_clock::now();
+    const RegularizedSurface r = regularize_surface(mesh, normals, o);
+    for (const auto& w : r.warnings) std::cerr << "warning: " << method << ": " << w << "\n";
+    const double seconds = seconds_since(t);
+    const DistanceToMesh after = distance_to_mesh(r.mesh, locator);
+    MeshAttributes attr;
+    attr.vertex_scalars = {{"H", r.H}};
+    write_mesh(a.out + "/reconstructed_" + method + ".ply", r.mesh, attr);
+    if (!a.no_render)
+      write_png(a.out + "/after_" + method + ".png", render_mesh(to_polygon_mesh(r.mesh), nullptr, view));
+    nlohmann::json entry;
+    entry["distance_mean_after"] = after.mean;
+    entry["distance_max_after"] = after.max;
+    entry["time_s"] = seconds;
+    entry["alpha"] = r.alpha;
+    m["methods"][method] = entry;
+    std::cerr << "  " << method << ": mean distance to the fine mesh " << before.mean << " -> " << after.mean
+              << " (max " << before.max << " -> " << after.max << "), " << seconds << " s\n";
+  }
+  m["time_s"] = stages;
+  std::ofstream(a.out + "/metrics.json") << m.dump(2) << "\n";
+  std::cerr << "  wrote " << a.out << "/input.ply, reconstructed_<method>.ply, metrics.json"
+            << (a.no_render ? "" : ", fine.png, before.png, after_<method>.png") << "\n";
+}
+
+RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
+  auto args = std::make_shared<ReconstructArgs>();
+  auto* cmd = app.add_subcommand(
+      "reconstruct",
+      "recover a surface from a normal map (paper §4.2): voxelize a fine mesh coarsely, subdivide the surfels, sample "
+      "the fine normals, regularize (docs/regularization.md)");
+  cmd->add_option("--mesh-file", args->mesh_file, "the fine triangle mesh, which gives the normal map")->required();
+  cmd->add_option("--resolution", args->resolution, "voxels along the mesh's longest side")
+      ->check(CLI::Range(4, 1024))
+      ->capture_default_str();
+  cmd->add_option("--subdivide", args->subdivide, "subdivide each surfel into 2^n x 2^n quads")
+      ->check(CLI::Range(0, 6))
+      ->capture_default_str();
+  cmd->add_option("--methods", args->methods,
+                  "vertex discretizations to compare (a corrected one and polydec, the uncorrected one)")
+      ->capture_default_str();
+  cmd->add_option("--curvature-radius", args->curvature_radius,
+                  "ball radius of the mean curvature (default 0.2 s, s = half the longest side, paper Fig. 16)")
+      ->check(positive_number());
+  cmd->add_option("--h-clamp", args->h_clamp, "clamp H to [-MAX, MAX] (default 10 / s, paper Fig. 16)")
+      ->check(positive_number());
+  cmd->add_option("--alpha0", args->alpha0, "attachment weight alpha = alpha0 / (h s)^2, h the coarse voxel")
+      ->check(positive_number())
+      ->capture_default_str();
+  cmd->add_option("--solver", args->solver,
+                  std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
+  cmd->add_flag("--no-render", args->no_render, "do not draw the pictures");
+  cmd->add_option("--out", args->out, "output directory")->required();
+  cmd->callback([args] { run(*args); });
+});
+
+}  // namespace
+}  // namespace corrlap::cli

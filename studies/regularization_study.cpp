@@ -1,0 +1,182 @@
+#include "regularization_study.hpp"
+
+#include <chrono>
+#include <corrlap/core/error.hpp>
+#include <corrlap/discretizations/registry.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/regularization/alignment_regularization.hpp>
+#include <corrlap/regularization/regularize_surface.hpp>
+#include <corrlap/regularization/surface_quality.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <sstream>
+
+#include "detail/csv.hpp"
+
+namespace corrlap {
+
+namespace {
+
+constexpr const char* kHeader =
+    "study,shape,method,normals,h,resolution,vertices,faces,distance_before,distance_after,angle_before,angle_after,"
+    "curvature_error_before,curvature_error_after,area_before,area_after,time_s";
+
+DigitizationParams box(const RegularizationStudyOptions& o, double h) {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = o.min_aabb;
+  p.max_aabb = o.max_aabb;
+  p.offset = o.offset;
+  return p;
+}
+
+// The longest side of the shape's digitization at a coarse step (1/96 of the box): the scale that
+// `resolutions` divide. Within two coarse voxels of the true extent.
+double longest_side(const ImplicitShape& shape, const RegularizationStudyOptions& o, const std::string& name) {
+  const VoxelGrid grid = digitize(shape, box(o, (o.max_aabb - o.min_aabb) / 96.0));
+  if (grid.count() == 0)
+    throw InputError("study regularization: shape '" + name + "' has no voxel inside the box [" +
+                     std::to_string(o.min_aabb) + ", " + std::to_string(o.max_aabb) + "]^3 (give --bbox)");
+  const SurfelMesh coarse = extract_surface(grid);
+  return (coarse.positions.colwise().maxCoeff() - coarse.positions.colwise().minCoeff()).maxCoeff();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void RegularizationStudyOptions::validate() const {
+  if (shapes.empty()) throw InputError("study regularization: no shape (--shapes)");
+  for (const std::string& s : shapes) (void)make_implicit_shape(s);  // InputError listing the names
+  if (methods.empty()) throw InputError("study regularization: no method (--methods)");
+  for (const std::string& m : methods)
+    if (m != "alignment") (void)make_discretization(m);  // InputError listing the registry
+  if (h.empty() && resolutions.empty()) throw InputError("study regularization: no resolution and no h");
+  for (int n : resolutions)
+    if (h.empty() && (n < 8 || n > 2048))
+      throw InputError("study regularization: resolution " + std::to_string(n) + " is outside [8, 2048]");
+  for (double x : h)
+    if (!(x > 0.0) || !std::isfinite(x)) throw InputError("study regularization: h must be positive");
+  if (normals != "ii" && normals != "true")
+    throw InputError("study regularization: normals '" + normals + "': expected ii or true");
+  if (!(alpha0 > 0.0)) throw InputError("study regularization: alpha0 must be positive");
+  if (!(max_aabb > min_aabb)) throw InputError("study regularization: the box must have max > min");
+}
+
+void run_regularization_study(const RegularizationStudyOptions& o,
+                              const std::function<void(const RegularizationStudyRow&)>& row,
+                              const std::function<void(const RegularizationStudyProgress&)>& progress) {
+  o.validate();
+  RegularizationStudyProgress p;
+  p.total = int(o.shapes.size() * (o.h.empty() ? o.resolutions.size() : o.h.size()) * o.methods.size());
+  for (const std::string& name : o.shapes) {
+    const ImplicitShape shape = make_implicit_shape(name);
+    std::vector<std::pair<double, int>> steps;  // (h, resolution)
+    if (!o.h.empty()) {
+      for (double h : o.h) steps.emplace_back(h, 0);
+    } else {
+      const double side = longest_side(shape, o, name);
+      for (int n : o.resolutions) steps.emplace_back(side / n, n);
+    }
+    for (const auto& [h, resolution] : steps) {
+      const VoxelGrid grid = digitize(shape, box(o, h));
+      if (grid.count() == 0)
+        throw InputError("study regularization: shape '" + name + "' has no voxel at h = " + std::to_string(h));
+      const SurfelMesh mesh = extract_surface(grid);
+      NormalRequest request;
+      request.source = o.normals == "ii" ? NormalSource::II : NormalSource::True;
+      const NormalFields normals = resolve_normals(mesh, NormalKind::Vertex, request, &shape, &grid, "study");
+      // The quality of both surfaces with the curvature radius of the regularization (0.1 size).
+      const double radius = 0.1 * regularization_size(mesh);
+      const SurfaceQuality before = measure_against_shape(mesh, shape, radius);
+      const double area_before = surface_area(mesh);
+      for (const std::string& method : o.methods) {
+        const auto t0 = std::chrono::steady_clock::now();
+        SurfelMesh result = mesh;
+        try {
+          if (method == "alignment") {
+            result.positions = alignment_regularization(mesh, normals.face).positions;
+          } else {
+            RegularizationOptions options;
+            options.method = method;
+            options.alpha0 = o.alpha0;
+            options.solver.set("solver", o.linear_solver);
+            result = regularize_surface(mesh, normals, options).mesh;
+          }
+        } catch (const Error& e) {
+          std::ostringstream os;
+          os << "study regularization: " << name << " at h = " << h << ", " << method << ": " << e.what();
+          if (dynamic_cast<const InputError*>(&e)) throw InputError(os.str());
+          throw NumericalError(os.str());
+        }
+        RegularizationStudyRow r;
+        r.time_s = seconds_since(t0);
+        r.shape = name;
+        r.method = method;
+        r.normals = o.normals;
+        r.h = h;
+        r.resolution = resolution;
+        r.vertices = mesh.num_vertices();
+        r.faces = mesh.num_faces();
+        const SurfaceQuality after = measure_against_shape(result, shape, radius);
+        r.distance_before = before.distance_l1;
+        r.distance_after = after.distance_l1;
+        r.angle_before = before.normal_angle_deg;
+        r.angle_after = after.normal_angle_deg;
+        r.curvature_error_before = before.mean_curvature_error;
+        r.curvature_error_after = after.mean_curvature_error;
+        r.area_before = area_before;
+        r.area_after = surface_area(result);
+        if (row) row(r);
+        ++p.done;
+        p.shape = name;
+        p.method = method;
+        p.h = h;
+        if (progress) progress(p);
+      }
+    }
+  }
+}
+
+void write_regularization_csv(const std::string& path, const std::vector<RegularizationStudyRow>& rows) {
+  std::FILE* f = detail::open_csv(path, false, kHeader);
+  using detail::number;
+  for (const RegularizationStudyRow& r : rows)
+    std::fprintf(f, "regularization,%s,%s,%s,%s,%d,%lld,%lld,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", r.shape.c_str(),
+                 r.method.c_str(), r.normals.c_str(), number(r.h).c_str(), r.resolution, r.vertices, r.faces,
+                 number(r.distance_before).c_str(), number(r.distance_after).c_str(), number(r.angle_before).c_str(),
+                 number(r.angle_after).c_str(), number(r.curvature_error_before).c_str(),
+                 number(r.curvature_error_after).c_str(), number(r.area_before).c_str(), number(r.area_after).c_str(),
+                 number(r.time_s).c_str());
+  detail::close_csv(f, path);
+}
+
+std::vector<RegularizationStudyRow> read_regularization_csv(const std::string& path) {
+  const detail::CsvReader csv(path, kHeader);
+  std::vector<RegularizationStudyRow> out;
+  for (const auto& row : csv.rows()) {
+    RegularizationStudyRow r;
+    r.shape = row.fields[1];
+    r.method = row.fields[2];
+    r.normals = row.fields[3];
+    r.h = csv.number(row, 4);
+    r.resolution = int(csv.number(row, 5));
+    r.vertices = (long long)csv.number(row, 6);
+    r.faces = (long long)csv.number(row, 7);
+    r.distance_before = csv.number(row, 8);
+    r.distance_after = csv.number(row, 9);
+    r.angle_before = csv.number(row, 10);
+    r.angle_after = csv.number(row, 11);
+    r.curvature_error_before = csv.number(row, 12);
+    r.curvature_error_after = csv.number(row, 13);
+    r.area_before = csv.number(row, 14);
+    r.area_after = csv.number(row, 15);
+    r.time_s = csv.number(row, 16);
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace corrlap

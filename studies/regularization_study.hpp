@@ -1,0 +1,61 @@
+#pragma once
+// The regularization study (paper §4.1, Fig. 15; docs/regularization.md): implicit shapes digitized
+// at several resolutions, regularized by each method (a corrected calculus, the uncorrected PolyDEC,
+// or the baseline [17]), and the result measured against the true surface.
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace corrlap {
+
+struct RegularizationStudyOptions {
+  std::vector<std::string> shapes = {"sphere1", "torus", "goursat"};  ///< implicit shapes (make_implicit_shape)
+  /// Voxels along each shape's longest side: h = (its longest side) / N, so that every shape is
+  /// resolved alike whatever its size. Ignored when `h` is given.
+  std::vector<int> resolutions = {32, 64, 128};
+  std::vector<double> h;  ///< grid steps used for every shape instead (world units)
+  /// Vertex discretizations of the registry (docs/math.md §9.2), or "alignment": the paper's
+  /// baseline [17] (docs/math.md §9.1, the reference's descent with its defaults).
+  std::vector<std::string> methods = {"fem", "polydec", "alignment"};
+  std::string normals = "ii";  ///< "ii" (the paper's, alpha = 1/3) or "true"; the baseline gets the face normals
+  double alpha0 = 10.0;        ///< as RegularizationOptions
+  double min_aabb = -10.0, max_aabb = 10.0;  ///< digitization box of every shape
+  int offset = 5;
+  std::string linear_solver = "cholmod";
+
+  /// InputError naming the first invalid option (unknown shape or method, no resolution...).
+  void validate() const;
+};
+
+/// One (shape, h, method): the quality of the staircase and of the regularized surface
+/// (measure_against_shape, regularization/surface_quality.hpp).
+struct RegularizationStudyRow {
+  std::string shape, method, normals;
+  double h = 0;
+  int resolution = 0;  ///< N when the study runs by resolutions, else 0
+  long long vertices = 0, faces = 0;
+  double distance_before = 0, distance_after = 0;  ///< mean vertex distance to the true surface
+  double angle_before = 0, angle_after = 0;        ///< mean vertex normal angle to the true normals, degrees
+  double curvature_error_before = 0, curvature_error_after = 0;  ///< mean |H - H_true|
+  double area_before = 0, area_after = 0;
+  double time_s = 0;  ///< the method's regularization (normals and digitization excluded)
+};
+
+struct RegularizationStudyProgress {
+  int done = 0, total = 0;
+  std::string shape, method;
+  double h = 0;
+};
+
+/// Runs the study: per (shape, h) the digitization, the normals and the quality of the staircase
+/// once; then every method. Rows reach `row` as they are made. Throws InputError for bad options,
+/// the method's errors naming the shape, h and method.
+void run_regularization_study(const RegularizationStudyOptions& options,
+                              const std::function<void(const RegularizationStudyRow&)>& row,
+                              const std::function<void(const RegularizationStudyProgress&)>& progress = {});
+
+/// The study's CSV (one row per (shape, h, method), 17 significant digits), and reading it back.
+void write_regularization_csv(const std::string& path, const std::vector<RegularizationStudyRow>& rows);
+std::vector<RegularizationStudyRow> read_regularization_csv(const std::string& path);
+
+}  // namespace corrlap
