@@ -11,6 +11,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/discretizations/assembly/detail/storage.hpp>
+#include <corrlap/discretizations/detail/heat_kernel_inputs.hpp>
 #include <corrlap/discretizations/detail/normal_policy.hpp>
 #include <new>
 #include <numbers>
@@ -157,13 +158,6 @@ void neighbours(const Eigen::MatrixX3d& x, const CellGrid& grid, Eigen::Index i,
   }
 }
 
-void check_inputs(const Eigen::MatrixX3d& points, double t, double cutoff) {
-  if (points.rows() == 0) throw InputError("heat kernel: no point");
-  if (!points.allFinite()) throw InputError("heat kernel: non-finite point position");
-  if (!(t > 0.0) || !std::isfinite(t)) throw InputError("heat kernel: t must be a positive number");
-  if (!(cutoff > 0.0) || !std::isfinite(cutoff)) throw InputError("heat kernel: cutoff must be a positive number");
-}
-
 // Entries of point i's neighbourhood s.a[0, s.n) that column i stores: all of them, or (Upper)
 // only rows below i.
 std::size_t stored_neighbours(const Scratch& s, Eigen::Index i, HeatKernelStorage storage) {
@@ -176,7 +170,7 @@ std::size_t stored_neighbours(const Scratch& s, Eigen::Index i, HeatKernelStorag
 }  // namespace
 
 std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, double cutoff, HeatKernelStorage storage) {
-  check_inputs(points, t, cutoff);
+  detail::check_heat_kernel_inputs(points, t, cutoff);
   const double R = cutoff * std::sqrt(2.0 * t);
   const CellGrid grid(points, R / kCellsPerRadius);
   tbb::enumerable_thread_specific<Scratch> scratch;
@@ -196,19 +190,12 @@ std::int64_t heat_kernel_nonzeros(const Eigen::MatrixX3d& points, double t, doub
 Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
                                                double cutoff, HeatKernelForm form, HeatKernelStorage storage,
                                                const Eigen::MatrixX3d* tangent_normals) {
-  check_inputs(points, t, cutoff);
+  detail::check_heat_kernel_inputs(points, t, cutoff);
   if (tangent_normals != nullptr) check_normals(*tangent_normals, points.rows(), "heat kernel: tangent normals");
   if (storage == HeatKernelStorage::Upper && form != HeatKernelForm::Symmetric)
     throw InputError("heat kernel: upper-triangle storage needs the symmetric form");
   const Eigen::Index n = points.rows();
-  if (mu.size() != n)
-    throw InputError("heat kernel: " + std::to_string(mu.size()) + " measures for " + std::to_string(n) + " points");
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (!std::isfinite(mu[i]) || !(mu[i] > 0.0)) {
-      std::ostringstream os;
-      os << "heat kernel: measure of point " << i << " is " << mu[i] << " (must be positive)";
-      throw InputError(os.str());
-    }
+  detail::check_heat_kernel_measures(mu, n);
   if (n > INT_MAX) throw InputError("heat kernel: too many points");
   const double R = cutoff * std::sqrt(2.0 * t);
   const double R2 = R * R, inv4t = 1.0 / (4.0 * t);

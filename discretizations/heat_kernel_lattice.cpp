@@ -10,6 +10,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/assembly/detail/huge_pages.hpp>
+#include <corrlap/discretizations/detail/heat_kernel_inputs.hpp>
 #include <new>
 #include <numbers>
 #include <sstream>
@@ -186,19 +187,9 @@ std::optional<LatticeHeatKernel> LatticeHeatKernel::build(const Eigen::MatrixX3d
                                                           double t, double cutoff, double step,
                                                           LatticeHeatKernel* recycle) {
   const Eigen::Index n = points.rows();
-  if (n == 0) throw InputError("heat kernel: no point");
-  if (!points.allFinite()) throw InputError("heat kernel: non-finite point position");
-  if (!(t > 0.0) || !std::isfinite(t)) throw InputError("heat kernel: t must be a positive number");
-  if (!(cutoff > 0.0) || !std::isfinite(cutoff)) throw InputError("heat kernel: cutoff must be a positive number");
+  detail::check_heat_kernel_inputs(points, t, cutoff);  // the readable one's errors
   if (!(step > 0.0) || !std::isfinite(step)) throw InputError("heat kernel: lattice step must be a positive number");
-  if (mu.size() != n)
-    throw InputError("heat kernel: " + std::to_string(mu.size()) + " measures for " + std::to_string(n) + " points");
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (!std::isfinite(mu[i]) || !(mu[i] > 0.0)) {
-      std::ostringstream os;
-      os << "heat kernel: measure of point " << i << " is " << mu[i] << " (must be positive)";
-      throw InputError(os.str());
-    }
+  detail::check_heat_kernel_measures(mu, n);
   if (n > INT_MAX) return std::nullopt;
 
   // Coupled pairs: m step^2 < R^2 (heat_kernel.cpp's |x_r - x_s|^2 < R^2 on lattice distances).

@@ -34,14 +34,6 @@ struct ReconstructArgs {
   bool no_render = false;
 };
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream ss(text);
-  for (std::string item; std::getline(ss, item, ',');)
-    if (!item.empty()) items.push_back(item);
-  return items;
-}
-
 double seconds_since(std::chrono::steady_clock::time_point& t0) {
   const auto now = std::chrono::steady_clock::now();
   const double s = std::chrono::duration<double>(now - t0).count();

@@ -46,14 +46,6 @@ struct StudyArgs {
   CLI::Option *h_option = nullptr, *resolutions_option = nullptr;
 };
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream ss(text);
-  for (std::string item; std::getline(ss, item, ',');)
-    if (!item.empty()) items.push_back(item);
-  return items;
-}
-
 // The options a resumed study must share with the one in DIR (methods, h and functions may grow).
 nlohmann::json fixed_options(const StudyOptions& o) {
   nlohmann::json j;

@@ -3,7 +3,9 @@
 // their range bound, the largest double, as a 309-digit number.
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace corrlap::cli {
 
@@ -34,6 +36,15 @@ inline CLI::Validator positive_number() {
 /// A finite number >= 0.
 inline CLI::Validator non_negative_number() {
   return detail::number_check("a number >= 0", [](double v) { return v >= 0.0; });
+}
+
+/// "a,b,,c" -> {"a", "b", "c"}: the comma lists of --methods, --shapes, --functions.
+inline std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) items.push_back(item);
+  return items;
 }
 
 }  // namespace corrlap::cli

@@ -6,29 +6,14 @@
 #include <corrlap/corrlap.hpp>
 #include <numbers>
 
+#include "regularization/sphere_fixture.hpp"
+
 using namespace corrlap;
 
 namespace {
 
-struct Sphere {
-  SurfelMesh mesh;
-  NormalFields normals;
-};
-
-// sphere1 at h = 0.1 with exact normals (~3.8k vertices).
-const Sphere& sphere() {
-  static const Sphere s = [] {
-    const ImplicitShape shape = make_implicit_shape("sphere1");
-    Sphere r;
-    r.mesh = extract_surface(digitize(shape, {.h = 0.1, .min_aabb = -1.5, .max_aabb = 1.5}));
-    NormalRequest request;
-    request.source = NormalSource::True;
-    r.normals = resolve_normals(r.mesh, NormalKind::Vertex, request, &shape);
-    r.normals.vertex = exact_vertex_normals(shape, r.mesh);
-    return r;
-  }();
-  return s;
-}
+using Sphere = test::RegularizationSphere;
+const Sphere& sphere() { return test::regularization_sphere(); }
 
 double mean_angle_deg(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
   double sum = 0;

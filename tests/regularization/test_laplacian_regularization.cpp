@@ -4,6 +4,8 @@
 
 #include <corrlap/corrlap.hpp>
 
+#include "regularization/sphere_fixture.hpp"
+
 using namespace corrlap;
 using SpMat = Eigen::SparseMatrix<double>;
 
@@ -15,16 +17,13 @@ struct Sphere {
   Operators ops;
 };
 
-// sphere1 at h = 0.1 with true normals and the corrected FEM (~3.8k vertices).
+// sphere1 at h = 0.1 with true normals (sphere_fixture.hpp) and the corrected FEM.
 const Sphere& sphere() {
   static const Sphere s = [] {
-    const ImplicitShape shape = make_implicit_shape("sphere1");
+    const test::RegularizationSphere& base = test::regularization_sphere();
     Sphere r;
-    r.mesh = extract_surface(digitize(shape, {.h = 0.1, .min_aabb = -1.5, .max_aabb = 1.5}));
-    NormalRequest request;
-    request.source = NormalSource::True;
-    r.normals = resolve_normals(r.mesh, NormalKind::Vertex, request, &shape);
-    r.normals.vertex = exact_vertex_normals(shape, r.mesh);
+    r.mesh = base.mesh;
+    r.normals = base.normals;
     r.ops = make_discretization("fem")->assemble(r.mesh, r.normals, Config());
     return r;
   }();
