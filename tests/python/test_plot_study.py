@@ -183,9 +183,30 @@ def test_garbage_number_is_exit_1(tmp_path, capsys):
 
 def test_empty_directory_is_exit_1(tmp_path, capsys):
     assert plot_study.main([str(tmp_path)]) == 1
-    assert f"plot_study: no summary.csv or eigen.csv in {tmp_path}" in capsys.readouterr().err
+    assert f"plot_study: no summary.csv, eigen.csv or regularization.csv in {tmp_path}" in capsys.readouterr().err
     assert plot_study.main([str(tmp_path / "absent")]) == 1
     assert "not a directory" in capsys.readouterr().err
+
+
+REGULARIZATION_HEADER = ("study,shape,method,normals,h,resolution,vertices,faces,distance_before,distance_after,"
+                         "angle_before,angle_after,curvature_error_before,curvature_error_after,area_before,"
+                         "area_after,time_s")
+
+
+def test_regularization_study_figures(tmp_path):
+    """One distance and one curvature figure per shape (paper Fig. 15); a zero error is left out."""
+    rows = []
+    for shape in ("sphere1", "torus"):
+        for h in STEPS:
+            for method, c in (("fem", 0.1), ("polydec", 0.2), ("alignment", 0.0)):
+                rows.append(("regularization", shape, method, "ii", h, 0, 100, 100, h / 4, c * h ** 1.5,
+                             17.0, 1.0, 0.5, c * h, 18.0, 12.6, 0.1))
+    write(tmp_path / "regularization.csv", REGULARIZATION_HEADER, rows)
+    paths = plot_study.plot_study(str(tmp_path), formats=("png",))
+    names = sorted(os.path.basename(p) for p in paths)
+    assert names == ["regularization_sphere1_curvature.png", "regularization_sphere1_distance.png",
+                     "regularization_torus_curvature.png", "regularization_torus_distance.png"]
+    assert all(os.path.getsize(p) > 1000 for p in paths)
 
 
 def test_header_only_is_exit_1(tmp_path, capsys):
