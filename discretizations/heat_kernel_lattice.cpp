@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <climits>
 #include <cmath>
 #include <corrlap/core/error.hpp>
@@ -227,7 +228,7 @@ std::optional<LatticeHeatKernel> LatticeHeatKernel::build(const Eigen::MatrixX3d
     std::vector<std::uint16_t> kernel;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
-  bool out_of_memory = false;
+  std::atomic<bool> out_of_memory{false};  // set from worker threads
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, num_blocks, 1), [&](const auto& range) {
     Scratch& s = scratch.local();
     for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
@@ -257,8 +258,6 @@ std::optional<LatticeHeatKernel> LatticeHeatKernel::build(const Eigen::MatrixX3d
     }
   });
   if (out_of_memory) {
-    std::int64_t estimate = 0;
-    for (const Block& b : L.blocks_) estimate += std::int64_t(b.column.size());
     std::ostringstream os;
     os << "heat kernel: the compact lattice kernel on " << n << " points does not fit in memory (cut-off radius " << R
        << ", " << max_m + 1 << " kernel values)";

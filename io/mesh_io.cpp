@@ -6,8 +6,7 @@
 
 namespace corrlap {
 
-namespace {
-std::string extension(const std::string& path) {
+std::string file_extension(const std::string& path) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && slash > dot)) return "";
@@ -15,10 +14,9 @@ std::string extension(const std::string& path) {
   std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   return e;
 }
-}  // namespace
 
 PolygonMesh read_mesh(const std::string& path, MeshAttributes* attributes) {
-  const std::string ext = extension(path);
+  const std::string ext = file_extension(path);
   if (ext == "ply") return read_ply(path, attributes);
   if (attributes) *attributes = MeshAttributes{};  // OBJ and OFF carry no attributes here
   if (ext == "obj") return read_obj(path);
@@ -27,7 +25,7 @@ PolygonMesh read_mesh(const std::string& path, MeshAttributes* attributes) {
 }
 
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshAttributes& attributes) {
-  const std::string ext = extension(path);
+  const std::string ext = file_extension(path);
   if (ext == "obj") return write_obj(path, mesh);  // OBJ has no place for attributes
   if (ext == "ply") return write_ply(path, mesh, attributes);
   throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' for writing (supported: .obj, .ply)");

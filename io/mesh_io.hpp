@@ -18,6 +18,10 @@ struct MeshAttributes {
   Eigen::MatrixX3d vertex_normals, face_normals;  // empty = absent
 };
 
+/// The extension of a file name, lower case, without the dot ("" when there is none): how the
+/// readers and writers pick a format.
+std::string file_extension(const std::string& path);
+
 /// Reads OBJ (v / f lines; "f a/b/c" forms, negative indices), PLY or OFF by extension (any case).
 /// `attributes`, when given, receives a PLY file's normals and scalars (see read_ply) and is emptied
 /// for the other formats. Throws IoError naming the file, the line (or element) and the problem.

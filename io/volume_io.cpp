@@ -7,6 +7,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
 #include <corrlap/io/detail/output_file.hpp>
+#include <corrlap/io/mesh_io.hpp>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -30,15 +31,6 @@ constexpr std::uint64_t kMaxVoxels = std::uint64_t{1} << 34;
 // Deflate cannot expand one compressed byte into more than 1032 bytes (a 258-byte match costs at
 // least two bits); the constant covers the gzip header and a final partial block.
 constexpr std::uint64_t kMaxDeflateRatio = 1032;
-
-std::string extension_of(const std::string& path) {
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && slash > dot)) return "";
-  std::string e = path.substr(dot + 1);
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e;
-}
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
   throw IoError("volume file '" + path + "': " + what);
@@ -439,11 +431,12 @@ class VolumeSink final : public VoxelSink {
 };
 
 // The values thresholded into a voxel grid as they arrive, one (y, z) row of 64-bit words at a
-// time (read_volume_as_voxels): the bytes are never held. The box is [0, size - 1] - shift padded by
-// one empty voxel on every side.
+// time (read_volume_as_voxels, threshold_volume): the bytes are never held. The box is
+// [0, size - 1] - shift padded by one empty voxel on every side; h (0: unit_size_grid_step) and the
+// shift (volume_centering_shift when centred) follow from the sizes, known at begin().
 class ThresholdSink final : public VoxelSink {
  public:
-  ThresholdSink(double threshold, double h, const Eigen::Vector3i& shift) : h_(h), shift_(shift) {
+  ThresholdSink(double threshold, double h, bool centered) : h_(h), centered_(centered) {
     for (int v = 0; v < 256; ++v) inside_[std::size_t(v)] = double(v) > threshold;
   }
   void check(const std::string& path, const Eigen::Vector3i& size) const override {
@@ -453,7 +446,9 @@ class ThresholdSink final : public VoxelSink {
   }
   void begin(const std::string&, const Eigen::Vector3i& size) override {
     size_ = size;
-    grid = VoxelGrid(Eigen::Vector3i::Constant(-1) - shift_, size - shift_, h_);  // checks the budget
+    shift_ = centered_ ? volume_centering_shift(size) : Eigen::Vector3i::Zero();
+    const double h = h_ == 0.0 ? unit_size_grid_step(size) : h_;
+    grid = VoxelGrid(Eigen::Vector3i::Constant(-1) - shift_, size - shift_, h);  // checks the budget
   }
   void consume(const std::uint8_t* values, std::size_t n) override {
     while (n > 0) {
@@ -483,13 +478,14 @@ class ThresholdSink final : public VoxelSink {
 
  private:
   double h_;
-  Eigen::Vector3i shift_, size_ = Eigen::Vector3i::Zero();
+  bool centered_;
+  Eigen::Vector3i shift_ = Eigen::Vector3i::Zero(), size_ = Eigen::Vector3i::Zero();
   int x_ = 0, y_ = 0, z_ = 0;
   std::array<bool, 256> inside_{};
 };
 
 void read_into(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink) {
-  const std::string ext = extension_of(path);
+  const std::string ext = file_extension(path);
   if (ext == "vol") return read_vol(path, sink);
   if (ext == "raw") return read_raw(path, options, sink);
   if (ext == "nrrd") return read_nrrd(path, sink);
@@ -522,7 +518,7 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
 }
 
 void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options) {
-  const std::string ext = extension_of(path);
+  const std::string ext = file_extension(path);
   const auto n = voxel_count(volume.size);
   if (!n || volume.values.size() != *n)
     fail(path, "volume data (" + io_detail::readable_count(volume.values.size()) + " values) does not match its " +
@@ -542,19 +538,14 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
   if (!n || volume.values.size() != *n)
     throw InputError("volume: " + io_detail::readable_count(volume.values.size()) + " values do not match its " +
                      describe(s));
-  VoxelGrid grid(Eigen::Vector3i::Constant(-1), s, h);
-  std::size_t inside = 0;
-  for (int z = 0; z < s.z(); ++z)
-    for (int y = 0; y < s.y(); ++y)
-      for (int x = 0; x < s.x(); ++x)
-        if (double(volume.at(x, y, z)) > threshold) {
-          grid.set(x, y, z, true);
-          ++inside;
-        }
-  if (inside == 0)
+  if (!(h > 0.0)) throw InputError("volume: h must be positive");
+  ThresholdSink sink(threshold, h, false);  // the same thresholding as the streamed read
+  sink.begin("", s);
+  sink.consume(volume.values.data(), volume.values.size());
+  if (sink.inside == 0)
     throw InputError("volume: no voxel above the threshold " + io_detail::readable_number(threshold) +
                      " (empty volume)");
-  return grid;
+  return std::move(sink.grid);
 }
 
 double unit_size_grid_step(const Eigen::Vector3i& size) { return size.maxCoeff() > 0 ? 2.0 / size.maxCoeff() : 1.0; }
@@ -564,29 +555,12 @@ Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size) { return (si
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options) {
   if (options.h < 0.0 || !std::isfinite(options.h))
     throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
-  // The sizes decide h and the shift before the first value arrives: a sink that learns them in begin().
-  class Deferred final : public VoxelSink {
-   public:
-    explicit Deferred(const VolumeReadOptions& o) : o_(o) {}
-    void check(const std::string& p, const Eigen::Vector3i& size) const override {
-      ThresholdSink(o_.threshold, 1.0, Eigen::Vector3i::Zero()).check(p, size);
-    }
-    void begin(const std::string& p, const Eigen::Vector3i& size) override {
-      const double h = o_.h == 0.0 ? unit_size_grid_step(size) : o_.h;
-      sink.emplace(o_.threshold, h, o_.centered ? volume_centering_shift(size) : Eigen::Vector3i::Zero());
-      sink->begin(p, size);
-    }
-    void consume(const std::uint8_t* values, std::size_t n) override { sink->consume(values, n); }
-    std::optional<ThresholdSink> sink;
-
-   private:
-    const VolumeReadOptions& o_;
-  } deferred(options);
-  read_into(path, options, deferred);
-  if (deferred.sink->inside == 0)
+  ThresholdSink sink(options.threshold, options.h, options.centered);
+  read_into(path, options, sink);
+  if (sink.inside == 0)
     throw InputError("volume '" + path + "': no voxel above the threshold " +
                      io_detail::readable_number(options.threshold) + " (empty volume)");
-  return std::move(deferred.sink->grid);
+  return std::move(sink.grid);
 }
 
 Volume voxels_to_volume(const VoxelGrid& grid) {

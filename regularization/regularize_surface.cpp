@@ -9,6 +9,7 @@
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <numbers>
+#include <optional>
 
 namespace corrlap {
 
@@ -26,35 +27,29 @@ double seconds_since(std::chrono::steady_clock::time_point& t0) {
 }
 }  // namespace
 
-RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,
-                                      const RegularizationOptions& o) {
-  // Options first: a bad name fails before the curvature and the assembly.
-  auto solver = make_linear_solver(o.solver, kDefaultLinearSolver);
-  auto method = make_discretization(o.method);
-  int boundary_edges = 0;
-  for (const int n : build_edges(mesh).faces_per_edge) boundary_edges += n == 1;
-  if (boundary_edges > 0)
-    throw InputError("regularization: the surface is open (" + std::to_string(boundary_edges) +
-                     " boundary edges); it is defined for closed surfaces");
-  if (!normals.has_vertex()) throw InputError("regularization: vertex normals are needed");
+namespace {
+double object_size(const SurfelMesh& mesh, const RegularizationOptions& o) {
+  const double size = o.size ? *o.size : regularization_size(mesh);
+  if (!(size > 0.0) || !std::isfinite(size)) throw InputError("regularization: the size must be positive");
+  return size;
+}
+}  // namespace
 
-  RegularizedSurface r;
-  r.h = mesh.grid_step();
-  r.size = o.size ? *o.size : regularization_size(mesh);
-  if (!(r.size > 0.0) || !std::isfinite(r.size)) throw InputError("regularization: the size must be positive");
-  r.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * r.size;
-  if (!(r.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
-  if (o.alpha_step && !(*o.alpha_step > 0.0)) throw InputError("regularization: the alpha step must be positive");
-  r.alpha = regularization_alpha((o.alpha_step ? *o.alpha_step : r.h) * r.size, o.alpha0);
-  r.solver = o.solver.get_string("solver", kDefaultLinearSolver);
+RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const NormalFields& normals,
+                                                 const RegularizationOptions& o) {
+  if (!normals.has_vertex()) throw InputError("regularization: vertex normals are needed");
+  RegularizationCurvature c;
+  const double h = mesh.grid_step();
+  c.size = object_size(mesh, o);
+  c.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * c.size;
+  if (!(c.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
   auto t = std::chrono::steady_clock::now();
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
-  const bool principal_edits = o.k1_edit.active() || o.k2_edit.active();
   const CurvatureEstimates estimates =
-      CorrectedCurvature::interpolated(mesh, normals.vertex).at_vertices(r.curvature_radius);
-  r.H = estimates.H;
-  for (Eigen::Index v = 0; v < r.H.size(); ++v)
-    if (!std::isfinite(r.H[v]))
+      CorrectedCurvature::interpolated(mesh, normals.vertex).at_vertices(c.curvature_radius);
+  c.H = estimates.H;
+  for (Eigen::Index v = 0; v < c.H.size(); ++v)
+    if (!std::isfinite(c.H[v]))
       throw NumericalError("regularization: the mean curvature of vertex " + std::to_string(v) +
                            " is not finite (is the curvature radius larger than the mesh?)");
   // A curvature radius below one voxel cannot be resolved: an estimate |H| > 1/h means the normals
@@ -64,35 +59,67 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   if (!o.h_clamp) {
     int absurd = 0;
     double worst = 0.0;
-    for (Eigen::Index v = 0; v < r.H.size(); ++v)
-      if (std::abs(r.H[v]) > 1.0 / r.h) {
+    for (Eigen::Index v = 0; v < c.H.size(); ++v)
+      if (std::abs(c.H[v]) > 1.0 / h) {
         ++absurd;
-        worst = std::max(worst, std::abs(r.H[v]));
+        worst = std::max(worst, std::abs(c.H[v]));
       }
     if (absurd > 0)
-      throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / r.h) + " at " +
-                       std::to_string(absurd) + " of " + std::to_string(r.H.size()) + " vertices (up to " +
+      throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / h) + " at " +
+                       std::to_string(absurd) + " of " + std::to_string(c.H.size()) + " vertices (up to " +
                        std::to_string(worst) +
                        "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
                        "features; give a smaller --ii-radius, other --normals, or --h-clamp MAX to clamp H");
   }
-  r.normals = normals.vertex;
-  if (principal_edits) {
+  c.normals = normals.vertex;
+  if (o.k1_edit.active() || o.k2_edit.active()) {
     // Paper §4.3: edit k1, k2 in S, integrate dn = S' into n', H' = tr(S') / 2 (curvature_editing.hpp).
     const std::vector<Eigen::Matrix3d> S =
         edited_shape_operators(estimates.k1, estimates.k2, estimates.d1, estimates.d2, o.k1_edit, o.k2_edit);
     auto integration_solver = make_linear_solver(o.solver, kDefaultLinearSolver);
-    r.normals = integrate_shape_operator(mesh, S, normals.vertex, r.size, o.normal_attachment, *integration_solver);
+    c.normals = integrate_shape_operator(mesh, S, normals.vertex, c.size, o.normal_attachment, *integration_solver);
     double angles = 0.0;
-    for (Eigen::Index v = 0; v < r.H.size(); ++v) {
-      r.H[v] = 0.5 * S[std::size_t(v)].trace();
-      angles += std::acos(std::clamp(r.normals.row(v).dot(normals.vertex.row(v)), -1.0, 1.0));
+    for (Eigen::Index v = 0; v < c.H.size(); ++v) {
+      c.H[v] = 0.5 * S[std::size_t(v)].trace();
+      angles += std::acos(std::clamp(c.normals.row(v).dot(normals.vertex.row(v)), -1.0, 1.0));
     }
-    r.normal_angle_change_deg = r.H.size() > 0 ? angles / double(r.H.size()) * 180.0 / std::numbers::pi : 0.0;
+    c.normal_angle_change_deg = c.H.size() > 0 ? angles / double(c.H.size()) * 180.0 / std::numbers::pi : 0.0;
   }
-  r.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
-  if (o.h_clamp) r.H = r.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
-  r.curvature_seconds = seconds_since(t);
+  c.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
+  if (o.h_clamp) c.H = c.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
+  c.seconds = seconds_since(t);
+  return c;
+}
+
+RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,
+                                      const RegularizationOptions& o, const RegularizationCurvature* curvature) {
+  // Options first: a bad name fails before the curvature and the assembly.
+  auto solver = make_linear_solver(o.solver, kDefaultLinearSolver);
+  auto method = make_discretization(o.method);
+  int boundary_edges = 0;
+  for (const int n : build_edges(mesh).faces_per_edge) boundary_edges += n == 1;
+  if (boundary_edges > 0)
+    throw InputError("regularization: the surface is open (" + std::to_string(boundary_edges) +
+                     " boundary edges); it is defined for closed surfaces");
+  if (!normals.has_vertex()) throw InputError("regularization: vertex normals are needed");
+  if (curvature && (curvature->H.size() != mesh.num_vertices() || curvature->normals.rows() != mesh.num_vertices()))
+    throw InputError("regularization: the given curvature has " + std::to_string(curvature->H.size()) + " values for " +
+                     std::to_string(mesh.num_vertices()) + " vertices");
+
+  RegularizedSurface r;
+  r.h = mesh.grid_step();
+  if (o.alpha_step && !(*o.alpha_step > 0.0)) throw InputError("regularization: the alpha step must be positive");
+  r.solver = o.solver.get_string("solver", kDefaultLinearSolver);
+  std::optional<RegularizationCurvature> computed;
+  if (!curvature) curvature = &computed.emplace(regularization_curvature(mesh, normals, o));
+  r.size = curvature->size;
+  r.curvature_radius = curvature->curvature_radius;
+  r.alpha = regularization_alpha((o.alpha_step ? *o.alpha_step : r.h) * r.size, o.alpha0);
+  r.H = curvature->H;
+  r.normals = curvature->normals;
+  r.normal_angle_change_deg = curvature->normal_angle_change_deg;
+  r.curvature_seconds = computed ? curvature->seconds : 0.0;
+  auto t = std::chrono::steady_clock::now();
 
   Operators ops = method->assemble(mesh, normals, o.method_params);
   r.warnings = ops.warnings;

@@ -53,11 +53,28 @@ struct RegularizedSurface {
 /// for a volume in world units, whose longest side spans 2).
 double regularization_size(const SurfelMesh& mesh);
 
+/// What regularize_surface uses besides the operators: the edited mean curvature and the normals of
+/// the target (n, or n' after principal edits). It depends on the mesh, the normals and the
+/// options' size, curvature radius and edits, not on the method: compute it once to regularize
+/// with several methods (the corrected curvature is the slowest stage on large surfaces).
+struct RegularizationCurvature {
+  Eigen::VectorXd H;         ///< #V, after the edits
+  Eigen::MatrixX3d normals;  ///< #V x 3
+  double size = 1.0, curvature_radius = 0.0, normal_angle_change_deg = 0.0;
+  double seconds = 0.0;
+};
+/// Throws as regularize_surface for bad options, non-finite H or |H| > 1/h without a clamp.
+RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const NormalFields& normals,
+                                                 const RegularizationOptions& options = {});
+
 /// Regularizes a closed surface with unit vertex normals (#V x 3, normals.vertex; the method's
 /// own normals come from the same fields). Throws InputError for an open surface (naming its
 /// boundary edge count), a method defined on faces, bad options; NumericalError when H or the
 /// result is not finite; SolverError from the solve.
+/// `curvature`: regularization_curvature(mesh, normals, options) computed before (reused across
+/// methods; curvature_seconds is then 0), or null to compute it here.
 RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,
-                                      const RegularizationOptions& options = {});
+                                      const RegularizationOptions& options = {},
+                                      const RegularizationCurvature* curvature = nullptr);
 
 }  // namespace corrlap

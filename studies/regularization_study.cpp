@@ -9,6 +9,7 @@
 #include <corrlap/regularization/surface_quality.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <optional>
 #include <sstream>
 
 #include "detail/csv.hpp"
@@ -92,6 +93,10 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       const double radius = 0.1 * regularization_size(mesh);
       const SurfaceQuality before = measure_against_shape(mesh, shape, radius);
       const double area_before = surface_area(mesh);
+      RegularizationOptions options;
+      options.alpha0 = o.alpha0;
+      options.solver.set("solver", o.linear_solver);
+      std::optional<RegularizationCurvature> curvature;  // the same for every Laplacian method
       for (const std::string& method : o.methods) {
         const auto t0 = std::chrono::steady_clock::now();
         SurfelMesh result = mesh;
@@ -99,11 +104,9 @@ void run_regularization_study(const RegularizationStudyOptions& o,
           if (method == "alignment") {
             result.positions = alignment_regularization(mesh, normals.face).positions;
           } else {
-            RegularizationOptions options;
             options.method = method;
-            options.alpha0 = o.alpha0;
-            options.solver.set("solver", o.linear_solver);
-            result = regularize_surface(mesh, normals, options).mesh;
+            if (!curvature) curvature = regularization_curvature(mesh, normals, options);
+            result = regularize_surface(mesh, normals, options, &*curvature).mesh;
           }
         } catch (const Error& e) {
           std::ostringstream os;

@@ -38,7 +38,9 @@ struct RegularizationStudyRow {
   double angle_before = 0, angle_after = 0;        ///< mean vertex normal angle to the true normals, degrees
   double curvature_error_before = 0, curvature_error_after = 0;  ///< mean |H - H_true|
   double area_before = 0, area_after = 0;
-  double time_s = 0;  ///< the method's regularization (normals and digitization excluded)
+  /// The method's regularization (normals and digitization excluded); the first Laplacian method
+  /// of an (shape, h) also carries the corrected curvature, which the others reuse.
+  double time_s = 0;
 };
 
 struct RegularizationStudyProgress {

@@ -1,6 +1,4 @@
 // corrlap digitize: implicit shape or volume -> digital surface mesh (+ optional normals).
-#include <algorithm>
-#include <cctype>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
@@ -8,7 +6,6 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
-#include <filesystem>
 #include <iostream>
 #include <optional>
 
@@ -32,19 +29,14 @@ void run(const DigitizeArgs& a) {
   if (!a.volume_out.empty()) {
     if (!loaded->grid) throw InputError("--volume-out needs voxels (--shape, --polynomial, --volume or --mesh-file)");
     VolumeWriteOptions options;
-    std::string ext = std::filesystem::path(a.volume_out).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    options.compressed = ext == ".vol" && nrrd_gzip_supported();  // Version 3, DGtal's current writer
+    options.compressed = file_extension(a.volume_out) == "vol" && nrrd_gzip_supported();  // Version 3, as DGtal
     write_volume(a.volume_out, voxels_to_volume(*loaded->grid), options);
     std::cerr << "wrote " << a.volume_out << " (" << loaded->grid->size().x() << "x" << loaded->grid->size().y() << "x"
               << loaded->grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", .vol Version 3" : "")
               << ")\n";
   }
   SurfelMesh mesh = loaded ? loaded->mesh : a.source.surface();
-  std::string extension = std::filesystem::path(a.out).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  const bool ply = extension == ".ply";
+  const bool ply = file_extension(a.out) == "ply";
   const bool want_normals = !a.face_normals_out.empty() || !a.vertex_normals_out.empty() || ply;
   MeshAttributes attributes;
   if (want_normals) {

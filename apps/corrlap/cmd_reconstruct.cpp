@@ -105,10 +105,13 @@ void run(const ReconstructArgs& a) {
     write_png(a.out + "/fine.png", render_mesh(fine, nullptr, view));
     write_png(a.out + "/before.png", render_mesh(to_polygon_mesh(mesh), nullptr, view));
   }
+  // The curvature does not depend on the method: once for all of them.
+  t = std::chrono::steady_clock::now();
+  const RegularizationCurvature curvature = regularization_curvature(mesh, normals, o);
+  stages["curvature_s"] = seconds_since(t);
   for (const std::string& method : methods) {
     o.method = method;
-    t = std::chrono::steady_clock::now();
-    const RegularizedSurface r = regularize_surface(mesh, normals, o);
+    const RegularizedSurface r = regularize_surface(mesh, normals, o, &curvature);
     for (const auto& w : r.warnings) std::cerr << "warning: " << method << ": " << w << "\n";
     const double seconds = seconds_since(t);
     const DistanceToMesh after = distance_to_mesh(r.mesh, locator);

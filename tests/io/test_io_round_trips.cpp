@@ -252,6 +252,7 @@ TEST_CASE("threshold turns grey levels into voxels (strictly above)") {
   CHECK(g.get(2, 1, 1));
   CHECK_FALSE(g.get(2, 0, 0));
   CHECK(g.h() == 0.5);
+  CHECK_THROWS_AS(threshold_volume(v, 100, 0.0), InputError);
   const Volume back = voxels_to_volume(g);
   CHECK(back.size == Eigen::Vector3i(5, 4, 4));  // padded by one voxel on every side
 }
@@ -436,7 +437,13 @@ TEST_CASE("read_volume_as_voxels streams every format into the same voxels as th
       int differ = 0;
       for (int z = -1; z <= v.size.z(); ++z)
         for (int y = -1; y <= v.size.y(); ++y)
-          for (int x = -1; x <= v.size.x(); ++x) differ += streamed.get(x, y, z) != expected.get(x, y, z);
+          for (int x = -1; x <= v.size.x(); ++x) {
+            // The readable rule: inside iff the file's value is strictly above the threshold.
+            const bool in_file = x >= 0 && y >= 0 && z >= 0 && x < v.size.x() && y < v.size.y() && z < v.size.z();
+            const bool inside = in_file && double(v.at(x, y, z)) > o.threshold;
+            differ += streamed.get(x, y, z) != expected.get(x, y, z);
+            differ += streamed.get(x, y, z) != inside;
+          }
       CHECK(differ == 0);
       // Centred: file voxel (x, y, z) is the digital point (x, y, z) - (size - 1) / 2.
       o.centered = true;
