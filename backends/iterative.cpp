@@ -225,20 +225,24 @@ Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
 
 Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::MatrixXd& B, const Config& options,
                                    SolverReport* report) {
-  options.check_keys({"tolerance", "max_iterations"}, "conjugate_gradient");
+  options.check_keys({"tolerance", "max_iterations", "on_no_convergence"}, "conjugate_gradient");
   const double tol = options.get_double("tolerance", 1e-10);
   if (!(tol > 0.0 && tol < 1.0)) throw InputError("conjugate_gradient: config key 'tolerance' must be in (0, 1)");
   const int maxit_option = options.get_int("max_iterations", 0);
   if (maxit_option < 0) throw InputError("conjugate_gradient: config key 'max_iterations' must be >= 0");
+  const std::string on = options.get_string("on_no_convergence", "error");
+  if (on != "error" && on != "warn")
+    throw InputError("conjugate_gradient: config key 'on_no_convergence' must be error or warn, got '" + on + "'");
   if (!A.multiply_transposed) throw InputError("conjugate_gradient: the operator has no product");
-  if (A.diagonal.size() != A.rows)
+  const bool jacobi = !A.precondition_transposed;
+  if (jacobi && A.diagonal.size() != A.rows)
     throw InputError("conjugate_gradient: diagonal of size " + std::to_string(A.diagonal.size()) + " for " +
                      std::to_string(A.rows) + " rows");
   detail::check_rhs(B, A.rows, "cg");
   SolverReport local;
   SolverReport& r = report ? *report : local;
   r = SolverReport{};
-  for (Eigen::Index i = 0; i < A.rows; ++i)
+  for (Eigen::Index i = 0; i < A.diagonal.size(); ++i)
     if (!(A.diagonal[i] > 0.0)) {
       std::ostringstream os;
       os << "cg: operator is not positive definite (diagonal entry " << A.diagonal[i] << " at row " << i << ")";
@@ -246,13 +250,18 @@ Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::Matr
       r.message = os.str();
       throw SolverError(SolverStatus::NotPositiveDefinite, os.str());
     }
-  const Eigen::RowVectorXd inverse_diagonal = A.diagonal.cwiseInverse().transpose();
+  const Eigen::RowVectorXd inverse_diagonal =
+      jacobi ? Eigen::RowVectorXd(A.diagonal.cwiseInverse().transpose()) : Eigen::RowVectorXd();
   detail::Stopwatch watch;
   const int maxit = maxit_option > 0 ? maxit_option : int(2 * A.rows);
-  Eigen::MatrixXd X = run_block_cg(
-      A.multiply_transposed, B,
-      [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { Zt = Rt.array().rowwise() * inverse_diagonal.array(); },
-      tol, maxit, "jacobi", false, r);
+  const auto precondition = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
+    if (jacobi)
+      Zt = Rt.array().rowwise() * inverse_diagonal.array();
+    else
+      A.precondition_transposed(Rt, Zt);
+  };
+  Eigen::MatrixXd X =
+      run_block_cg(A.multiply_transposed, B, precondition, tol, maxit, jacobi ? "jacobi" : "custom", on == "warn", r);
   r.solve_seconds = watch.seconds();
   return X;
 }

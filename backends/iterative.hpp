@@ -37,12 +37,17 @@ struct SymmetricOperator {
   Eigen::Index rows = 0;
   /// Yt = (A X)^T for Xt = X^T (k by rows): the transposed layout keeps a row's k values together.
   std::function<void(const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt)> multiply_transposed;
-  Eigen::VectorXd diagonal;  ///< diag(A) (> 0): the Jacobi preconditioner
+  Eigen::VectorXd diagonal;  ///< diag(A) (> 0): the Jacobi preconditioner, unless one is given below
+  /// Optional preconditioner, Zt = (P^{-1} R)^T for Rt = R^T (k by rows), P symmetric positive
+  /// definite and fixed (a factorization, not an inner iteration). When set, `diagonal` may be empty.
+  std::function<void(const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt)> precondition_transposed;
 };
 
-/// Solves A X = B (#rows by k) with the "cg" backend's iteration and checks (Jacobi preconditioner,
+/// Solves A X = B (#rows by k) with the "cg" backend's iteration and checks (Jacobi or the operator's
+/// preconditioner,
 /// every column in one product per iteration, the true residual checked at the end). Options:
-/// tolerance (1e-10) and max_iterations (0: 2 n), as for "cg"; other keys are InputErrors. Throws
+/// tolerance (1e-10), max_iterations (0: 2 n) and on_no_convergence (error | warn: return the last
+/// finite iterate with status NoConvergence in `report`), as for "cg"; other keys are InputErrors. Throws
 /// SolverError (NotPositiveDefinite, NoConvergence) like the backend; `report` gets iterations,
 /// residual and solve time.
 Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::MatrixXd& B, const Config& options = {},

@@ -1,5 +1,6 @@
 #include "corrected_curvature.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -74,7 +75,7 @@ void CorrectedCurvature::build_adjacency() {
     }
   std::sort(recs.begin(), recs.end(),
             [](const Rec& x, const Rec& y) { return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.f < y.f); });
-  face_neighbours_.assign(std::size_t(F), {});
+  std::vector<std::vector<int>> face_neighbours(static_cast<std::size_t>(F));
   face_left_edges_.assign(std::size_t(F), {});
   std::vector<std::array<int, 2>> edges;
   std::vector<double> emu1;
@@ -84,7 +85,7 @@ void CorrectedCurvature::build_adjacency() {
     while (j < recs.size() && recs[j].a == recs[i].a && recs[j].b == recs[i].b) ++j;
     for (std::size_t p = i; p < j; ++p)
       for (std::size_t q = i; q < j; ++q)
-        if (p != q) face_neighbours_[std::size_t(recs[p].f)].push_back(recs[q].f);
+        if (p != q) face_neighbours[std::size_t(recs[p].f)].push_back(recs[q].f);
     if (!interpolated_) {
       // Constant normals: mu1 lives on the edge (a < b), between its left face (a -> b) and right face.
       int left = -1, right = -1, nl = 0, nr = 0;
@@ -123,9 +124,15 @@ void CorrectedCurvature::build_adjacency() {
     }
     i = j;
   }
-  for (auto& n : face_neighbours_) {
+  neighbour_start_.assign(std::size_t(F) + 1, 0);
+  neighbour_faces_.clear();
+  for (int f = 0; f < F; ++f) {
+    auto& n = face_neighbours[std::size_t(f)];
     std::sort(n.begin(), n.end());
     n.erase(std::unique(n.begin(), n.end()), n.end());
+    neighbour_faces_.insert(neighbour_faces_.end(), n.begin(), n.end());
+    neighbour_start_[std::size_t(f) + 1] = int(neighbour_faces_.size());
+    std::vector<int>().swap(n);
   }
   edges_.resize(Eigen::Index(edges.size()), 2);
   edge_mu1_.resize(Eigen::Index(edges.size()));
@@ -340,8 +347,8 @@ std::vector<std::pair<int, double>> CorrectedCurvature::faces_in_ball(const Eige
     const double w = inclusion_ratio(dmin, dmax, r);
     if (w <= 0.0) continue;  // the walk does not expand from faces of weight 0
     result.emplace_back(f, w);
-    for (int n : face_neighbours_[std::size_t(f)])
-      if (stamp[std::size_t(n)] != generation) {
+    for (int i = neighbour_start_[std::size_t(f)]; i < neighbour_start_[std::size_t(f) + 1]; ++i)
+      if (const int n = neighbour_faces_[std::size_t(i)]; stamp[std::size_t(n)] != generation) {
         stamp[std::size_t(n)] = generation;
         queue.push_back(n);
       }
@@ -435,6 +442,91 @@ CurvatureEstimates CorrectedCurvature::at_vertices(double r) const {
     }
     // docs/math.md §8.3 (choice): ball at the vertex, seed = an incident face.
     estimate(positions_.row(v).transpose(), r, seed, vertex_normals_.row(v).transpose(), out, v);
+  });
+  return out;
+}
+
+CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices(double r) const {
+  check_radius(r, positions_);
+  const Eigen::Index V = positions_.rows(), F = faces_.rows();
+  if (!interpolated_ || r < 1e-6) {
+    CurvatureEstimates e = at_vertices(r);
+    return {std::move(e.H), std::move(e.area)};
+  }
+  // Row-major copies: a face's data in one or two cache lines (the Eigen members are column-major).
+  struct Face {
+    V3 centroid;
+    double rho;  // largest corner distance from the centroid
+    double mu0, mu1;
+    std::array<int, 4> corners;
+  };
+  std::vector<Face> face(static_cast<std::size_t>(F));
+  std::vector<V3> position(static_cast<std::size_t>(V));
+  for (Eigen::Index v = 0; v < V; ++v) position[std::size_t(v)] = positions_.row(v).transpose();
+  tbb::parallel_for(Eigen::Index(0), F, [&](Eigen::Index f) {
+    Face& d = face[std::size_t(f)];
+    d.centroid = centroids_.row(f).transpose();
+    d.rho = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      d.corners[std::size_t(k)] = faces_(f, k);
+      d.rho = std::max(d.rho, (position[std::size_t(faces_(f, k))] - d.centroid).norm());
+    }
+    d.mu0 = mu0_[f], d.mu1 = mu1_[f];
+  });
+  MeanCurvature out{Eigen::VectorXd(V), Eigen::VectorXd(V)};
+  struct Walk {
+    std::vector<std::uint32_t> stamp;
+    std::uint32_t generation = 0;
+    std::vector<int> queue;
+  };
+  tbb::enumerable_thread_specific<Walk> walks;
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, V, 256), [&](const tbb::blocked_range<Eigen::Index>& range) {
+    Walk& w = walks.local();
+    if (w.stamp.empty()) w.stamp.assign(std::size_t(F), 0);
+    for (Eigen::Index v = range.begin(); v != range.end(); ++v) {
+      const int seed = vertex_face_[std::size_t(v)];
+      if (seed < 0) {
+        out.H[v] = out.area[v] = 0.0;
+        continue;
+      }
+      if (++w.generation == 0) {
+        std::fill(w.stamp.begin(), w.stamp.end(), 0u);
+        w.generation = 1;
+      }
+      // The walk of faces_in_ball (same order, same weights), fused with the sums of estimate().
+      const V3 x = position[std::size_t(v)];
+      double m0 = 0.0, m1 = 0.0;
+      w.queue.assign(1, seed);
+      w.stamp[std::size_t(seed)] = w.generation;
+      for (std::size_t head = 0; head < w.queue.size(); ++head) {
+        const int f = w.queue[head];
+        const Face& d = face[std::size_t(f)];
+        const double dc = (d.centroid - x).norm();
+        double weight;
+        if (dc + d.rho <= r) {
+          weight = 1.0;  // every corner within r: dmax <= r
+        } else if (dc - d.rho >= r) {
+          continue;  // every corner at r or beyond: weight 0, the walk stops here
+        } else {
+          double dmin = dc, dmax = dc;
+          for (const int c : d.corners) {
+            const double dk = (position[std::size_t(c)] - x).norm();
+            dmin = std::min(dmin, dk), dmax = std::max(dmax, dk);
+          }
+          weight = inclusion_ratio(dmin, dmax, r);
+          if (weight <= 0.0) continue;
+        }
+        m0 += weight * d.mu0;
+        m1 += weight * d.mu1;
+        for (int i = neighbour_start_[std::size_t(f)]; i < neighbour_start_[std::size_t(f) + 1]; ++i)
+          if (const int n = neighbour_faces_[std::size_t(i)]; w.stamp[std::size_t(n)] != w.generation) {
+            w.stamp[std::size_t(n)] = w.generation;
+            w.queue.push_back(n);
+          }
+      }
+      out.area[v] = m0;
+      out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
+    }
   });
   return out;
 }

@@ -44,6 +44,16 @@ class CorrectedCurvature {
   /// Estimates with balls centred at vertices (seed = an incident face; N = vertex normal, or the
   /// normalized sum of incident face normals in the constant variant).
   CurvatureEstimates at_vertices(double r) const;
+  /// Mean curvature and ball area alone.
+  struct MeanCurvature {
+    Eigen::VectorXd H, area;  ///< #V each
+  };
+  /// Equals at_vertices(r).H and .area (the same walk, weights and sums, to rounding), faster for
+  /// what regularization needs: no muXY sums nor eigen solves, and the walk classifies a face from
+  /// its centroid's distance d alone when it can (whole if d + rho <= r, out if d - rho >= r, rho
+  /// the largest corner distance from the centroid), reading its corners only near the sphere.
+  /// The constant variant and radii below 1e-6 use at_vertices.
+  MeanCurvature mean_curvature_at_vertices(double r) const;
   /// Estimates with balls centred at arbitrary points (#P x 3): the seed is the face with the
   /// nearest centroid, found through a uniform grid of face centroids; N = that face's normal.
   CurvatureEstimates at_points(const Eigen::MatrixX3d& points, double r) const;
@@ -59,8 +69,8 @@ class CorrectedCurvature {
   bool interpolated_ = true;
   Eigen::MatrixX3d positions_, centroids_, face_normals_, vertex_normals_;
   Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces_;
-  std::vector<std::vector<int>> face_neighbours_;
-  std::vector<int> vertex_face_;  // one incident face per vertex (-1 if none)
+  std::vector<int> neighbour_start_, neighbour_faces_;  // edge-adjacent faces of f, CSR, ascending
+  std::vector<int> vertex_face_;                        // one incident face per vertex (-1 if none)
   // Uniform grid over the face centroids (cell size ~ mean edge length), CSR layout.
   Eigen::Vector3d grid_origin_ = Eigen::Vector3d::Zero();
   Eigen::Vector3i grid_dims_ = Eigen::Vector3i::Ones();

@@ -1,7 +1,10 @@
 #include "laplacian_regularization.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <corrlap/backends/iterative.hpp>
 #include <corrlap/core/error.hpp>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -86,6 +89,90 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
   solver.compute(std::move(A));
   const Eigen::MatrixXd q = solver.solve(rhs);
   if (!q.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
+  return q;
+}
+
+Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
+                                                     const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
+                                                     const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
+                                                     double alpha, LinearSolver& solver, SolverReport* report) {
+  check_inputs(L, M, p, normals, H);
+  if (!(alpha > 0.0) || !std::isfinite(alpha)) throw InputError("regularization: alpha must be a positive number");
+  const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
+  const Eigen::VectorXd mass = Ml.diagonal(), inverse_mass = mass.cwiseInverse();
+  const Eigen::MatrixX3d rhs = alpha * (Ml * p) - 2.0 * (L * mean_curvature_normals(normals, H));
+  // B = sqrt(alpha) M_l - L, SPD when L is negative semi-definite (the header's bound).
+  Eigen::SparseMatrix<double> B = -L;
+  B += std::sqrt(alpha) * Ml;
+  B.prune(0.0);
+  solver.compute(std::move(B));
+  const auto multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
+    return L * (inverse_mass.asDiagonal() * (L * X)) + alpha * (mass.asDiagonal() * X);
+  };
+  SymmetricOperator A;
+  A.rows = p.rows();
+  // The CG blocks are transposed (k by n): multiply through plain n by k matrices.
+  A.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
+    Yt = multiply(Xt.transpose()).transpose();
+  };
+  A.precondition_transposed = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
+    // P^{-1} = B^{-1} M_l B^{-1}.
+    const Eigen::MatrixXd Y = solver.solve(Rt.transpose());
+    Zt = solver.solve(mass.asDiagonal() * Y).transpose();
+  };
+  // Corrected weights grow like 1/(u.n) where normals are nearly tangent to the surfels; A's
+  // entries then span many orders of magnitude and CG's recurrence drifts from the true residual.
+  // Each pass solves for the true residual of the last (iterative refinement), until the relative
+  // residual is 1e-10 or stops falling (the rounding of A q itself); q is then accepted when its
+  // componentwise backward error, max_i |b - A q|_i / (|L| M_l^{-1} |L| |q| + alpha M_l |q| + |b|)_i,
+  // is below 1e-12 (that rounding is ~20 eps for rows of ~9 entries).
+  constexpr double kBackwardTolerance = 1e-12;
+  Config cg_options;
+  cg_options.set("on_no_convergence", "warn");
+  SolverReport local;
+  SolverReport& cg = report ? *report : local;
+  const auto relative_residual = [&](const Eigen::MatrixXd& R) {
+    double worst = 0.0;
+    for (Eigen::Index j = 0; j < R.cols(); ++j)
+      worst = std::max(worst, R.col(j).norm() / std::max(rhs.col(j).norm(), std::numeric_limits<double>::min()));
+    return worst;
+  };
+  const Eigen::SparseMatrix<double> absL = L.cwiseAbs();
+  const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
+    const Eigen::MatrixXd absq = q.cwiseAbs();
+    const Eigen::MatrixXd scale = absL * (inverse_mass.asDiagonal() * (absL * absq)) +
+                                  alpha * (mass.asDiagonal() * absq) + Eigen::MatrixXd(rhs.cwiseAbs());
+    double worst = 0.0;
+    for (Eigen::Index j = 0; j < q.cols(); ++j)
+      for (Eigen::Index i = 0; i < q.rows(); ++i)
+        if (scale(i, j) > 0.0) worst = std::max(worst, std::abs(R(i, j)) / scale(i, j));
+    return worst;
+  };
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p.rows(), 3), residual = rhs;
+  int iterations = 0;
+  double normwise = 1.0, backward = 1.0;
+  for (int pass = 0; pass < 3; ++pass) {
+    const Eigen::MatrixXd step = conjugate_gradient(A, residual, cg_options, &cg);
+    iterations += cg.iterations;
+    if (!step.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
+    q += step;
+    residual = rhs - multiply(q);
+    normwise = relative_residual(residual);
+    backward = backward_error(q, residual);
+    if (normwise <= 1e-10 || backward <= kBackwardTolerance) break;
+  }
+  cg.iterations = iterations;
+  cg.residual = normwise;
+  std::ostringstream os;
+  os << "regularization: relative residual " << normwise << " after " << iterations
+     << " preconditioned CG iterations, componentwise backward error " << backward;
+  if (normwise > 1e-10 && !(backward <= kBackwardTolerance)) {
+    cg.status = SolverStatus::NoConvergence;
+    cg.message = os.str();
+    throw SolverError(SolverStatus::NoConvergence, os.str());
+  }
+  cg.status = SolverStatus::Success;
+  cg.message = normwise > 1e-10 ? os.str() + " (the rounding of A q)" : std::string();
   return q;
 }
 

@@ -28,6 +28,23 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
                                       const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
                                       const Eigen::VectorXd& H, double alpha, LinearSolver& solver);
 
+/// The same p' as regularize_positions (to the CG tolerance, 1e-10 relative residual of the
+/// normal equations), without forming L M_l^{-1} L, whose two-ring pattern makes its Cholesky
+/// factor several times denser than L's. With B = beta M_l - L, beta = sqrt(alpha), the matrix
+///     P = B M_l^{-1} B = L M_l^{-1} L + alpha M_l - 2 beta L
+/// bounds A = L M_l^{-1} L + alpha M_l spectrally: in the eigenbasis of -L v = lambda M_l v
+/// (lambda >= 0) the eigenvalues of P^{-1} A are (lambda^2 + alpha) / (lambda + beta)^2, in [1/2, 1].
+/// So CG on A preconditioned by P (two solves with one factorization of B, which has L's pattern)
+/// converges in about 15 iterations whatever h. `solver` factorizes B; it must be a direct solver
+/// (a fixed preconditioner). Throws as regularize_positions, SolverError NotPositiveDefinite when
+/// B is not (L not negative semi-definite: use regularize_positions), NoConvergence from CG.
+/// `report`, if given, receives the CG iterations and residual.
+Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
+                                                     const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
+                                                     const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
+                                                     double alpha, LinearSolver& solver,
+                                                     SolverReport* report = nullptr);
+
 /// The two terms of the energy above at positions q (for reports): the Laplacian term
 /// |M_l^{-1} L q + 2 H n|^2_{M_l} and the attachment term |q - p|^2_{M_l} (without alpha).
 struct RegularizationEnergy {

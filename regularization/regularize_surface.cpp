@@ -45,8 +45,14 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   if (!(c.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
   auto t = std::chrono::steady_clock::now();
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
-  const CurvatureEstimates estimates =
-      CorrectedCurvature::interpolated(mesh, normals.vertex).at_vertices(c.curvature_radius);
+  // Principal edits need k1, k2 and their directions; H alone has a faster walk (equal results).
+  const bool principal = o.k1_edit.active() || o.k2_edit.active();
+  const CorrectedCurvature measures = CorrectedCurvature::interpolated(mesh, normals.vertex);
+  CurvatureEstimates estimates;
+  if (principal)
+    estimates = measures.at_vertices(c.curvature_radius);
+  else
+    estimates.H = measures.mean_curvature_at_vertices(c.curvature_radius).H;
   c.H = estimates.H;
   for (Eigen::Index v = 0; v < c.H.size(); ++v)
     if (!std::isfinite(c.H[v]))
@@ -72,7 +78,7 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
                        "features; give a smaller --ii-radius, other --normals, or --h-clamp MAX to clamp H");
   }
   c.normals = normals.vertex;
-  if (o.k1_edit.active() || o.k2_edit.active()) {
+  if (principal) {
     // Paper §4.3: edit k1, k2 in S, integrate dn = S' into n', H' = tr(S') / 2 (curvature_editing.hpp).
     const std::vector<Eigen::Matrix3d> S =
         edited_shape_operators(estimates.k1, estimates.k2, estimates.d1, estimates.d2, o.k1_edit, o.k2_edit);
@@ -129,7 +135,27 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   r.operators_seconds = seconds_since(t);
 
   r.mesh = mesh;
-  r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver);
+  // With a direct backend, CG preconditioned by a factorization with L's pattern gives the normal
+  // equations' solution at a fraction of the cost of factorizing L M_l^{-1} L (the header of
+  // regularize_positions_preconditioned); it needs L negative semi-definite, else the direct solve.
+  if (r.solver != "cg") {
+    try {
+      SolverReport cg;
+      r.mesh.positions =
+          regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver, &cg);
+      r.solve_scheme = "preconditioned-cg";
+      r.solve_iterations = cg.iterations;
+    } catch (const SolverError& e) {
+      if (e.status() != SolverStatus::NotPositiveDefinite) throw;
+      r.warnings.push_back("regularization: " + std::string(e.what()) +
+                           "; L is not negative semi-definite, solved the normal equations directly");
+    }
+  }
+  if (r.solve_scheme.empty()) {
+    solver = make_linear_solver(o.solver, kDefaultLinearSolver);
+    r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver);
+    r.solve_scheme = "direct";
+  }
   r.solve_seconds = seconds_since(t);
   r.energy_before = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, mesh.positions);
   r.energy_after = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, r.mesh.positions);

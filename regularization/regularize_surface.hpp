@@ -42,7 +42,11 @@ struct RegularizedSurface {
   Eigen::VectorXd H;         ///< #V mean curvature used (after the edits)
   Eigen::MatrixX3d normals;  ///< #V x 3 unit normals n used: the input's, or n' after principal edits
   double h = 0.0, size = 1.0, curvature_radius = 0.0, alpha = 0.0;
-  std::string solver;                                ///< backend name
+  std::string solver;  ///< backend name
+  /// "preconditioned-cg" (regularize_positions_preconditioned, the default with a direct backend)
+  /// or "direct" (regularize_positions: with "cg", or when L is not negative semi-definite).
+  std::string solve_scheme;
+  int solve_iterations = 0;                          ///< CG iterations of the preconditioned scheme
   RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
   double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;
   double normal_angle_change_deg = 0.0;  ///< mean angle between n' and n (0 without principal edits)

@@ -32,7 +32,7 @@ SurfaceQuality measure_against_shape(const SurfelMesh& mesh, const ImplicitShape
   double angles = 0.0;
   for (Eigen::Index v = 0; v < n.rows(); ++v) angles += std::acos(std::clamp(n.row(v).dot(truth.row(v)), -1.0, 1.0));
   q.normal_angle_deg = angles / double(n.rows()) * 180.0 / std::numbers::pi;
-  const Eigen::VectorXd H = CorrectedCurvature::interpolated(mesh, n).at_vertices(curvature_radius).H;
+  const Eigen::VectorXd H = CorrectedCurvature::interpolated(mesh, n).mean_curvature_at_vertices(curvature_radius).H;
   q.mean_curvature_error = (H - true_mean_curvatures(shape, mesh.positions)).cwiseAbs().mean();
   return q;
 }

@@ -233,6 +233,8 @@ void run(const RegularizeArgs& a) {
     m["normal_angle_change_deg"] = r.normal_angle_change_deg;
   }
   m["solver"] = r.solver;
+  m["solve_scheme"] = r.solve_scheme;
+  if (r.solve_scheme == "preconditioned-cg") m["solve_iterations"] = r.solve_iterations;
   m["time_s"] = stages;
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;

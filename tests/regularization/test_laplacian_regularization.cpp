@@ -128,6 +128,15 @@ TEST_CASE("regularize_surface: H = +1 on the unit sphere, the surface gets close
   CHECK(after.distance_l1 < 0.25 * before.distance_l1);
   CHECK(after.normal_angle_deg < 0.25 * before.normal_angle_deg);
   CHECK(after.mean_curvature_error < 0.25 * before.mean_curvature_error);
+  // The default (cholmod) takes the preconditioned scheme; "cg" the normal equations, same result.
+  CHECK(r.solve_scheme == "preconditioned-cg");
+  CHECK(r.solve_iterations > 0);
+  RegularizationOptions with_cg;
+  with_cg.solver.set("solver", "cg");
+  with_cg.solver.set("tolerance", 1e-12);
+  const RegularizedSurface rc = regularize_surface(s.mesh, s.normals, with_cg);
+  CHECK(rc.solve_scheme == "direct");
+  CHECK((rc.mesh.positions - r.mesh.positions).cwiseAbs().maxCoeff() < 1e-8);
 
   RegularizationOptions faces;
   faces.method = "heat-kernel";
@@ -143,4 +152,40 @@ TEST_CASE("regularize_surface: H = +1 on the unit sphere, the surface gets close
   open_normals.face = s.normals.face.bottomRows(s.mesh.num_faces() - 1);
   CHECK_THROWS_WITH_AS(regularize_surface(open, open_normals), doctest::Contains("open (4 boundary edges)"),
                        InputError);
+}
+
+TEST_CASE("regularize_positions_preconditioned equals regularize_positions, in a few iterations") {
+  const test::RegularizationSphere& base = test::regularization_sphere();
+  const Eigen::MatrixX3d& p = base.mesh.positions;
+  const Eigen::MatrixX3d& n = base.normals.vertex;
+  std::srand(11);
+  // An H with structure (not the exact one), so that the solution is not p + c n.
+  const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows()) + 0.3 * Eigen::VectorXd::Random(p.rows());
+  for (const char* method : {"fem", "interpolated", "corrected-vrm", "projected-polydec", "polydec"}) {
+    CAPTURE(method);
+    const Operators ops = make_discretization(method)->assemble(base.mesh, base.normals, Config());
+    for (const double alpha0 : {1.0, 10.0, 1000.0}) {
+      CAPTURE(alpha0);
+      const double alpha = regularization_alpha(0.1, alpha0);
+      auto direct = make_linear_solver("cholmod");
+      const Eigen::MatrixX3d q = regularize_positions(ops.L, ops.M, p, n, H, alpha, *direct);
+      auto factor = make_linear_solver("cholmod");
+      SolverReport report;
+      const Eigen::MatrixX3d qp = regularize_positions_preconditioned(ops.L, ops.M, p, n, H, alpha, *factor, &report);
+      // Relative residual 1e-10 of A x = b with b ~ alpha M_l x: the error in x is ~1e-10 |x|
+      // in the smooth modes (A's smallest eigenvalues are alpha M_l's), below in the others.
+      CHECK((qp - q).cwiseAbs().maxCoeff() < 1e-8);
+      CHECK(report.residual < 1e-9);
+      // P^{-1} A has its spectrum in [1/2, 1]: CG's bound (sqrt 2 - 1)/(sqrt 2 + 1) per step
+      // reaches 1e-10 in 14 steps; allow a margin for rounding.
+      CHECK(report.iterations <= 25);
+      MESSAGE(std::string(method) << " alpha0 " << alpha0 << ": " << report.iterations << " iterations");
+    }
+  }
+  // L not negative semi-definite: B = beta M_l - L is not SPD and the factorization says so.
+  const Operators ops = make_discretization("fem")->assemble(base.mesh, base.normals, Config());
+  const SpMat wrong_sign = -ops.L;
+  auto factor = make_linear_solver("cholmod");
+  CHECK_THROWS_AS(regularize_positions_preconditioned(wrong_sign, ops.M, p, n, H, regularization_alpha(0.1), *factor),
+                  SolverError);
 }
