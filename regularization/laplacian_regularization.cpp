@@ -49,6 +49,13 @@ Eigen::MatrixX3d mean_curvature_normals(const Eigen::MatrixX3d& normals, const E
   return H.asDiagonal() * normals;
 }
 
+// The right-hand side of the normal equations, alpha M_l p - 2 L (H n) (#V x 3).
+Eigen::MatrixX3d normal_equations_rhs(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& Ml,
+                                      const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                      const Eigen::VectorXd& H, double alpha) {
+  return alpha * (Ml * p) - 2.0 * (L * mean_curvature_normals(normals, H));
+}
+
 }  // namespace
 
 Eigen::SparseMatrix<double> lumped_mass(const Eigen::SparseMatrix<double>& M) {
@@ -85,7 +92,7 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
   Eigen::SparseMatrix<double> A = L * scaled_L;
   A += alpha * Ml;
   A.prune(0.0);
-  const Eigen::MatrixX3d rhs = alpha * (Ml * p) - 2.0 * (L * mean_curvature_normals(normals, H));
+  const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
   solver.compute(std::move(A));
   const Eigen::MatrixXd q = solver.solve(rhs);
   if (!q.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
@@ -100,7 +107,7 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   if (!(alpha > 0.0) || !std::isfinite(alpha)) throw InputError("regularization: alpha must be a positive number");
   const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
   const Eigen::VectorXd mass = Ml.diagonal(), inverse_mass = mass.cwiseInverse();
-  const Eigen::MatrixX3d rhs = alpha * (Ml * p) - 2.0 * (L * mean_curvature_normals(normals, H));
+  const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
   // B = sqrt(alpha) M_l - L, SPD when L is negative semi-definite (the header's bound).
   Eigen::SparseMatrix<double> B = -L;
   B += std::sqrt(alpha) * Ml;
@@ -122,10 +129,10 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   };
   // Corrected weights grow like 1/(u.n) where normals are nearly tangent to the surfels; A's
   // entries then span many orders of magnitude and CG's recurrence drifts from the true residual.
-  // Each pass solves for the true residual of the last (iterative refinement), until the relative
-  // residual is 1e-10 or stops falling (the rounding of A q itself); q is then accepted when its
-  // componentwise backward error, max_i |b - A q|_i / (|L| M_l^{-1} |L| |q| + alpha M_l |q| + |b|)_i,
-  // is below 1e-12 (that rounding is ~20 eps for rows of ~9 entries).
+  // Each pass after the first solves for the true residual of the last (iterative refinement, at
+  // most 3 passes), until the relative residual is 1e-10 or the componentwise backward error,
+  // max_i |b - A q|_i / (|L| M_l^{-1} |L| |q| + alpha M_l |q| + |b|)_i, is below 1e-12 (the rounding
+  // of A q is ~20 eps for rows of ~9 entries; one refinement pass reaches it, Skeel's result).
   constexpr double kBackwardTolerance = 1e-12;
   Config cg_options;
   cg_options.set("on_no_convergence", "warn");

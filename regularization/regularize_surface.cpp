@@ -152,7 +152,6 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     }
   }
   if (r.solve_scheme.empty()) {
-    solver = make_linear_solver(o.solver, kDefaultLinearSolver);
     r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver);
     r.solve_scheme = "direct";
   }
