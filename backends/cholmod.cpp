@@ -146,7 +146,7 @@ struct CholmodSolver::Impl {
   std::string supernodal = "supernodal";
   std::string ordering = "amd";
   bool long_index = false;
-  int openmp_threads = 0;
+  int openmp_threads = 1;
   int blas_threads = 0;
   bool check_symmetry = true;
 
@@ -340,8 +340,9 @@ std::vector<ParameterInfo> CholmodSolver::options() const {
       {"supernodal", "supernodal", "supernodal | simplicial | auto (CHOLMOD's choice by flop count)"},
       {"ordering", "amd", "amd | metis | nesdis | natural | auto (AMD, METIS if fill is high) | best (try all)"},
       {"long_index", "false", "use CHOLMOD's 64-bit index API (very large systems)"},
-      {"openmp_threads", "0",
-       "0: let OpenMP shrink CHOLMOD's team to idle cores (dynamic); 1: serial; >1: CHOLMOD's built-in team"},
+      {"openmp_threads", "1",
+       "1: serial, the parallelism comes from BLAS (default); 0: let OpenMP shrink CHOLMOD's team to idle cores "
+       "(dynamic); >1: CHOLMOD's built-in team"},
       {"blas_threads", "0",
        "0: OpenBLAS as configured, switched to 1 thread once CHOLMOD calls overlap; n: set OpenBLAS to n threads "
        "(process-wide; use 1 for bitwise-reproducible concurrent use)"},
