@@ -48,6 +48,83 @@ double inclusion_ratio(double d_min, double d_max, double r) {
   return (r - d_min) / (d_max - d_min);
 }
 
+// The faces as mean_curvature_at_vertices reads them: row-major, a face in one cache line.
+struct WalkFace {
+  V3 centroid;
+  double rho;  // largest corner distance from the centroid
+  double mu0, mu1;
+  std::array<int, 4> corners;
+};
+
+// Edge-connected pieces of the faces whose centroids share a cube of the given side: their summed
+// measures, a centre and a radius bounding every corner, and the faces around them, CSR.
+struct FaceClusters {
+  std::vector<int> of_face;
+  std::vector<double> mu0, mu1, radius;
+  std::vector<V3> centre;
+  std::vector<int> around_start, around;
+};
+
+FaceClusters cluster_faces(const std::vector<WalkFace>& face, const std::vector<int>& neighbour_start,
+                           const std::vector<int>& neighbour_faces, double side) {
+  const std::size_t F = face.size();
+  const auto cube = [&](std::size_t f) {
+    std::array<std::int64_t, 3> k;
+    for (int j = 0; j < 3; ++j) k[std::size_t(j)] = std::int64_t(std::floor(face[f].centroid[j] / side));
+    return k;
+  };
+  // Union-find over edge-adjacent faces in the same cube.
+  std::vector<int> parent(F);
+  for (std::size_t f = 0; f < F; ++f) parent[f] = int(f);
+  const auto root = [&](int f) {
+    while (parent[std::size_t(f)] != f) f = parent[std::size_t(f)] = parent[std::size_t(parent[std::size_t(f)])];
+    return f;
+  };
+  for (std::size_t f = 0; f < F; ++f) {
+    const auto kf = cube(f);
+    for (int i = neighbour_start[f]; i < neighbour_start[f + 1]; ++i) {
+      const int n = neighbour_faces[std::size_t(i)];
+      if (cube(std::size_t(n)) != kf) continue;
+      const int a = root(int(f)), b = root(n);
+      if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
+    }
+  }
+  FaceClusters c;
+  c.of_face.assign(F, -1);
+  std::vector<int> id_of_root(F, -1);
+  for (std::size_t f = 0; f < F; ++f) {
+    int& id = id_of_root[std::size_t(root(int(f)))];
+    if (id < 0) id = int(c.mu0.size()), c.mu0.push_back(0.0), c.mu1.push_back(0.0), c.centre.push_back(V3::Zero());
+    c.of_face[f] = id;
+  }
+  const std::size_t C = c.mu0.size();
+  std::vector<int> count(C, 0);
+  for (std::size_t f = 0; f < F; ++f) {
+    const auto k = std::size_t(c.of_face[f]);
+    c.mu0[k] += face[f].mu0, c.mu1[k] += face[f].mu1, c.centre[k] += face[f].centroid, ++count[k];
+  }
+  for (std::size_t k = 0; k < C; ++k) c.centre[k] /= double(count[k]);
+  c.radius.assign(C, 0.0);
+  for (std::size_t f = 0; f < F; ++f) {
+    const auto k = std::size_t(c.of_face[f]);
+    c.radius[k] = std::max(c.radius[k], (face[f].centroid - c.centre[k]).norm() + face[f].rho);
+  }
+  // Faces around each cluster: neighbours of its faces in other clusters, without repeats.
+  std::vector<std::vector<int>> around(C);
+  for (std::size_t f = 0; f < F; ++f)
+    for (int i = neighbour_start[f]; i < neighbour_start[f + 1]; ++i)
+      if (const int n = neighbour_faces[std::size_t(i)]; c.of_face[std::size_t(n)] != c.of_face[f])
+        around[std::size_t(c.of_face[f])].push_back(n);
+  c.around_start.assign(C + 1, 0);
+  for (std::size_t k = 0; k < C; ++k) {
+    std::sort(around[k].begin(), around[k].end());
+    around[k].erase(std::unique(around[k].begin(), around[k].end()), around[k].end());
+    c.around.insert(c.around.end(), around[k].begin(), around[k].end());
+    c.around_start[k + 1] = int(c.around.size());
+  }
+  return c;
+}
+
 void check_mesh(const SurfelMesh& mesh) {
   if (mesh.num_faces() == 0) throw InputError("curvature: the mesh has no face");
   mesh.validate("curvature mesh");
@@ -454,17 +531,11 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
     return {std::move(e.H), std::move(e.area)};
   }
   // Row-major copies: a face's data in one or two cache lines (the Eigen members are column-major).
-  struct Face {
-    V3 centroid;
-    double rho;  // largest corner distance from the centroid
-    double mu0, mu1;
-    std::array<int, 4> corners;
-  };
-  std::vector<Face> face(static_cast<std::size_t>(F));
+  std::vector<WalkFace> face(static_cast<std::size_t>(F));
   std::vector<V3> position(static_cast<std::size_t>(V));
   for (Eigen::Index v = 0; v < V; ++v) position[std::size_t(v)] = positions_.row(v).transpose();
   tbb::parallel_for(Eigen::Index(0), F, [&](Eigen::Index f) {
-    Face& d = face[std::size_t(f)];
+    WalkFace& d = face[std::size_t(f)];
     d.centroid = centroids_.row(f).transpose();
     d.rho = 0.0;
     for (int k = 0; k < 4; ++k) {
@@ -473,16 +544,23 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
     }
     d.mu0 = mu0_[f], d.mu1 = mu1_[f];
   });
+  const FaceClusters clusters = cluster_faces(face, neighbour_start_, neighbour_faces_, 2.0 * grid_cell_);
   MeanCurvature out{Eigen::VectorXd(V), Eigen::VectorXd(V)};
   struct Walk {
-    std::vector<std::uint32_t> stamp;
+    std::vector<std::uint32_t> stamp, cluster_seen;
+    std::vector<char> cluster_inside;
     std::uint32_t generation = 0;
     std::vector<int> queue;
   };
   tbb::enumerable_thread_specific<Walk> walks;
+  const std::size_t C = clusters.mu0.size();
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, V, 256), [&](const tbb::blocked_range<Eigen::Index>& range) {
     Walk& w = walks.local();
-    if (w.stamp.empty()) w.stamp.assign(std::size_t(F), 0);
+    if (w.stamp.empty()) {
+      w.stamp.assign(std::size_t(F), 0);
+      w.cluster_seen.assign(C, 0);
+      w.cluster_inside.assign(C, 0);
+    }
     for (Eigen::Index v = range.begin(); v != range.end(); ++v) {
       const int seed = vertex_face_[std::size_t(v)];
       if (seed < 0) {
@@ -491,16 +569,40 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
       }
       if (++w.generation == 0) {
         std::fill(w.stamp.begin(), w.stamp.end(), 0u);
+        std::fill(w.cluster_seen.begin(), w.cluster_seen.end(), 0u);
         w.generation = 1;
       }
-      // The walk of faces_in_ball (same order, same weights), fused with the sums of estimate().
+      // The walk of faces_in_ball (same faces, same weights), fused with the sums of estimate().
+      // A cluster whose every corner is within r is summed at once (its faces all have weight 1
+      // and are edge-connected, so the walk would reach them all) and the walk goes on from the
+      // faces around it.
       const V3 x = position[std::size_t(v)];
       double m0 = 0.0, m1 = 0.0;
       w.queue.assign(1, seed);
       w.stamp[std::size_t(seed)] = w.generation;
+      const auto push = [&w](int n) {
+        if (w.stamp[std::size_t(n)] != w.generation) {
+          w.stamp[std::size_t(n)] = w.generation;
+          w.queue.push_back(n);
+        }
+      };
       for (std::size_t head = 0; head < w.queue.size(); ++head) {
         const int f = w.queue[head];
-        const Face& d = face[std::size_t(f)];
+        const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
+        if (w.cluster_seen[c] != w.generation) {
+          w.cluster_seen[c] = w.generation;
+          w.cluster_inside[c] = (clusters.centre[c] - x).norm() + clusters.radius[c] <= r;
+          if (w.cluster_inside[c]) {
+            m0 += clusters.mu0[c];
+            m1 += clusters.mu1[c];
+            for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
+              push(clusters.around[std::size_t(i)]);
+            continue;
+          }
+        } else if (w.cluster_inside[c]) {
+          continue;  // summed with its cluster
+        }
+        const WalkFace& d = face[std::size_t(f)];
         const double dc = (d.centroid - x).norm();
         double weight;
         if (dc + d.rho <= r) {
@@ -509,8 +611,8 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
           continue;  // every corner at r or beyond: weight 0, the walk stops here
         } else {
           double dmin = dc, dmax = dc;
-          for (const int c : d.corners) {
-            const double dk = (position[std::size_t(c)] - x).norm();
+          for (const int k : d.corners) {
+            const double dk = (position[std::size_t(k)] - x).norm();
             dmin = std::min(dmin, dk), dmax = std::max(dmax, dk);
           }
           weight = inclusion_ratio(dmin, dmax, r);
@@ -519,10 +621,7 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
         m0 += weight * d.mu0;
         m1 += weight * d.mu1;
         for (int i = neighbour_start_[std::size_t(f)]; i < neighbour_start_[std::size_t(f) + 1]; ++i)
-          if (const int n = neighbour_faces_[std::size_t(i)]; w.stamp[std::size_t(n)] != w.generation) {
-            w.stamp[std::size_t(n)] = w.generation;
-            w.queue.push_back(n);
-          }
+          push(neighbour_faces_[std::size_t(i)]);
       }
       out.area[v] = m0;
       out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
