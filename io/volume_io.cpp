@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -88,8 +89,10 @@ void check_holds(const std::string& path, const Eigen::Vector3i& s, std::uint64_
                  ", more than the " + io_detail::readable_bytes(double(available)) + " the file holds");
 }
 
-void read_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, VoxelSink& sink) {
-  const std::size_t n = checked_voxels(path, s);
+// `bytes_per_voxel` bytes for each voxel (8: .longvol), given to the sink as they are.
+void read_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, VoxelSink& sink,
+                  std::size_t bytes_per_voxel = 1) {
+  const std::size_t n = checked_voxels(path, s) * bytes_per_voxel;
   // Checked before the sink allocates, so that a corrupt header cannot make us allocate gigabytes.
   sink.check(path, s);
   check_holds(path, s, n, io_detail::bytes_left(in), "");
@@ -182,9 +185,42 @@ void read_compressed_payload(std::istream& in, const std::string& path, const Ei
 #endif
 }
 
+// DGtal .longvol voxels are 64-bit little-endian words: this sink assembles them and gives the
+// next sink one byte per voxel, `to_byte(word)` (which may refuse a value, naming it).
+class WordSink final : public VoxelSink {
+ public:
+  using ToByte = std::function<std::uint8_t(std::uint64_t)>;
+  WordSink(VoxelSink& next, ToByte to_byte) : next_(next), to_byte_(std::move(to_byte)) {}
+  void check(const std::string& path, const Eigen::Vector3i& size) const override { next_.check(path, size); }
+  void begin(const std::string& path, const Eigen::Vector3i& size) override { next_.begin(path, size); }
+  void consume(const std::uint8_t* bytes, std::size_t n) override {
+    for (std::size_t i = 0; i < n; ++i) {
+      word_ |= std::uint64_t(bytes[i]) << (8 * filled_);
+      if (++filled_ < 8) continue;
+      out_.push_back(to_byte_(word_));
+      word_ = 0, filled_ = 0;
+      if (out_.size() == kChunk) flush();
+    }
+    flush();  // whole words only reach the next sink: its chunks may end anywhere
+  }
+
+ private:
+  void flush() {
+    if (!out_.empty()) next_.consume(out_.data(), out_.size());
+    out_.clear();
+  }
+  VoxelSink& next_;
+  ToByte to_byte_;
+  std::vector<std::uint8_t> out_;
+  std::uint64_t word_ = 0;
+  unsigned filled_ = 0;
+};
+
 // DGtal .vol: "Key: value" lines ended by a line "."; then X*Y*Z bytes, x fastest: raw
 // (Version 2, or no Version field) or one zlib stream (Version 3, DGtal's VolWriter with compression).
-void read_vol(const std::string& path, VoxelSink& sink) {
+// .longvol: the same header (Lvoxel-* fields for Voxel-*), 8 bytes per voxel, little-endian; the
+// words go through a WordSink made by the caller.
+void read_vol(const std::string& path, VoxelSink& sink, std::size_t bytes_per_voxel = 1) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
   std::map<std::string, std::string> fields;
@@ -220,9 +256,9 @@ void read_vol(const std::string& path, VoxelSink& sink) {
   const auto version = fields.find("Version");
   const std::string ver = version == fields.end() ? "2" : version->second;
   if (ver == "2")
-    read_payload(in, path, s, sink);
+    read_payload(in, path, s, sink, bytes_per_voxel);
   else if (ver == "3")
-    read_compressed_payload(in, path, s, n, sink, "zlib");
+    read_compressed_payload(in, path, s, n * bytes_per_voxel, sink, "zlib");
   else
     fail(path, "unsupported Version '" + ver.substr(0, 20) + "' (supported: 2 raw, 3 zlib)");
 }
@@ -234,16 +270,43 @@ void write_values(io_detail::OutputFile& out, const Volume& v) {
   out.commit();
 }
 
-void write_vol(const std::string& path, const Volume& v, bool compressed) {
+// The payload of a .vol (the bytes) or .longvol (each byte as a 64-bit little-endian word), in
+// chunks of at most kChunk voxels: emit(data, length, last).
+template <class Emit>
+void for_each_payload_chunk(const Volume& v, bool longvol, Emit&& emit) {
+  std::vector<std::uint8_t> words;
+  std::size_t fed = 0;
+  do {
+    const std::size_t k = std::min(kChunk, v.values.size() - fed);
+    const std::uint8_t* data = v.values.data() + fed;
+    if (longvol) {
+      words.assign(8 * k, 0);
+      for (std::size_t i = 0; i < k; ++i) words[8 * i] = data[i];  // little-endian: the low byte first
+      data = words.data();
+    }
+    fed += k;
+    emit(data, longvol ? 8 * k : k, fed == v.values.size());
+  } while (fed < v.values.size());
+}
+
+void write_vol(const std::string& path, const Volume& v, bool compressed, bool longvol) {
 #ifndef CORRLAP_HAVE_ZLIB
-  if (compressed) fail(path, ".vol Version 3 (zlib) needs corrlap built with zlib (zlib1g-dev)");
+  if (compressed) fail(path, "Version 3 (zlib) needs corrlap built with zlib (zlib1g-dev)");
 #endif
   io_detail::OutputFile out(path, "volume", true);
-  std::fprintf(out.get(),
-               "Center-X: %d\nCenter-Y: %d\nCenter-Z: %d\nX: %d\nY: %d\nZ: %d\nVoxel-Size: 1\nAlpha-Color: 0\n"
-               "Voxel-Endian: 0\nInt-Endian: 0123\nVersion: %d\n.\n",
-               v.size.x() / 2, v.size.y() / 2, v.size.z() / 2, v.size.x(), v.size.y(), v.size.z(), compressed ? 3 : 2);
-  if (!compressed) return write_values(out, v);
+  // DGtal's VolWriter and LongvolWriter headers (LongvolWriter writes "Lvoxel-Size: 4").
+  std::fprintf(out.get(), "Center-X: %d\nCenter-Y: %d\nCenter-Z: %d\nX: %d\nY: %d\nZ: %d\n%s\nAlpha-Color: 0\n%s\n",
+               v.size.x() / 2, v.size.y() / 2, v.size.z() / 2, v.size.x(), v.size.y(), v.size.z(),
+               longvol ? "Lvoxel-Size: 4" : "Voxel-Size: 1", longvol ? "Lvoxel-Endian: 0" : "Voxel-Endian: 0");
+  std::fprintf(out.get(), "Int-Endian: 0123\nVersion: %d\n.\n", compressed ? 3 : 2);
+  if (!compressed) {
+    if (!longvol) return write_values(out, v);
+    // A short write sets the stream's error flag, which commit() reports naming the file.
+    for_each_payload_chunk(v, true, [&](const std::uint8_t* data, std::size_t n, bool) {
+      (void)std::fwrite(data, 1, n, out.get());
+    });
+    return out.commit();
+  }
 #ifdef CORRLAP_HAVE_ZLIB
   // One zlib stream, deflated 1 MiB of voxels at a time: the compressed volume is never held whole.
   struct Stream {
@@ -256,22 +319,19 @@ void write_vol(const std::string& path, const Volume& v, bool compressed) {
   if (deflateInit(&s.zs, Z_DEFAULT_COMPRESSION) != Z_OK) fail(path, "zlib initialisation failed");
   s.live = true;
   std::vector<unsigned char> buffer(kChunk);
-  std::size_t fed = 0;
-  int rc = Z_OK;
-  do {
-    const std::size_t k = std::min(kChunk, v.values.size() - fed);
-    s.zs.next_in = const_cast<Bytef*>(v.values.data() + fed);
-    s.zs.avail_in = uInt(k);
-    fed += k;
-    const int flush = fed == v.values.size() ? Z_FINISH : Z_NO_FLUSH;
+  for_each_payload_chunk(v, longvol, [&](const std::uint8_t* data, std::size_t n, bool last) {
+    s.zs.next_in = const_cast<Bytef*>(data);
+    s.zs.avail_in = uInt(n);
+    const int flush = last ? Z_FINISH : Z_NO_FLUSH;
+    int rc = Z_OK;
     do {
       s.zs.next_out = buffer.data();
       s.zs.avail_out = uInt(buffer.size());
       rc = deflate(&s.zs, flush);
       if (rc == Z_STREAM_ERROR) fail(path, "zlib compression failed");
       (void)std::fwrite(buffer.data(), 1, buffer.size() - s.zs.avail_out, out.get());
-    } while (s.zs.avail_out == 0);
-  } while (rc != Z_STREAM_END);
+    } while (s.zs.avail_out == 0 || (last && rc != Z_STREAM_END));
+  });
   out.commit();
 #endif
 }
@@ -484,12 +544,18 @@ class ThresholdSink final : public VoxelSink {
   std::array<bool, 256> inside_{};
 };
 
-void read_into(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink) {
+// `word_to_byte`: what a .longvol voxel becomes for the sink.
+void read_into(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink,
+               const WordSink::ToByte& word_to_byte) {
   const std::string ext = file_extension(path);
   if (ext == "vol") return read_vol(path, sink);
+  if (ext == "longvol") {
+    WordSink words(sink, word_to_byte);
+    return read_vol(path, words, 8);
+  }
   if (ext == "raw") return read_raw(path, options, sink);
   if (ext == "nrrd") return read_nrrd(path, sink);
-  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .raw, .nrrd)");
+  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .longvol, .raw, .nrrd)");
 }
 
 void write_nrrd(const std::string& path, const Volume& v) {
@@ -513,7 +579,12 @@ bool nrrd_gzip_supported() {
 
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   VolumeSink sink;
-  read_into(path, options, sink);
+  read_into(path, options, sink, [&path](std::uint64_t word) {
+    if (word > 255)
+      fail(path, "longvol value " + std::to_string(word) +
+                     " does not fit the uint8 volume; read it thresholded (read_volume_as_voxels, --threshold)");
+    return std::uint8_t(word);
+  });
   return std::move(sink.volume);
 }
 
@@ -523,12 +594,12 @@ void write_volume(const std::string& path, const Volume& volume, const VolumeWri
   if (!n || volume.values.size() != *n)
     fail(path, "volume data (" + io_detail::readable_count(volume.values.size()) + " values) does not match its " +
                    describe(volume.size));
-  if (options.compressed && ext != "vol")
-    fail(path, "compressed writing is for .vol files (Version 3); ." + ext + " is written uncompressed");
-  if (ext == "vol") return write_vol(path, volume, options.compressed);
+  if (options.compressed && ext != "vol" && ext != "longvol")
+    fail(path, "compressed writing is for .vol and .longvol files (Version 3); ." + ext + " is written uncompressed");
+  if (ext == "vol" || ext == "longvol") return write_vol(path, volume, options.compressed, ext == "longvol");
   if (ext == "raw") return write_raw(path, volume);
   if (ext == "nrrd") return write_nrrd(path, volume);
-  fail(path, "unsupported extension '" + ext + "' for writing (supported: .vol, .raw, .nrrd)");
+  fail(path, "unsupported extension '" + ext + "' for writing (supported: .vol, .longvol, .raw, .nrrd)");
 }
 
 VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
@@ -555,8 +626,10 @@ Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size) { return (si
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options) {
   if (options.h < 0.0 || !std::isfinite(options.h))
     throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
-  ThresholdSink sink(options.threshold, options.h, options.centered);
-  read_into(path, options, sink);
+  // A .longvol word is compared with the threshold itself (labels may exceed 255): 1 inside, 0 out.
+  const bool words = file_extension(path) == "longvol";
+  ThresholdSink sink(words ? 0.5 : options.threshold, options.h, options.centered);
+  read_into(path, options, sink, [&options](std::uint64_t word) { return std::uint8_t(double(word) > options.threshold); });
   if (sink.inside == 0)
     throw InputError("volume '" + path + "': no voxel above the threshold " +
                      io_detail::readable_number(options.threshold) + " (empty volume)");

@@ -1,6 +1,6 @@
 #pragma once
 // Grey-level volumes (uint8 voxels) and their conversion to voxel sets by a threshold.
-// Formats: DGtal .vol (read/write; Version 2 raw and Version 3 zlib), raw uint8 with given dimensions (.raw), NRRD
+// Formats: DGtal .vol and .longvol (64-bit voxels) (read/write; Version 2 raw and Version 3 zlib), raw uint8 with given dimensions (.raw), NRRD
 // (.nrrd: 3D uint8 with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
 #include <Eigen/Core>
 #include <corrlap/core/voxel_grid.hpp>
@@ -32,15 +32,15 @@ struct VolumeReadOptions {
 };
 
 /// Reads by extension. Throws IoError naming the file and the problem (missing header field,
-/// truncated data, absurd dimensions...).
+/// truncated data, absurd dimensions, a .longvol value above 255...).
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
 struct VolumeWriteOptions {
-  /// .vol only: Version 3, the voxels as one zlib stream (DGtal's VolWriter with compression);
+  /// .vol and .longvol only: Version 3, the voxels as one zlib stream (DGtal's VolWriter with compression);
   /// needs zlib. Otherwise Version 2, raw bytes.
   bool compressed = false;
 };
 
-/// Writes by extension (.vol, .raw, .nrrd). NRRD is written as uint8, raw encoding.
+/// Writes by extension (.vol, .longvol, .raw, .nrrd). NRRD is written as uint8, raw encoding.
 void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options = {});
 /// True when corrlap was built with zlib: NRRD files with "encoding: gzip" and .vol Version 3 files
 /// can be read (and .vol Version 3 written).

@@ -29,10 +29,11 @@ void run(const DigitizeArgs& a) {
   if (!a.volume_out.empty()) {
     if (!loaded->grid) throw InputError("--volume-out needs voxels (--shape, --polynomial, --volume or --mesh-file)");
     VolumeWriteOptions options;
-    options.compressed = file_extension(a.volume_out) == "vol" && nrrd_gzip_supported();  // Version 3, as DGtal
+    const std::string ext = file_extension(a.volume_out);
+    options.compressed = (ext == "vol" || ext == "longvol") && nrrd_gzip_supported();  // Version 3, as DGtal
     write_volume(a.volume_out, voxels_to_volume(*loaded->grid), options);
     std::cerr << "wrote " << a.volume_out << " (" << loaded->grid->size().x() << "x" << loaded->grid->size().y() << "x"
-              << loaded->grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", .vol Version 3" : "")
+              << loaded->grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", Version 3" : "")
               << ")\n";
   }
   SurfelMesh mesh = loaded ? loaded->mesh : a.source.surface();
@@ -65,7 +66,7 @@ RegisterCommand reg(10, "digitize", [](CLI::App& app) {
   args->source.add_options(*cmd, /*with_mesh=*/false);
   cmd->add_option("--out", args->out, "output mesh (.obj, or .ply with face and vertex normals)");
   cmd->add_option("--volume-out", args->volume_out,
-                  "also write the voxels as a volume (.vol: Version 3 with zlib, .nrrd, .raw; 255 inside, 0 outside)");
+                  "also write the voxels as a volume (.vol, .longvol: Version 3 with zlib, .nrrd, .raw; 255 inside, 0 outside)");
   cmd->add_option("--output-units", args->output_units,
                   "world: positions h z (volumes centred, docs/io.md); voxels: the input's voxel units (a volume "
                   "file's voxel indices; pointels at half-integers)")

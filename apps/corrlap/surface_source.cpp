@@ -19,7 +19,7 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   auto* g = cmd.add_option_group("surface", "where the digital surface comes from (one of)");
   auto* s = g->add_option("--shape", shape, "named implicit shape (sphere1, torus, goursat, ...)");
   auto* p = g->add_option("--polynomial", polynomial, "implicit shape P(x,y,z) <= 0, e.g. \"x^2+y^2+z^2-1\"");
-  auto* v = g->add_option("--volume", volume, "volume file (.vol, .nrrd, .raw) digitized by --threshold");
+  auto* v = g->add_option("--volume", volume, "volume file (.vol, .longvol, .nrrd, .raw) digitized by --threshold");
   auto* mf = g->add_option("--mesh-file", mesh_file,
                            "closed triangle mesh (.obj, .ply, .off) voxelized at --resolution N or grid step --h");
   CLI::Option* m = nullptr;

@@ -145,9 +145,9 @@ TEST_CASE("OFF files are read (comments, counts on the header line, colours igno
   CHECK(read_off(q).faces.size() == 1);
 }
 
-TEST_CASE("volume round trips are exact for .vol, .raw and .nrrd") {
+TEST_CASE("volume round trips are exact for .vol, .longvol, .raw and .nrrd") {
   const Volume v = random_volume({5, 3, 4}, 3);
-  for (const char* ext : {"vol", "raw", "nrrd"}) {
+  for (const char* ext : {"vol", "longvol", "raw", "nrrd"}) {
     CAPTURE(ext);
     const std::string p = tmp_path(std::string("rt.") + ext);
     write_volume(p, v);
@@ -201,6 +201,53 @@ TEST_CASE(".vol Version 3 (zlib): DGtal's compressed files are read; written and
   // 2^27 voxels announced in a 60-byte stream: refused before inflating (deflate expands <= 1032x).
   write_text(p, "X: 512\nY: 512\nZ: 512\nVersion: 3\n.\n" + data.substr(0, 60));
   CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("deflate expands at most"), IoError);
+}
+
+TEST_CASE(".longvol: 64-bit little-endian voxels (DGtal's LongvolWriter layout), thresholded as they are") {
+  // Written by hand as DGtal's LongvolWriter lays it out: header, then one 8-byte word per voxel,
+  // least significant byte first. Values up to 2^40: labels beyond uint8.
+  const Eigen::Vector3i size(3, 2, 2);
+  std::string payload;
+  std::vector<std::uint64_t> values;
+  for (int i = 0; i < 12; ++i) {
+    const std::uint64_t value = i % 3 == 0 ? (std::uint64_t{1} << 40) + std::uint64_t(i) : std::uint64_t(i * 20);
+    values.push_back(value);
+    for (int b = 0; b < 8; ++b) payload.push_back(char((value >> (8 * b)) & 0xFF));
+  }
+  const std::string header =
+      "Center-X: 1\nCenter-Y: 1\nCenter-Z: 1\nX: 3\nY: 2\nZ: 2\nLvoxel-Size: 4\nAlpha-Color: 0\n"
+      "Lvoxel-Endian: 0\nInt-Endian: 0123\nVersion: 2\n.\n";
+  const std::string p = tmp_path("labels.longvol");
+  write_text(p, header + payload);
+  VolumeReadOptions o;
+  o.h = 1.0;
+  for (const double threshold : {100.0, 1000.0, 1e12}) {
+    CAPTURE(threshold);
+    o.threshold = threshold;
+    const VoxelGrid g = read_volume_as_voxels(p, o);
+    int differ = 0;
+    for (int i = 0; i < 12; ++i)
+      differ += g.get(i % 3, (i / 3) % 2, i / 6) != (double(values[std::size_t(i)]) > threshold);
+    CHECK(differ == 0);
+  }
+  // As uint8 bytes, values above 255 are named, not wrapped.
+  CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("longvol value 1099511627776"), IoError);
+  // A word short: truncated, named.
+  write_text(p, header + payload.substr(0, payload.size() - 3));
+  CHECK_THROWS_WITH_AS(read_volume_as_voxels(p, o), doctest::Contains("truncated data"), IoError);
+  // Our writer: DGtal's field names, 8 bytes per voxel, Version 3 when compressed.
+  const Volume v = random_volume({4, 3, 2}, 5);
+  write_volume(p, v);
+  const std::string text = corrlap::test::read_text(p);
+  CHECK(text.find("Lvoxel-Size: 4\n") != std::string::npos);
+  CHECK(text.size() - (text.find("Version: 2\n.\n") + 13) == 8 * v.values.size());
+  if (nrrd_gzip_supported()) {
+    VolumeWriteOptions compressed;
+    compressed.compressed = true;
+    write_volume(p, v, compressed);
+    CHECK(corrlap::test::read_text(p).find("Version: 3\n.\n") != std::string::npos);
+    CHECK(read_volume(p).values == v.values);
+  }
 }
 
 TEST_CASE("NRRD: ascii encoding, aliases of uint8, comments and key/value pairs") {
@@ -415,9 +462,10 @@ TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 
 TEST_CASE("read_volume_as_voxels streams every format into the same voxels as threshold_volume(read_volume)") {
   // 70 x 3 x 4: rows longer than one 64-bit word, values on both sides of the threshold.
   const Volume v = random_volume({70, 3, 4}, 11);
-  for (const char* ext : {"vol", "raw", "nrrd"})
+  for (const char* ext : {"vol", "longvol", "raw", "nrrd"})
     for (bool compressed : {false, true}) {
-      if (compressed && (std::string(ext) != "vol" || !nrrd_gzip_supported())) continue;
+      if (compressed && ((std::string(ext) != "vol" && std::string(ext) != "longvol") || !nrrd_gzip_supported()))
+        continue;
       CAPTURE(ext);
       CAPTURE(compressed);
       const std::string p = tmp_path(std::string("stream.") + ext);
