@@ -110,18 +110,17 @@ FaceClusters cluster_faces(const std::vector<WalkFace>& face, const std::vector<
     c.radius[k] = std::max(c.radius[k], (face[f].centroid - c.centre[k]).norm() + face[f].rho);
   }
   // Faces around each cluster: neighbours of its faces in other clusters, without repeats.
-  std::vector<std::vector<int>> around(C);
+  std::vector<std::pair<int, int>> around;  // (cluster, face)
   for (std::size_t f = 0; f < F; ++f)
     for (int i = neighbour_start[f]; i < neighbour_start[f + 1]; ++i)
       if (const int n = neighbour_faces[std::size_t(i)]; c.of_face[std::size_t(n)] != c.of_face[f])
-        around[std::size_t(c.of_face[f])].push_back(n);
+        around.emplace_back(c.of_face[f], n);
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
   c.around_start.assign(C + 1, 0);
-  for (std::size_t k = 0; k < C; ++k) {
-    std::sort(around[k].begin(), around[k].end());
-    around[k].erase(std::unique(around[k].begin(), around[k].end()), around[k].end());
-    c.around.insert(c.around.end(), around[k].begin(), around[k].end());
-    c.around_start[k + 1] = int(c.around.size());
-  }
+  c.around.reserve(around.size());
+  for (const auto& [k, n] : around) ++c.around_start[std::size_t(k) + 1], c.around.push_back(n);
+  for (std::size_t k = 0; k < C; ++k) c.around_start[k + 1] += c.around_start[k];
   return c;
 }
 
@@ -544,7 +543,12 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
     }
     d.mu0 = mu0_[f], d.mu1 = mu1_[f];
   });
-  const FaceClusters clusters = cluster_faces(face, neighbour_start_, neighbour_faces_, 2.0 * grid_cell_);
+  // Clusters pay off when the ball holds many of them (radius >= 12 edges, ~3 cluster widths);
+  // below, the walk is face by face.
+  const double edge = 0.5 * grid_cell_;
+  const bool use_clusters = r >= 12.0 * edge;
+  const FaceClusters clusters =
+      use_clusters ? cluster_faces(face, neighbour_start_, neighbour_faces_, 4.0 * edge) : FaceClusters{};
   MeanCurvature out{Eigen::VectorXd(V), Eigen::VectorXd(V)};
   struct Walk {
     std::vector<std::uint32_t> stamp, cluster_seen;
@@ -588,8 +592,10 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
       };
       for (std::size_t head = 0; head < w.queue.size(); ++head) {
         const int f = w.queue[head];
-        const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
-        if (w.cluster_seen[c] != w.generation) {
+        const std::size_t c = use_clusters ? std::size_t(clusters.of_face[std::size_t(f)]) : 0;
+        if (!use_clusters) {
+          // the face by face walk below
+        } else if (w.cluster_seen[c] != w.generation) {
           w.cluster_seen[c] = w.generation;
           w.cluster_inside[c] = (clusters.centre[c] - x).norm() + clusters.radius[c] <= r;
           if (w.cluster_inside[c]) {

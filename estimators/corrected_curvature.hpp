@@ -52,8 +52,9 @@ class CorrectedCurvature {
   /// what regularization needs: no muXY sums nor eigen solves, and the walk classifies a face from
   /// its centroid's distance d alone when it can (whole if d + rho <= r, out if d - rho >= r, rho
   /// the largest corner distance from the centroid), reading its corners only near the sphere;
-  /// edge-connected clusters of faces within a cube of side 4 edges are summed at once when the
-  /// ball holds all their corners (then only the faces around them are walked on).
+  /// for radii of 12 edges and more, edge-connected clusters of faces within a cube of side 4
+  /// edges are summed at once when the ball holds all their corners (then only the faces around
+  /// them are walked on).
   /// The constant variant and radii below 1e-6 use at_vertices.
   MeanCurvature mean_curvature_at_vertices(double r) const;
   /// Estimates with balls centred at arbitrary points (#P x 3): the seed is the face with the
