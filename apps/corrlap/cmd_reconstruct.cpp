@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "command.hpp"
+#include "surface_source.hpp"
 #include "validators.hpp"
 
 namespace corrlap::cli {
@@ -31,7 +32,7 @@ struct ReconstructArgs {
   std::string methods = "fem,polydec";
   std::optional<double> curvature_radius, h_clamp;
   double alpha0 = 10.0;
-  bool no_render = false;
+  bool no_render = false, allow_nonmanifold = false;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point& t0) {
@@ -63,6 +64,7 @@ void run(const ReconstructArgs& a) {
   for (const std::string& w : report.warnings()) std::cerr << "warning: " << a.mesh_file << ": " << w << "\n";
   const SurfelMesh coarse = extract_surface(grid);
   if (coarse.num_faces() == 0) throw InputError("reconstruct: the voxelization of '" + a.mesh_file + "' is empty");
+  check_regularizable(coarse, a.allow_nonmanifold, "reconstruct");
   const SurfelMesh mesh = subdivide_quads(coarse, a.subdivide);
   stages["voxelize_s"] = seconds_since(t);
   // The normal map at the subdivided surface: the fine mesh's normals at the closest points.
@@ -161,6 +163,8 @@ RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
+  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
+                "reconstruct from a coarse voxelization with non-manifold edges or vertices (refused by default)");
   cmd->add_flag("--no-render", args->no_render, "do not draw the pictures");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->callback([args] { run(*args); });

@@ -176,17 +176,7 @@ void run(const RegularizeArgs& a) {
   auto t = std::chrono::steady_clock::now();
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
-  const MeshInfo info = compute_mesh_info(mesh);
-  if (!info.closed())
-    throw InputError("regularize: the surface is open (" + std::to_string(info.boundary_edges) +
-                     " boundary edges); the regularization is defined for closed surfaces");
-  // Voxels that touch along an edge or at a corner only: the surface pinches there, its normals
-  // and curvature are unreliable nearby, and the solve moves it by several voxels (measured).
-  if (!info.manifold() && !a.allow_nonmanifold)
-    throw InputError("regularize: the surface is not manifold (" + std::to_string(info.nonmanifold_edges) +
-                     " non-manifold edges, " + std::to_string(info.nonmanifold_vertices) +
-                     " non-manifold vertices: voxels touching along an edge or a corner); clean the volume "
-                     "(e.g. a morphological opening) or give --allow-nonmanifold to regularize anyway");
+  check_regularizable(mesh, a.allow_nonmanifold, "regularize");
   stages["surface_s"] = seconds_since(t);
   std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces, h = " << mesh.grid_step() << "\n";

@@ -67,6 +67,12 @@ struct SurfaceSource {
   std::string describe() const;
 };
 
+/// The surfaces `regularize` and `reconstruct` accept: closed (InputError naming the boundary
+/// edges otherwise) and, unless `allow_nonmanifold`, manifold. Voxels that touch along an edge or at
+/// a corner only pinch the surface: its normals and curvature are unreliable nearby and the solve
+/// moves it by several voxels (measured), so that is refused by default, naming the counts.
+void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold, const std::string& command);
+
 /// The boundary condition the solvers' problems get on this surface: none on a closed surface;
 /// on an open one, natural (zero Neumann) conditions on its boundary edges, because every
 /// discretization assembles L without boundary terms (docs/math.md §10.4).

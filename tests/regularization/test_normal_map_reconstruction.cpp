@@ -97,3 +97,30 @@ TEST_CASE("corrlap reconstruct: files, metrics, the corrected method closer than
   CHECK(test::run_cli("reconstruct --mesh-file " + obj + " --methods nosuch --out " + dir, &out, &err) == 1);
   CHECK(test::run_cli("reconstruct --mesh-file " + dir + "/missing.obj --out " + dir, &out, &err) == 1);
 }
+
+TEST_CASE("corrlap reconstruct: a non-manifold coarse voxelization is refused unless --allow-nonmanifold") {
+  // Two unit cubes that share one edge (x = y = 1): their voxels touch along it at any resolution.
+  std::string obj_text;
+  const int quads[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  for (const int offset : {0, 1})
+    for (int corner = 0; corner < 8; ++corner)
+      obj_text += "v " + std::to_string(offset + corner / 4) + " " + std::to_string(offset + corner / 2 % 2) + " " +
+                  std::to_string(corner % 2) + "\n";
+  for (const int base : {1, 9})
+    for (const auto& q : quads)
+      obj_text += "f " + std::to_string(base + q[0]) + " " + std::to_string(base + q[1]) + " " +
+                  std::to_string(base + q[2]) + " " + std::to_string(base + q[3]) + "\n";
+  const std::string obj = test::tmp_path("two_cubes.obj");
+  test::write_text(obj, obj_text);
+  const std::string dir = test::tmp_path("reconstruct_nonmanifold");
+  std::string out, err;
+  CHECK(test::run_cli("reconstruct --mesh-file " + obj + " --resolution 8 --subdivide 1 --no-render --out " + dir, &out,
+                      &err) == 1);
+  CHECK(err.find("reconstruct: the surface is not manifold (4 non-manifold edges") != std::string::npos);
+  CHECK(err.find("--allow-nonmanifold") != std::string::npos);
+  CHECK(test::run_cli("reconstruct --mesh-file " + obj +
+                          " --resolution 8 --subdivide 1 --no-render --allow-nonmanifold --out " + dir,
+                      &out, &err) == 0);
+  const auto m = nlohmann::json::parse(test::read_text(dir + "/metrics.json"));
+  CHECK(std::isfinite(m["methods"]["fem"]["distance_mean_after"].get<double>()));
+}
