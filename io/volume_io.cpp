@@ -302,9 +302,8 @@ void write_vol(const std::string& path, const Volume& v, bool compressed, bool l
   if (!compressed) {
     if (!longvol) return write_values(out, v);
     // A short write sets the stream's error flag, which commit() reports naming the file.
-    for_each_payload_chunk(v, true, [&](const std::uint8_t* data, std::size_t n, bool) {
-      (void)std::fwrite(data, 1, n, out.get());
-    });
+    for_each_payload_chunk(
+        v, true, [&](const std::uint8_t* data, std::size_t n, bool) { (void)std::fwrite(data, 1, n, out.get()); });
     return out.commit();
   }
 #ifdef CORRLAP_HAVE_ZLIB
@@ -629,7 +628,8 @@ VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions
   // A .longvol word is compared with the threshold itself (labels may exceed 255): 1 inside, 0 out.
   const bool words = file_extension(path) == "longvol";
   ThresholdSink sink(words ? 0.5 : options.threshold, options.h, options.centered);
-  read_into(path, options, sink, [&options](std::uint64_t word) { return std::uint8_t(double(word) > options.threshold); });
+  read_into(path, options, sink,
+            [&options](std::uint64_t word) { return std::uint8_t(double(word) > options.threshold); });
   if (sink.inside == 0)
     throw InputError("volume '" + path + "': no voxel above the threshold " +
                      io_detail::readable_number(options.threshold) + " (empty volume)");

@@ -1,6 +1,7 @@
 #pragma once
 // Grey-level volumes (uint8 voxels) and their conversion to voxel sets by a threshold.
-// Formats: DGtal .vol and .longvol (64-bit voxels) (read/write; Version 2 raw and Version 3 zlib), raw uint8 with given dimensions (.raw), NRRD
+// Formats: DGtal .vol and .longvol (64-bit voxels) (read/write; Version 2 raw and Version 3 zlib), raw uint8 with given
+// dimensions (.raw), NRRD
 // (.nrrd: 3D uint8 with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
 #include <Eigen/Core>
 #include <corrlap/core/voxel_grid.hpp>

@@ -65,8 +65,9 @@ RegisterCommand reg(10, "digitize", [](CLI::App& app) {
                                  "digitize an implicit shape, a volume or a closed triangle mesh into a surfel mesh");
   args->source.add_options(*cmd, /*with_mesh=*/false);
   cmd->add_option("--out", args->out, "output mesh (.obj, or .ply with face and vertex normals)");
-  cmd->add_option("--volume-out", args->volume_out,
-                  "also write the voxels as a volume (.vol, .longvol: Version 3 with zlib, .nrrd, .raw; 255 inside, 0 outside)");
+  cmd->add_option(
+      "--volume-out", args->volume_out,
+      "also write the voxels as a volume (.vol, .longvol: Version 3 with zlib, .nrrd, .raw; 255 inside, 0 outside)");
   cmd->add_option("--output-units", args->output_units,
                   "world: positions h z (volumes centred, docs/io.md); voxels: the input's voxel units (a volume "
                   "file's voxel indices; pointels at half-integers)")

@@ -172,11 +172,12 @@ void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold, const s
     throw InputError(command + ": the surface is open (" + std::to_string(info.boundary_edges) +
                      " boundary edges); the regularization is defined for closed surfaces");
   if (!info.manifold() && !allow_nonmanifold)
-    throw InputError(command + ": the surface is not manifold (" + std::to_string(info.nonmanifold_edges) +
-                     " non-manifold edges, " + std::to_string(info.nonmanifold_vertices) +
-                     " non-manifold vertices: voxels touching along an edge or a corner); clean the volume "
-                     "(e.g. a morphological opening; for a voxelized mesh, another --resolution) or give --allow-nonmanifold "
-                     "to go on anyway");
+    throw InputError(
+        command + ": the surface is not manifold (" + std::to_string(info.nonmanifold_edges) + " non-manifold edges, " +
+        std::to_string(info.nonmanifold_vertices) +
+        " non-manifold vertices: voxels touching along an edge or a corner); clean the volume "
+        "(e.g. a morphological opening; for a voxelized mesh, another --resolution) or give --allow-nonmanifold "
+        "to go on anyway");
 }
 
 }  // namespace corrlap::cli
