@@ -201,7 +201,7 @@ class WordSink final : public VoxelSink {
       word_ = 0, filled_ = 0;
       if (out_.size() == kChunk) flush();
     }
-    flush();  // whole words only reach the next sink: its chunks may end anywhere
+    flush();  // a chunk may end inside a word: its bytes wait in word_ for the next chunk
   }
 
  private:
