@@ -68,11 +68,9 @@ struct FaceClusters {
 FaceClusters cluster_faces(const std::vector<WalkFace>& face, const std::vector<int>& neighbour_start,
                            const std::vector<int>& neighbour_faces, double side) {
   const std::size_t F = face.size();
-  const auto cube = [&](std::size_t f) {
-    std::array<std::int64_t, 3> k;
-    for (int j = 0; j < 3; ++j) k[std::size_t(j)] = std::int64_t(std::floor(face[f].centroid[j] / side));
-    return k;
-  };
+  std::vector<std::array<std::int64_t, 3>> cube(F);
+  for (std::size_t f = 0; f < F; ++f)
+    for (int j = 0; j < 3; ++j) cube[f][std::size_t(j)] = std::int64_t(std::floor(face[f].centroid[j] / side));
   // Union-find over edge-adjacent faces in the same cube.
   std::vector<int> parent(F);
   for (std::size_t f = 0; f < F; ++f) parent[f] = int(f);
@@ -81,10 +79,9 @@ FaceClusters cluster_faces(const std::vector<WalkFace>& face, const std::vector<
     return f;
   };
   for (std::size_t f = 0; f < F; ++f) {
-    const auto kf = cube(f);
     for (int i = neighbour_start[f]; i < neighbour_start[f + 1]; ++i) {
       const int n = neighbour_faces[std::size_t(i)];
-      if (cube(std::size_t(n)) != kf) continue;
+      if (cube[std::size_t(n)] != cube[f]) continue;
       const int a = root(int(f)), b = root(n);
       if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
     }
@@ -590,24 +587,22 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
           w.queue.push_back(n);
         }
       };
+      // True when face f is summed with its whole cluster, now (first face of it popped) or before.
+      const auto summed_with_cluster = [&](int f) {
+        const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
+        if (w.cluster_seen[c] == w.generation) return w.cluster_inside[c] != 0;
+        w.cluster_seen[c] = w.generation;
+        w.cluster_inside[c] = (clusters.centre[c] - x).norm() + clusters.radius[c] <= r;
+        if (!w.cluster_inside[c]) return false;
+        m0 += clusters.mu0[c];
+        m1 += clusters.mu1[c];
+        for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
+          push(clusters.around[std::size_t(i)]);
+        return true;
+      };
       for (std::size_t head = 0; head < w.queue.size(); ++head) {
         const int f = w.queue[head];
-        const std::size_t c = use_clusters ? std::size_t(clusters.of_face[std::size_t(f)]) : 0;
-        if (!use_clusters) {
-          // the face by face walk below
-        } else if (w.cluster_seen[c] != w.generation) {
-          w.cluster_seen[c] = w.generation;
-          w.cluster_inside[c] = (clusters.centre[c] - x).norm() + clusters.radius[c] <= r;
-          if (w.cluster_inside[c]) {
-            m0 += clusters.mu0[c];
-            m1 += clusters.mu1[c];
-            for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
-              push(clusters.around[std::size_t(i)]);
-            continue;
-          }
-        } else if (w.cluster_inside[c]) {
-          continue;  // summed with its cluster
-        }
+        if (use_clusters && summed_with_cluster(f)) continue;
         const WalkFace& d = face[std::size_t(f)];
         const double dc = (d.centroid - x).norm();
         double weight;

@@ -177,10 +177,11 @@ TEST_CASE("constant-normal curvature measures: Gauss-Bonnet total, principal cur
 }
 
 TEST_CASE("mean_curvature_at_vertices equals at_vertices' H and area") {
-  // The fast walk classifies faces from their centroid distance and sums whole clusters of faces
-  // (side 4 edges) at once; the terms are at_vertices', their order differs. Radii up to 25 h
-  // (the regularization's 0.1 size at 512^3), where most of the ball is whole clusters. Torus (negative and positive H)
-  // and goursat with estimated (II-like, noisy) normals: perturbed radial-ish normals make mu1 vary face to face.
+  // The fast walk classifies faces from their centroid distance and, from 12 edges on, sums whole
+  // clusters of faces (side 4 edges) at once; the terms are at_vertices', their order differs.
+  // Radii up to 25 h (the regularization's 0.1 size at 512^3), where whole clusters cover about
+  // half of the ball. Torus (negative and positive H) and goursat with estimated (II-like, noisy)
+  // normals: perturbed radial-ish normals make mu1 vary face to face.
   for (const char* shape : {"torus", "goursat"}) {
     const SurfelMesh m = surface(shape, 0.4, -10.0, 10.0);
     std::srand(7);
