@@ -1,5 +1,7 @@
-// corrlap solve: pure-Neumann Poisson problem of docs/math.md §10.4 with any discretization and any
-// linear solver backend; prints timings, the residual and the error vs the analytic solution.
+// corrlap solve: factorizes and solves one of the systems the paper uses, with any discretization
+// and any linear solver backend; prints timings, the residual and the error vs the analytic solution.
+//   --system poisson: the pure-Neumann Poisson problem L g = M b of docs/math.md §10.4 (-L pinned);
+//   --system heat:    the diffusion step (M - dt L) X = L u of docs/math.md §10.3, dt = dt-factor * h.
 #include <chrono>
 #include <cmath>
 #include <corrlap/backends/registry.hpp>
@@ -32,6 +34,8 @@ struct SolveArgs {
   std::string config_file;
   std::vector<std::string> options;
   std::string out;
+  std::string system = "poisson";
+  double dt_factor = 0.035;
   bool json = false;
 };
 
@@ -69,31 +73,47 @@ void run(const SolveArgs& a) {
   const double assemble_s = seconds_since(t0);
   const Eigen::Index n = ops.L.rows();
 
-  // Right-hand side b = Delta f at q_v = (x_v - c) / |x_v - c| (docs/math.md §10.1), or from a file.
   const Eigen::Vector3d c(a.source.center[0], a.source.center[1], a.source.center[2]);
-  Eigen::VectorXd g;
-  double residual = 0.0;
-  std::optional<PoissonErrors> err;
-  if (analytic) {
-    const PoissonResult r =
-        explain_solver_failure(ops, [&] { return solve_poisson(ops, mesh.positions, *analytic, *solver, c); });
-    g = r.g;
-    residual = r.residual;
-    // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
-    const auto& shape = surface.shape;
-    if (shape && std::abs(shape->sphere_radius() - 1.0) < 1e-12) err = r.errors;
-  } else {
+  // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
+  const bool unit_sphere = analytic && surface.shape && std::abs(surface.shape->sphere_radius() - 1.0) < 1e-12;
+  // The input u (heat) or b (poisson): the test function's samples, or a file of one value per vertex.
+  Eigen::VectorXd from_file;
+  if (!analytic) {
     if (!std::filesystem::exists(a.rhs)) {
       std::string names;
       for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
       throw InputError("--rhs '" + a.rhs + "': neither a test function (" + names + ") nor an existing file");
     }
-    const Eigen::VectorXd b = read_scalars(a.rhs);
-    if (b.size() != n)
-      throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(b.size()) +
+    from_file = read_scalars(a.rhs);
+    if (from_file.size() != n)
+      throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(from_file.size()) +
                        " values, the mesh has " + std::to_string(n) + " vertices");
-    g = explain_solver_failure(ops, [&] { return solve_neumann_poisson(ops.L, ops.M, b, *solver, 0.0, 0); });
-    residual = neumann_residual(ops.L, ops.M, b, g, 0);
+  }
+  Eigen::VectorXd g;
+  double residual = 0.0, dt = 0.0;
+  std::optional<ErrorNorms> err;
+  if (a.system == "heat") {
+    // docs/math.md §10.3: X = (M - dt L)^{-1} L u approximates the Laplacian of u; dt = 0.035 h is the
+    // paper's diffusion time. grid_step() is h for digitized surfaces, the mean edge length otherwise.
+    dt = a.dt_factor * mesh.grid_step();
+    std::optional<TestFunctionSamples> samples;
+    if (analytic) samples = sample_on_unit_sphere(*analytic, mesh.positions, c);
+    const Eigen::VectorXd& u = analytic ? samples->f : from_file;
+    g = explain_solver_failure(ops, [&] { return forward_laplacian(ops.L, ops.M, u, *solver, dt); });
+    const Eigen::VectorXd Lu = ops.L * u;
+    const Eigen::VectorXd r = ops.M * g - dt * (ops.L * g) - Lu;
+    residual = Lu.norm() > 0.0 ? r.norm() / Lu.norm() : r.norm();
+    if (unit_sphere) err = error_norms(ops.M, g - samples->laplacian);
+  } else if (analytic) {
+    // Right-hand side b = Delta f at q_v = (x_v - c) / |x_v - c| (docs/math.md §10.1).
+    const PoissonResult r =
+        explain_solver_failure(ops, [&] { return solve_poisson(ops, mesh.positions, *analytic, *solver, c); });
+    g = r.g;
+    residual = r.residual;
+    if (unit_sphere) err = r.errors;
+  } else {
+    g = explain_solver_failure(ops, [&] { return solve_neumann_poisson(ops.L, ops.M, from_file, *solver, 0.0, 0); });
+    residual = neumann_residual(ops.L, ops.M, from_file, g, 0);
   }
   const SolverReport report = solver->info();
   if (!a.out.empty()) write_scalars(a.out, g);
@@ -101,6 +121,8 @@ void run(const SolveArgs& a) {
   if (a.json) {
     nlohmann::json j;
     j["solver"] = solver_name;
+    j["system"] = a.system;
+    if (a.system == "heat") j["dt"] = dt;
     j["method"] = a.method;
     j["surface"] = a.source.describe();
     j["normals"] = kind;
@@ -119,6 +141,10 @@ void run(const SolveArgs& a) {
     std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   } else {
     std::cout << "surface     " << a.source.describe() << " (" << n << " vertices)\n"
+              << "system      "
+              << (a.system == "heat" ? "heat: (M - dt L) X = L u, dt = " + std::to_string(dt)
+                                     : std::string("poisson: L g = M b, vertex 0 pinned"))
+              << "\n"
               << "method      " << a.method << " (normals " << kind << ")\n"
               << "solver      " << solver_name << "\n"
               << "assemble    " << assemble_s << " s\n"
@@ -128,7 +154,8 @@ void run(const SolveArgs& a) {
     if (report.iterations > 0) std::cout << " (" << report.iterations << " iterations)";
     std::cout << "\nresidual    " << residual << "\n";
     if (err)
-      std::cout << "error Linf  " << err->linf << "\nerror L2    " << err->l2 << " (M-weighted, docs/math.md §10.4)\n";
+      std::cout << "error Linf  " << err->linf << "\nerror L2    " << err->l2 << " (M-weighted, docs/math.md "
+                << (a.system == "heat" ? "§10.3, X vs the exact Laplacian" : "§10.4") << ")\n";
     else
       std::cout << "error       n/a (analytic solution known for x2/expx/p6 on the unit sphere only)\n";
   }
@@ -143,7 +170,9 @@ void run(const SolveArgs& a) {
 RegisterCommand reg(40, "solve", [](CLI::App& app) {
   auto args = std::make_shared<SolveArgs>();
   auto* cmd = app.add_subcommand(
-      "solve", "Poisson problem L g = M b on a closed surface (docs/math.md §10.4) with any method and backend");
+      "solve",
+      "solve the Poisson problem L g = M b (docs/math.md §10.4) or the diffusion step (M - dt L) X = L u (§10.3) "
+      "with any method and backend");
   args->source.add_options(*cmd);
   cmd->add_option("--method", args->method, "discretization (registry name)")->capture_default_str();
   args->normals.add_options(*cmd);
@@ -156,16 +185,29 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
   cmd->add_option(
          "--rhs", args->rhs,
          names +
-             " (docs/math.md §10.2: b = Laplacian of f at the projected vertices) or a file of one value per vertex")
+             " (docs/math.md §10.2, sampled at the projected vertices; poisson: b = Laplacian of f, heat: u = f) or a "
+             "file of one value per vertex (b or u)")
       ->capture_default_str();
   cmd->add_option("--solver", args->solver,
                   std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
   cmd->add_option("--config", args->config_file,
                   "JSON file of backend options, e.g. {\"solver\": \"cg\", \"tolerance\": 1e-10}");
   cmd->add_option("options", args->options, "backend options key=value (override --config)");
-  cmd->add_option("--out", args->out, "write the solution g (one value per vertex)");
+  cmd->add_option("--system", args->system,
+                  "poisson: L g = M b with -L pinned (docs/math.md §10.4); heat: (M - dt L) X = L u, the paper's "
+                  "diffusion matrix (§10.3), rhs = u")
+      ->check(CLI::IsMember({"poisson", "heat"}))
+      ->capture_default_str();
+  auto* dt_factor = cmd->add_option("--dt-factor", args->dt_factor, "heat: dt = dt-factor * h (h: the grid step)")
+                        ->check(CLI::PositiveNumber)
+                        ->capture_default_str();
+  cmd->add_option("--out", args->out, "write the solution g (poisson) or X (heat), one value per vertex");
   cmd->add_flag("--json", args->json, "print one JSON object");
-  cmd->callback([args] { run(*args); });
+  cmd->callback([args, dt_factor] {
+    if (dt_factor->count() > 0 && args->system != "heat")
+      throw InputError("--dt-factor applies to --system heat only (the Poisson system has no time step)");
+    run(*args);
+  });
 });
 
 }  // namespace

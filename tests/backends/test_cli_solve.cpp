@@ -117,6 +117,42 @@ TEST_CASE("corrlap solve: --normals gives the library's fields, the same as corr
   CHECK(err.find("x3") != std::string::npos);
 }
 
+TEST_CASE("corrlap solve --system heat factorizes the paper's diffusion matrix M - dt L (docs/math.md §10.3)") {
+  using namespace corrlap;
+  if (!discretization_registry().contains("fem")) return;
+  const ImplicitShape shape = make_implicit_shape("sphere1");
+  const VoxelGrid grid = digitize(shape, {.h = 0.2, .min_aabb = -2, .max_aabb = 2});
+  const SurfelMesh mesh = extract_surface(grid);
+  auto solver = make_linear_solver();
+  const Operators fem = corrected_fem(mesh, true_face_normals(shape, mesh));
+  const std::string base = "solve --system heat --shape sphere1 --h 0.2 --bbox -2 2 --method fem --normals true --json";
+  for (const char* rhs : {"x2", "expx"}) {
+    CAPTURE(rhs);
+    std::string out, err;
+    REQUIRE(run_cli(base + " --rhs " + rhs, &out, &err) == 0);
+    const auto j = nlohmann::json::parse(out);
+    CHECK(j["system"] == "heat");
+    CHECK(j["dt"].get<double>() == doctest::Approx(0.035 * 0.2).epsilon(1e-14));  // the default factor
+    // The library's forward evaluation with the same operator and dt: equal up to rounding.
+    const ErrorNorms lib = forward_error(fem, mesh.positions, test_function(rhs), *solver, 0.035 * 0.2);
+    CHECK(j["error_linf"].get<double>() == doctest::Approx(lib.linf).epsilon(1e-12));
+    CHECK(j["error_l2"].get<double>() == doctest::Approx(lib.l2).epsilon(1e-12));
+    CHECK(j["residual"].get<double>() < 1e-12);
+  }
+  // docs/math.md §12.5: FEM, h = 0.2, diffused forward L_inf on e^x = 0.584 (3 significant digits).
+  std::string out, err;
+  REQUIRE(run_cli(base + " --rhs expx", &out, &err) == 0);
+  CHECK(nlohmann::json::parse(out)["error_linf"].get<double>() == doctest::Approx(0.584).epsilon(0.005));
+  // Another factor changes dt (and the error); the Poisson system has no time step.
+  REQUIRE(run_cli(base + " --rhs x2 --dt-factor 0.1", &out, &err) == 0);
+  CHECK(nlohmann::json::parse(out)["dt"].get<double>() == doctest::Approx(0.02).epsilon(1e-14));
+  CHECK(run_cli("solve --system poisson --dt-factor 0.1 --shape sphere1 --h 0.2 --method fem --normals true", &out,
+                &err) == 1);
+  CHECK(err.find("--dt-factor applies to --system heat only") != std::string::npos);
+  CHECK(run_cli("solve --system wave --shape sphere1 --h 0.2", &out, &err) != 0);
+  CHECK(err.find("wave") != std::string::npos);
+}
+
 TEST_CASE("corrlap solve and eigs say which boundary condition an open surface gets") {
   // {z <= 0} in the box [-1, 1]^3: the surface stops at the box, so it has boundary edges.
   const std::string open = " --method fem --polynomial z --h 0.25 --bbox -1 1 --normals true";
