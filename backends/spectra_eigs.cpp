@@ -93,6 +93,18 @@ class MassOp {
   const SpMat& M_;
 };
 
+/// The Lanczos basis size of a run for `nev` pairs: ncv, or max(2 nev + 1, nev + 20), at most n.
+int basis_size(Eigen::Index n, int nev, int ncv) {
+  return int(std::min<Eigen::Index>(n, ncv > 0 ? std::max(ncv, nev + 2) : std::max(2 * nev + 1, nev + 20)));
+}
+
+/// Whether the dense solver is cheaper than Lanczos with a basis of `basis` vectors. Measured on
+/// digitized spheres (docs/backends.md, 2026-12-03): the dense solve costs about 9e-10 n^3 s, a
+/// shift-invert run about 3.8e-9 n basis^2 s (orthogonalization against the basis dominates), so the
+/// dense one wins while n^2 < 4.2 basis^2. With k = 49 that is n <= 250; a fixed size cannot be right
+/// for every k (k = 5: dense is already 5x slower at n = 296).
+bool dense_is_cheaper(Eigen::Index n, int basis) { return n <= 2 * Eigen::Index(basis); }
+
 EigenResult dense_solve(const SpMat& L, const SpMat& M, int k) {
   const Eigen::MatrixXd K = -Eigen::MatrixXd(L);
   const Eigen::MatrixXd Md = Eigen::MatrixXd(M);
@@ -103,6 +115,7 @@ EigenResult dense_solve(const SpMat& L, const SpMat& M, int k) {
   EigenResult r;
   r.values = es.eigenvalues().head(k);
   r.vectors = es.eigenvectors().leftCols(k);
+  r.method = "dense";
   return r;
 }
 
@@ -136,8 +149,8 @@ struct ShiftInvertEigenSolver::Impl {
   bool verify = true;
   int max_iterations = 1000;
   double tolerance = 1e-10;
-  int dense_threshold = 400;
-  Config linear_config;  // includes "solver"
+  int dense_threshold = -1;  // -1: by cost (dense_is_cheaper)
+  Config linear_config;      // includes "solver"
   SolverReport last_report;
 };
 
@@ -155,7 +168,9 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
       {"verify", "true", "deflate the pairs found and search the rest of the spectrum for missed copies"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
-      {"dense_threshold", "400", "use the dense solver when n <= this"},
+      {"dense_threshold", "auto",
+       "use the dense solver when n <= this; auto: when it is the cheaper one, n <= 2 x the Lanczos basis size "
+       "(measured, docs/backends.md)"},
   };
 }
 
@@ -182,9 +197,11 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   if (guard_text != "auto" && guard < 0) throw InputError("eigen solver 'shift-invert': guard must be >= 0 or auto");
   const int maxit = options.get_int("max_iterations", s.max_iterations);
   const double tol = options.get_double("tolerance", s.tolerance);
-  const int dense = options.get_int("dense_threshold", s.dense_threshold);
-  if (ncv < 0 || maxit < 1 || !(tol > 0.0) || dense < 0)
-    throw InputError("eigen solver 'shift-invert': ncv >= 0, max_iterations >= 1, tolerance > 0, dense_threshold >= 0");
+  const std::string dense_text = options.get_string("dense_threshold", "auto");
+  const int dense = dense_text == "auto" ? -1 : options.get_int("dense_threshold", 0);
+  if (ncv < 0 || maxit < 1 || !(tol > 0.0) || (dense_text != "auto" && dense < 0))
+    throw InputError(
+        "eigen solver 'shift-invert': ncv >= 0, max_iterations >= 1, tolerance > 0, dense_threshold >= 0 or auto");
   s.shift = shift;
   s.ncv = ncv;
   s.guard = guard;
@@ -200,7 +217,10 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   check_problem(L, M, k, "shift-invert eigen solver");
   const Eigen::Index n = L.rows();
   // Spectra needs k < ncv <= n; tiny problems go dense.
-  if (n <= s.dense_threshold || k + 2 > n) return dense_solve(L, M, k);
+  const int guard_wanted = s.guard >= 0 ? s.guard : std::max(6, k / 4);
+  const int nev = k + int(std::max<Eigen::Index>(0, std::min<Eigen::Index>(guard_wanted, n - 2 - k)));
+  const bool dense = s.dense_threshold >= 0 ? n <= s.dense_threshold : dense_is_cheaper(n, basis_size(n, nev, s.ncv));
+  if (dense || k + 2 > n) return dense_solve(L, M, k);
 
   auto linear = make_linear_solver(s.linear_config, kDefaultLinearSolver);
   ShiftInvertOp op(L, M, *linear);
@@ -208,8 +228,7 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   int restarts = 0;
   // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
   const auto run = [&](int nev, const Eigen::VectorXd* start, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
-    const int ncv =
-        int(std::min<Eigen::Index>(n, s.ncv > 0 ? std::max(s.ncv, nev + 2) : std::max(2 * nev + 1, nev + 20)));
+    const int ncv = basis_size(n, nev, s.ncv);
     Spectra::SymGEigsShiftSolver<ShiftInvertOp, MassOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, nev, ncv,
                                                                                               s.shift);
     if (start)
@@ -237,8 +256,6 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   // whole copies of 4- and 8-fold eigenvalues). Two defences: (1) `guard` extra eigenpairs, dropped
   // at the end; (2) verification: deflate everything found and look for eigenvalues below the k-th
   // in the rest of the spectrum; add them and repeat until there are none.
-  const int guard_wanted = s.guard >= 0 ? s.guard : std::max(6, k / 4);
-  const int nev = k + int(std::min<Eigen::Index>(guard_wanted, n - 2 - k));
   Eigen::VectorXd values;
   Eigen::MatrixXd vectors;
   run(nev, nullptr, values, vectors);
@@ -278,6 +295,7 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   r.values = values.head(k);
   r.vectors = vectors.leftCols(k);
   r.iterations = restarts;
+  r.method = "lanczos";
   return r;
 }
 

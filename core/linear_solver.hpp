@@ -88,6 +88,7 @@ struct EigenResult {
   Eigen::VectorXd values;   ///< ascending
   Eigen::MatrixXd vectors;  ///< one column per value, M-orthonormal
   int iterations = 0;
+  std::string method;  ///< how it was computed ("dense", "lanczos"), for reports
 };
 
 /// Computes the k eigenpairs of L u = lambda M u of smallest |lambda|.

@@ -36,11 +36,21 @@ TEST_CASE("eigs sparse and dense paths agree") {
   std::string sparse, dense, err;
   const std::string base = "eigs --method interpolated --shape sphere1 --h 0.2 --bbox -2 2 --normals true -k 12";
   REQUIRE(corrlap::test::run_cli(base + " --solver eigen-ldlt", &sparse, &err) == 0);
-  REQUIRE(corrlap::test::run_cli(base, &dense, &err) == 0);
+  CHECK(err.find("shift-invert (eigen-ldlt,") != std::string::npos);
+  REQUIRE(corrlap::test::run_cli(base + " --solver-option dense_threshold=100000", &dense, &err) == 0);
+  CHECK(err.find("the dense solver") != std::string::npos);
   const auto a = parse_values(sparse), b = parse_values(dense);
   REQUIRE(a.size() == 12);
   REQUIRE(b.size() == 12);
   for (std::size_t i = 1; i < a.size(); ++i) CHECK(a[i] == doctest::Approx(b[i]).epsilon(1e-8));
+  // By default the path is chosen by cost: dense for a tiny problem, Lanczos once n exceeds twice
+  // its basis (k = 12: basis 38, so n = 440 is Lanczos; the 2026-12-03 default took the dense path
+  // up to n = 6000, 1400 times slower at n = 5264).
+  REQUIRE(corrlap::test::run_cli(base, &dense, &err) == 0);
+  CHECK(err.find("shift-invert (cholmod,") != std::string::npos);
+  REQUIRE(corrlap::test::run_cli("eigs --method fem --shape sphere1 --h 0.6 --bbox -2 2 --normals true -k 12", &dense,
+                                 &err) == 0);
+  CHECK(err.find("the dense solver") != std::string::npos);
   CHECK(corrlap::test::run_cli(base + " --solver nosuchsolver", nullptr, &err) == 1);
   CHECK(err.find("cholmod") != std::string::npos);  // the error lists the valid names
 }
