@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <atomic>
+#include <corrlap/backends/detail/geometric_ordering.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <mutex>
 #include <new>
@@ -28,6 +29,9 @@ struct Api<int> {
   static int start(cholmod_common* c) { return cholmod_start(c); }
   static int finish(cholmod_common* c) { return cholmod_finish(c); }
   static cholmod_factor* analyze(cholmod_sparse* A, cholmod_common* c) { return cholmod_analyze(A, c); }
+  static cholmod_factor* analyze_p(cholmod_sparse* A, int* perm, cholmod_common* c) {
+    return cholmod_analyze_p(A, perm, nullptr, 0, c);
+  }
   static int factorize(cholmod_sparse* A, cholmod_factor* L, cholmod_common* c) { return cholmod_factorize(A, L, c); }
   static cholmod_dense* solve(cholmod_factor* L, cholmod_dense* B, cholmod_common* c) {
     return cholmod_solve(CHOLMOD_A, L, B, c);
@@ -41,6 +45,9 @@ struct Api<SuiteSparse_long> {
   static int start(cholmod_common* c) { return cholmod_l_start(c); }
   static int finish(cholmod_common* c) { return cholmod_l_finish(c); }
   static cholmod_factor* analyze(cholmod_sparse* A, cholmod_common* c) { return cholmod_l_analyze(A, c); }
+  static cholmod_factor* analyze_p(cholmod_sparse* A, SuiteSparse_long* perm, cholmod_common* c) {
+    return cholmod_l_analyze_p(A, perm, nullptr, 0, c);
+  }
   static int factorize(cholmod_sparse* A, cholmod_factor* L, cholmod_common* c) { return cholmod_l_factorize(A, L, c); }
   static cholmod_dense* solve(cholmod_factor* L, cholmod_dense* B, cholmod_common* c) {
     return cholmod_l_solve(CHOLMOD_A, L, B, c);
@@ -144,13 +151,15 @@ const char* ordering_name(int ordering) {
 struct CholmodSolver::Impl {
   // options
   std::string supernodal = "supernodal";
-  std::string ordering = "amd";
+  std::string ordering = "geometric";
   bool long_index = false;
   int openmp_threads = 1;
   int blas_threads = 0;
   bool check_symmetry = true;
 
   // state
+  Eigen::MatrixX3d positions;  // set_positions: one point per unknown, for the geometric ordering
+  bool geometric_used = false;
   cholmod_common common{};
   bool started = false;
   bool common_long = false;
@@ -208,7 +217,7 @@ struct CholmodSolver::Impl {
       common.method[0].ordering = ordering == "metis"     ? CHOLMOD_METIS
                                   : ordering == "nesdis"  ? CHOLMOD_NESDIS
                                   : ordering == "natural" ? CHOLMOD_NATURAL
-                                                          : CHOLMOD_AMD;
+                                                          : CHOLMOD_AMD;  // amd, geometric without points
     }
     common.postorder = 1;
   }
@@ -278,9 +287,20 @@ struct CholmodSolver::Impl {
     cholmod_sparse s = view<I>(A);
     free_factor();
     apply_options();
-    std::unique_lock<std::mutex> lock(metis_mutex, std::defer_lock);
-    if (ordering != "amd" && ordering != "natural") lock.lock();
-    factor = Api<I>::analyze(&s, &common);
+    // geometric: nested dissection by planes through the points (detail/geometric_ordering.hpp),
+    // handed to CHOLMOD as a given order (which it still postorders); without points, AMD.
+    geometric_used = ordering == "geometric" && positions.rows() == A.rows() && A.rows() > 1;
+    if (geometric_used) {
+      common.nmethods = 1;
+      common.method[0].ordering = CHOLMOD_GIVEN;  // analyze_p ignores the order for any other method
+      const std::vector<int> order = detail::geometric_nested_dissection(A, positions);
+      std::vector<I> perm(order.begin(), order.end());
+      factor = Api<I>::analyze_p(&s, perm.data(), &common);
+    } else {
+      std::unique_lock<std::mutex> lock(metis_mutex, std::defer_lock);
+      if (ordering != "amd" && ordering != "natural" && ordering != "geometric") lock.lock();
+      factor = Api<I>::analyze(&s, &common);
+    }
     if (!factor) check_status("analysis");
     if (!factor) fail(SolverStatus::NumericalIssue, "analysis returned no factor");
     check_status("analysis");
@@ -338,7 +358,9 @@ CholmodSolver::~CholmodSolver() = default;
 std::vector<ParameterInfo> CholmodSolver::options() const {
   return {
       {"supernodal", "supernodal", "supernodal | simplicial | auto (CHOLMOD's choice by flop count)"},
-      {"ordering", "amd", "amd | metis | nesdis | natural | auto (AMD, METIS if fill is high) | best (try all)"},
+      {"ordering", "geometric",
+       "geometric (nested dissection by planes through the unknowns' positions when the caller gives them, "
+       "else amd) | amd | metis | nesdis | natural | auto (AMD, METIS if fill is high) | best (try all)"},
       {"long_index", "false", "use CHOLMOD's 64-bit index API (very large systems)"},
       {"openmp_threads", "1",
        "1: serial, the parallelism comes from BLAS (default); 0: let OpenMP shrink CHOLMOD's team to idle cores "
@@ -358,10 +380,11 @@ void CholmodSolver::configure(const Config& options) {
     throw InputError("linear solver 'cholmod': config key 'supernodal' must be supernodal, simplicial or auto, got '" +
                      supernodal + "'");
   const std::string ordering = options.get_string("ordering", s.ordering);
-  if (ordering != "amd" && ordering != "metis" && ordering != "nesdis" && ordering != "natural" && ordering != "auto" &&
-      ordering != "best")
+  if (ordering != "geometric" && ordering != "amd" && ordering != "metis" && ordering != "nesdis" &&
+      ordering != "natural" && ordering != "auto" && ordering != "best")
     throw InputError(
-        "linear solver 'cholmod': config key 'ordering' must be amd, metis, nesdis, natural, auto or best, got '" +
+        "linear solver 'cholmod': config key 'ordering' must be geometric, amd, metis, nesdis, natural, auto or best, "
+        "got '" +
         ordering + "'");
   const int threads = options.get_int("openmp_threads", s.openmp_threads);
   if (threads < 0) throw InputError("linear solver 'cholmod': config key 'openmp_threads' must be >= 0");
@@ -412,6 +435,14 @@ void CholmodSolver::analyze(const SpMat& A) {
   ++s.analyses;
   s.report.status = SolverStatus::Success;
   s.report.analyze_seconds = watch.seconds();
+  s.report.ordering = ordering_used();
+  s.report.factor_nonzeros = s.common.lnz;
+  s.report.factor_flops = s.common.fl;
+}
+
+void CholmodSolver::set_positions(const Eigen::MatrixX3d& positions) {
+  if (!positions.allFinite()) throw InputError("linear solver 'cholmod': set_positions: the positions must be finite");
+  impl_->positions = positions;
 }
 
 void CholmodSolver::factorize(const SpMat& A) {
@@ -457,6 +488,9 @@ Eigen::MatrixXd CholmodSolver::solve(const Eigen::MatrixXd& B) {
 const SolverReport& CholmodSolver::info() const { return impl_->report; }
 int CholmodSolver::analysis_count() const { return impl_->analyses; }
 bool CholmodSolver::is_supernodal() const { return impl_->factor && impl_->factor->is_super; }
-std::string CholmodSolver::ordering_used() const { return impl_->factor ? ordering_name(impl_->factor->ordering) : ""; }
+std::string CholmodSolver::ordering_used() const {
+  if (!impl_->factor) return "";
+  return impl_->geometric_used ? "geometric" : ordering_name(impl_->factor->ordering);
+}
 
 }  // namespace corrlap

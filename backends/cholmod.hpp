@@ -16,6 +16,7 @@ class CholmodSolver : public LinearSolver {
   std::string name() const override { return "cholmod"; }
   std::vector<ParameterInfo> options() const override;
   void configure(const Config& options) override;
+  void set_positions(const Eigen::MatrixX3d& positions) override;
   void analyze(const Eigen::SparseMatrix<double>& A) override;
   void factorize(const Eigen::SparseMatrix<double>& A) override;
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B) override;
@@ -25,7 +26,7 @@ class CholmodSolver : public LinearSolver {
   int analysis_count() const;
   /// True when the current factor is supernodal (the "auto" choice is CHOLMOD's).
   bool is_supernodal() const;
-  /// Ordering CHOLMOD actually used in the last analysis ("amd", "metis", "nesdis", ...).
+  /// Ordering used in the last analysis ("geometric", "amd", "metis", "nesdis", ...).
   std::string ordering_used() const;
 
  private:

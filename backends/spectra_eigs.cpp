@@ -149,8 +149,9 @@ struct ShiftInvertEigenSolver::Impl {
   bool verify = true;
   int max_iterations = 1000;
   double tolerance = 1e-10;
-  int dense_threshold = -1;  // -1: by cost (dense_is_cheaper)
-  Config linear_config;      // includes "solver"
+  int dense_threshold = -1;    // -1: by cost (dense_is_cheaper)
+  Config linear_config;        // includes "solver"
+  Eigen::MatrixX3d positions;  // ordering hint for the linear solver
   SolverReport last_report;
 };
 
@@ -223,6 +224,7 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   if (dense || k + 2 > n) return dense_solve(L, M, k);
 
   auto linear = make_linear_solver(s.linear_config, kDefaultLinearSolver);
+  if (s.positions.rows() == n) linear->set_positions(s.positions);
   ShiftInvertOp op(L, M, *linear);
   MassOp bop(M);
   int restarts = 0;
@@ -298,6 +300,8 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   r.method = "lanczos";
   return r;
 }
+
+void ShiftInvertEigenSolver::set_positions(const Eigen::MatrixX3d& positions) { impl_->positions = positions; }
 
 SolverReport ShiftInvertEigenSolver::linear_solver_report() const { return impl_->last_report; }
 

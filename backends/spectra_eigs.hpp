@@ -22,6 +22,8 @@ class ShiftInvertEigenSolver : public EigenSolver {
   std::string name() const override { return "shift-invert"; }
   std::vector<ParameterInfo> options() const override;
   void configure(const Config& options) override;
+  /// Passed on to the linear solver of (K - sigma M)^{-1}.
+  void set_positions(const Eigen::MatrixX3d& positions) override;
   EigenResult solve(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, int k) override;
 
   /// Report of the inner linear solver after the last solve (timings of its factorization).

@@ -36,6 +36,10 @@ struct SolverReport {
   int iterations = 0;     ///< iterative solvers
   double residual = 0.0;  ///< relative residual |Ax-b|/|b| of the last solve
   double analyze_seconds = 0.0, factorize_seconds = 0.0, solve_seconds = 0.0;
+  /// Direct solvers, after analyze(): the elimination order used ("amd", "geometric", ...), the
+  /// entries of the factor and the flops of a factorization (0 when the backend does not say).
+  std::string ordering;
+  double factor_nonzeros = 0.0, factor_flops = 0.0;
 };
 
 /// Raised when a solver phase fails; carries the backend status.
@@ -56,6 +60,12 @@ class LinearSolver {
   virtual std::vector<ParameterInfo> options() const = 0;
   /// Applies options; unknown keys are InputErrors listing the valid ones.
   virtual void configure(const Config& options) = 0;
+  /// Optional hint for the next analyze(): a point per unknown (#unknowns x 3), e.g. the vertex
+  /// positions of the mesh the system lives on. Direct solvers use it to order the elimination
+  /// (cholmod: geometric nested dissection, 4x fewer flops than AMD at 10^6 unknowns); the others
+  /// ignore it. A hint whose row count differs from the next matrix's is ignored; an empty matrix
+  /// clears it.
+  virtual void set_positions(const Eigen::MatrixX3d& /*positions*/) {}
   /// Symbolic analysis of the pattern of A (reusable for matrices with the same pattern).
   virtual void analyze(const Eigen::SparseMatrix<double>& A) = 0;
   /// Numeric factorization of A (same pattern as the analyzed one). Throws SolverError.
@@ -98,6 +108,8 @@ class EigenSolver {
   virtual std::string name() const = 0;
   virtual std::vector<ParameterInfo> options() const = 0;
   virtual void configure(const Config& options) = 0;
+  /// Optional ordering hint for the linear solves (LinearSolver::set_positions): a point per unknown.
+  virtual void set_positions(const Eigen::MatrixX3d& /*positions*/) {}
   virtual EigenResult solve(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, int k) = 0;
 };
 

@@ -15,10 +15,12 @@ namespace corrlap {
 /// Solves L u = M f on the free vertices with u[fixed[i]] = values[i]. Throws InputError for
 /// out-of-range or repeated vertices, a size mismatch, or no free vertex; SolverError from the
 /// solver (e.g. not positive definite when a connected component has no fixed vertex). No fixed
-/// vertex at all is an InputError (L 1 = 0 makes the system singular).
+/// vertex at all is an InputError (L 1 = 0 makes the system singular). `positions` (#V x 3, the
+/// vertices'), when given, is the solver's ordering hint (LinearSolver::set_positions); the same
+/// holds for the functions below.
 Eigen::VectorXd solve_dirichlet(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                 const Eigen::VectorXd& f, const std::vector<int>& fixed, const Eigen::VectorXd& values,
-                                LinearSolver& solver);
+                                LinearSolver& solver, const Eigen::MatrixX3d* positions = nullptr);
 
 /// M-weighted mean 1^T M v / 1^T M 1.
 double mass_weighted_mean(const Eigen::SparseMatrix<double>& M, const Eigen::VectorXd& v);
@@ -28,14 +30,15 @@ double mass_weighted_mean(const Eigen::SparseMatrix<double>& M, const Eigen::Vec
 /// fixed to `pin_value`, and return g.
 Eigen::VectorXd solve_neumann_poisson(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                       const Eigen::VectorXd& b, LinearSolver& solver, double pin_value = 0.0,
-                                      int pin = 0);
+                                      int pin = 0, const Eigen::MatrixX3d* positions = nullptr);
 
 /// solve_neumann_poisson for several right-hand sides at once (#V x k columns of B, one pin value
 /// per column): one factorization, k solves. Column j equals solve_neumann_poisson(L, M, B.col(j),
 /// solver, pin_values[j], pin) up to the rounding of the multi-column solve.
 Eigen::MatrixXd solve_neumann_poisson_columns(const Eigen::SparseMatrix<double>& L,
                                               const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& B,
-                                              LinearSolver& solver, const Eigen::VectorXd& pin_values, int pin = 0);
+                                              LinearSolver& solver, const Eigen::VectorXd& pin_values, int pin = 0,
+                                              const Eigen::MatrixX3d* positions = nullptr);
 
 /// Norms of an error vector e of docs/math.md §10.3/§10.4: L_inf = max |e|, L_2 = sqrt(e^T M e / 1^T M 1).
 struct ErrorNorms {
@@ -73,7 +76,8 @@ PoissonResult solve_poisson(const Operators& ops, const Eigen::MatrixX3d& positi
 /// `solver` factorizes M - dt L (SPD since L is negative semi-definite). Throws InputError for
 /// dt < 0 or size mismatches, SolverError.
 Eigen::VectorXd forward_laplacian(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
-                                  const Eigen::VectorXd& u, LinearSolver& solver, double dt = 0.0);
+                                  const Eigen::VectorXd& u, LinearSolver& solver, double dt = 0.0,
+                                  const Eigen::MatrixX3d* positions = nullptr);
 
 /// Norms of forward_laplacian(u) - Delta u for a test function sampled as in solve_poisson.
 ErrorNorms forward_error(const Operators& ops, const Eigen::MatrixX3d& positions, const TestFunction& function,

@@ -93,6 +93,7 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
   A += alpha * Ml;
   A.prune(0.0);
   const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
+  solver.set_positions(p);  // orders the factorization (geometric nested dissection)
   solver.compute(std::move(A));
   const Eigen::MatrixXd q = solver.solve(rhs);
   if (!q.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
@@ -112,6 +113,7 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   Eigen::SparseMatrix<double> B = -L;
   B += std::sqrt(alpha) * Ml;
   B.prune(0.0);
+  solver.set_positions(p);  // orders the factorization (geometric nested dissection)
   solver.compute(std::move(B));
   const auto multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
     return L * (inverse_mass.asDiagonal() * (L * X)) + alpha * (mass.asDiagonal() * X);

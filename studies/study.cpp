@@ -471,11 +471,13 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
             const Eigen::MatrixXd& F = on_faces ? s.face_f : s.vertex_f;
             const Eigen::MatrixXd& Lap = on_faces ? s.face_laplacian : s.vertex_laplacian;
             auto solver = make_linear_solver(solver_for(o.linear_solver, ops.L, o.kind));
+            // The unknowns' positions order the factorization (LinearSolver::set_positions).
+            const Eigen::MatrixX3d unknown_positions = on_faces ? s.mesh.face_centroids() : s.mesh.positions;
             std::vector<ErrorNorms> errors(functions.size());
             if (o.kind == StudyKind::Backward) {
               // docs/math.md §10.4: L g = M b_c, vertex 0 pinned to f(q_0), errors with means removed.
-              const Eigen::MatrixXd G =
-                  solve_neumann_poisson_columns(ops.L, ops.M, Lap, *solver, F.row(0).transpose(), 0);
+              const Eigen::MatrixXd G = solve_neumann_poisson_columns(ops.L, ops.M, Lap, *solver, F.row(0).transpose(),
+                                                                      0, &unknown_positions);
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = poisson_errors(ops.M, G.col(Eigen::Index(j)), F.col(Eigen::Index(j)));
             } else {
@@ -483,7 +485,8 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
               const double dt = o.naive ? 0.0 : o.diffusion * h;
               const Eigen::MatrixXd LF = ops.L * F;
               make_forward_system(ops.L, ops.M, dt);  // ops.L is now A = M - dt L
-              solver->compute(std::move(ops.L));      // cg keeps A instead of a copy
+              solver->set_positions(unknown_positions);
+              solver->compute(std::move(ops.L));  // cg keeps A instead of a copy
               const Eigen::MatrixXd X = solver->solve(LF);
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = error_norms(ops.M, X.col(Eigen::Index(j)) - Lap.col(Eigen::Index(j)));

@@ -36,6 +36,8 @@ void run(const EigsArgs& a) {
   if (!a.solver.empty()) config.set("solver", a.solver);
   if (!config.has("solver")) config.set("solver", kDefaultLinearSolver);
   auto eig = make_eigen_solver(kDefaultEigenSolver, config);
+  // The unknowns' positions order the factorization (LinearSolver::set_positions).
+  eig->set_positions(ops.domain == Operators::Domain::Vertices ? in.mesh.positions : in.mesh.face_centroids());
   const auto t0 = std::chrono::steady_clock::now();
   // values are -lambda >= 0, ascending, when L is negative semi-definite
   const EigenResult r = explain_solver_failure(ops, [&] { return eig->solve(ops.L, ops.M, a.k); });

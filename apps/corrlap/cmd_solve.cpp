@@ -99,7 +99,7 @@ void run(const SolveArgs& a) {
     std::optional<TestFunctionSamples> samples;
     if (analytic) samples = sample_on_unit_sphere(*analytic, mesh.positions, c);
     const Eigen::VectorXd& u = analytic ? samples->f : from_file;
-    g = explain_solver_failure(ops, [&] { return forward_laplacian(ops.L, ops.M, u, *solver, dt); });
+    g = explain_solver_failure(ops, [&] { return forward_laplacian(ops.L, ops.M, u, *solver, dt, &mesh.positions); });
     const Eigen::VectorXd Lu = ops.L * u;
     const Eigen::VectorXd r = ops.M * g - dt * (ops.L * g) - Lu;
     residual = Lu.norm() > 0.0 ? r.norm() / Lu.norm() : r.norm();
@@ -112,7 +112,8 @@ void run(const SolveArgs& a) {
     residual = r.residual;
     if (unit_sphere) err = r.errors;
   } else {
-    g = explain_solver_failure(ops, [&] { return solve_neumann_poisson(ops.L, ops.M, from_file, *solver, 0.0, 0); });
+    g = explain_solver_failure(
+        ops, [&] { return solve_neumann_poisson(ops.L, ops.M, from_file, *solver, 0.0, 0, &mesh.positions); });
     residual = neumann_residual(ops.L, ops.M, from_file, g, 0);
   }
   const SolverReport report = solver->info();
@@ -132,6 +133,9 @@ void run(const SolveArgs& a) {
     j["assemble_s"] = assemble_s;
     j["analyze_s"] = report.analyze_seconds;
     j["factorize_s"] = report.factorize_seconds;
+    j["ordering"] = report.ordering;
+    j["factor_nonzeros"] = report.factor_nonzeros;
+    j["factor_flops"] = report.factor_flops;
     j["solve_s"] = report.solve_seconds;
     j["iterations"] = report.iterations;
     j["residual"] = residual;
@@ -148,7 +152,8 @@ void run(const SolveArgs& a) {
               << "method      " << a.method << " (normals " << kind << ")\n"
               << "solver      " << solver_name << "\n"
               << "assemble    " << assemble_s << " s\n"
-              << "analyze     " << report.analyze_seconds << " s\n"
+              << "analyze     " << report.analyze_seconds << " s"
+              << (report.ordering.empty() ? std::string() : " (ordering " + report.ordering + ")") << "\n"
               << "factorize   " << report.factorize_seconds << " s\n"
               << "solve       " << report.solve_seconds << " s";
     if (report.iterations > 0) std::cout << " (" << report.iterations << " iterations)";
