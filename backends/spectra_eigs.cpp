@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <corrlap/backends/detail/block_lanczos.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <new>
 #include <random>
@@ -56,6 +57,13 @@ class ShiftInvertOp {
     Eigen::Map<Eigen::VectorXd> y(y_out, rows());
     y = solver_.solve(x);
     if (X_ != nullptr && X_->cols() > 0) y -= *X_ * (MX_.transpose() * y);
+  }
+  /// P (K - sigma M)^{-1} M X for a block X: the operator S of the block Lanczos (one multi-column
+  /// solve). set_shift must have been called.
+  Eigen::MatrixXd apply_block(const Eigen::MatrixXd& X) const {
+    Eigen::MatrixXd Y = solver_.solve(M_ * X);
+    if (X_ != nullptr && X_->cols() > 0) Y -= *X_ * (MX_.transpose() * Y);
+    return Y;
   }
   /// Deflate the columns of X (M-orthonormal); nullptr: none.
   void deflate(const Eigen::MatrixXd* X) {
@@ -149,7 +157,8 @@ struct ShiftInvertEigenSolver::Impl {
   bool verify = true;
   int max_iterations = 1000;
   double tolerance = 1e-10;
-  int dense_threshold = -1;    // -1: by cost (dense_is_cheaper)
+  int dense_threshold = -1;  // -1: by cost (dense_is_cheaper)
+  int block_size = 16;
   Config linear_config;        // includes "solver"
   Eigen::MatrixX3d positions;  // ordering hint for the linear solver
   SolverReport last_report;
@@ -162,11 +171,16 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
   return {
       {"solver", kDefaultLinearSolver, "linear solver for (K - shift M)^{-1}; its options may be given too"},
       {"shift", "-0.001", "shift in units of mu = -lambda; must be < 0 (K - shift M must be positive definite)"},
-      {"ncv", "0", "Lanczos basis size (0: max(2m + 1, m + 20) for m = k + guard, at most n)"},
+      {"ncv", "0",
+       "Lanczos basis size (0: for m = k + guard, max(2m + 1, m + 20) single-vector, max(3m, m + 8 block_size) "
+       "block; at most n)"},
       {"guard", "auto",
        "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
        "gets all its copies (auto: max(6, k/4))"},
       {"verify", "true", "deflate the pairs found and search the rest of the spectrum for missed copies"},
+      {"block_size", "16",
+       "vectors per Lanczos block (block Lanczos, BLAS-3 solves and orthogonalization); 1: Spectra's "
+       "single-vector Lanczos"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
       {"dense_threshold", "auto",
@@ -197,6 +211,8 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   const int guard = guard_text == "auto" ? -1 : options.get_int("guard", 0);
   if (guard_text != "auto" && guard < 0) throw InputError("eigen solver 'shift-invert': guard must be >= 0 or auto");
   const int maxit = options.get_int("max_iterations", s.max_iterations);
+  const int block = options.get_int("block_size", s.block_size);
+  if (block < 1) throw InputError("eigen solver 'shift-invert': block_size must be >= 1");
   const double tol = options.get_double("tolerance", s.tolerance);
   const std::string dense_text = options.get_string("dense_threshold", "auto");
   const int dense = dense_text == "auto" ? -1 : options.get_int("dense_threshold", 0);
@@ -208,6 +224,7 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   s.guard = guard;
   s.verify = options.get_bool("verify", s.verify);
   s.max_iterations = maxit;
+  s.block_size = block;
   s.tolerance = tol;
   s.dense_threshold = dense;
   s.linear_config = linear_config;
@@ -229,7 +246,29 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   MassOp bop(M);
   int restarts = 0;
   // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
+  int block_runs = 0;
   const auto run = [&](int nev, const Eigen::VectorXd* start, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
+    if (s.block_size > 1) {
+      // Block Lanczos (detail/block_lanczos.hpp); the single-vector run below is the fallback when
+      // it stops without converging (a basis that lost rank, restarts exhausted).
+      op.set_shift(s.shift);
+      detail::BlockLanczosOptions o;
+      o.block_size = s.block_size;
+      o.max_basis = s.ncv;
+      o.max_restarts = s.max_iterations;
+      o.tolerance = s.tolerance;
+      o.wanted = std::min(nev, k);
+      o.seed = 12345u + unsigned(block_runs++);
+      const detail::BlockLanczosResult r =
+          detail::block_lanczos([&](const Eigen::MatrixXd& X) { return op.apply_block(X); }, M, nev, o);
+      s.last_report = linear->info();
+      if (r.converged) {
+        restarts += r.restarts;
+        values = s.shift + r.theta.cwiseInverse().array();  // theta = 1 / (mu - sigma), descending
+        vectors = r.vectors;
+        return;
+      }
+    }
     const int ncv = basis_size(n, nev, s.ncv);
     Spectra::SymGEigsShiftSolver<ShiftInvertOp, MassOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, nev, ncv,
                                                                                               s.shift);

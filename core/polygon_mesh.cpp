@@ -38,9 +38,9 @@ SurfelMesh to_surfel_mesh(const PolygonMesh& mesh, const std::string& what) {
 PolygonMesh to_polygon_mesh(const SurfelMesh& mesh) {
   PolygonMesh out;
   out.positions = mesh.positions;
-  out.faces.resize(std::size_t(mesh.num_faces()));
+  out.faces.reserve(std::size_t(mesh.num_faces()), 4 * std::size_t(mesh.num_faces()));
   for (int f = 0; f < mesh.num_faces(); ++f)
-    out.faces[std::size_t(f)] = {mesh.faces(f, 0), mesh.faces(f, 1), mesh.faces(f, 2), mesh.faces(f, 3)};
+    out.faces.push_back({mesh.faces(f, 0), mesh.faces(f, 1), mesh.faces(f, 2), mesh.faces(f, 3)});
   return out;
 }
 

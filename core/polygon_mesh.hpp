@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "face_list.hpp"
 #include "surfel_mesh.hpp"
 
 namespace corrlap {
@@ -14,7 +15,7 @@ using TriangleIndices = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 /// Vertices and faces of any degree >= 3 (0-based ids), as stored in a file.
 struct PolygonMesh {
   Eigen::MatrixX3d positions;
-  std::vector<std::vector<int>> faces;
+  FaceList faces;  ///< faces[f] is a std::span of the corner ids of face f
 
   bool all_quads() const;
   bool all_triangles() const;

@@ -1,13 +1,11 @@
 // Wavefront OBJ reader and writer.
-#include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <corrlap/core/error.hpp>
-#include <corrlap/io/detail/output_file.hpp>
-#include <cstdio>
-#include <cstring>
-#include <fstream>
-#include <memory>
+#include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/line_reader.hpp>
+#include <corrlap/io/detail/text_writer.hpp>
+#include <corrlap/io/detail/tokens.hpp>
+#include <optional>
 #include <sstream>
 
 #include "mesh_io.hpp"
@@ -25,69 +23,82 @@ namespace {
 
 // Upper bound on elements, to reject absurd files before allocating.
 constexpr std::size_t kMaxElements = std::size_t{1} << 31;
+
+// The tag of an OBJ line ("v", "f", "vn", "#"...): its first token.
+std::string_view tag_of(io_detail::Tokens& tokens) {
+  std::string_view tag;
+  return tokens.next(tag) ? tag : std::string_view{};
+}
 }  // namespace
 
+// Two passes over the file: the first counts vertices, faces and corners, so that the mesh is
+// allocated once at its final size (no growing vectors: a read holds little more than its result);
+// the second parses. Negative indices are relative to the end of the vertex list, as before.
 PolygonMesh read_obj(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) fail(path, 0, "cannot open");
-  PolygonMesh mesh;
-  std::vector<double> xyz;
-  std::string line;
-  std::size_t lineno = 0;
-  std::vector<std::vector<long>> raw_faces;
-  std::vector<std::size_t> face_lines;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string tag;
-    if (!(ls >> tag) || tag[0] == '#') continue;
+  io_detail::LineReader in(path);
+  if (!in.is_open()) fail(path, 0, "cannot open");
+  std::size_t nv = 0, nf = 0, corners = 0;
+  std::string_view line, tok;
+  while (in.next(line)) {
+    io_detail::Tokens ls(line);
+    const std::string_view tag = tag_of(ls);
     if (tag == "v") {
-      double p[3];
-      for (double& c : p) {
-        std::string tok;
-        if (!(ls >> tok)) fail(path, lineno, "vertex with fewer than 3 coordinates");
-        const char* b = tok.data();
-        auto [ptr, ec] = std::from_chars(b, b + tok.size(), c);
-        if (ec != std::errc() || ptr != b + tok.size() || !std::isfinite(c))
-          fail(path, lineno, "malformed or non-finite coordinate '" + tok.substr(0, 40) + "'");
-      }
-      xyz.insert(xyz.end(), p, p + 3);
-      if (xyz.size() / 3 > kMaxElements) fail(path, lineno, "too many vertices");
+      if (++nv > kMaxElements) fail(path, in.line_number(), "too many vertices");
     } else if (tag == "f") {
-      std::vector<long> ids;
-      std::string tok;
-      while (ls >> tok) {
-        const std::string first = tok.substr(0, tok.find('/'));
-        long id = 0;
-        auto [ptr, ec] = std::from_chars(first.data(), first.data() + first.size(), id);
-        if (ec != std::errc() || ptr != first.data() + first.size() || id == 0)
-          fail(path, lineno, "malformed face index '" + tok.substr(0, 40) + "'");
-        ids.push_back(id);
+      if (++nf > kMaxElements) fail(path, in.line_number(), "too many faces");
+      while (ls.next(tok)) ++corners;
+    }
+  }
+  if (in.error()) fail(path, in.line_number(), "read error");
+  io_detail::check_budget("OBJ file '" + path + "'", 24.0 * double(nv) + 4.0 * double(corners) + 8.0 * double(nf),
+                          io_detail::readable_count(nv) + " vertices and " + io_detail::readable_count(nf) + " faces");
+  PolygonMesh mesh;
+  mesh.positions.resize(Eigen::Index(nv), 3);
+  mesh.faces.reserve(nf, corners);
+
+  in.rewind();
+  std::size_t v = 0;
+  // Index errors are reported after the whole file has parsed (a malformed line anywhere wins).
+  std::optional<std::pair<std::size_t, long>> bad_index;  // line, index
+  const long lnv = long(nv);
+  while (in.next(line)) {
+    io_detail::Tokens ls(line);
+    const std::string_view tag = tag_of(ls);
+    if (tag == "v") {
+      if (v == nv) fail(path, in.line_number(), "file changed while reading");
+      for (int c = 0; c < 3; ++c) {
+        double x = 0;
+        if (!ls.next(tok)) fail(path, in.line_number(), "vertex with fewer than 3 coordinates");
+        if (!io_detail::parse_number(tok, x) || !std::isfinite(x))
+          fail(path, in.line_number(), "malformed or non-finite coordinate '" + std::string(tok.substr(0, 40)) + "'");
+        mesh.positions(Eigen::Index(v), c) = x;
       }
-      if (ids.size() < 3) fail(path, lineno, "face with fewer than 3 corners");
-      raw_faces.push_back(std::move(ids));
-      face_lines.push_back(lineno);
-      if (raw_faces.size() > kMaxElements) fail(path, lineno, "too many faces");
+      ++v;
+    } else if (tag == "f") {
+      if (mesh.faces.size() == nf) fail(path, in.line_number(), "file changed while reading");
+      mesh.faces.start_face();
+      std::size_t n = 0;
+      while (ls.next(tok)) {
+        long id = 0;  // "f v/vt/vn": the vertex is the part before the first '/'
+        if (!io_detail::parse_number(tok.substr(0, tok.find('/')), id) || id == 0)
+          fail(path, in.line_number(), "malformed face index '" + std::string(tok.substr(0, 40)) + "'");
+        const long w = id > 0 ? id - 1 : lnv + id;  // negative: relative to the end
+        if ((w < 0 || w >= lnv) && !bad_index) bad_index.emplace(in.line_number(), id);
+        mesh.faces.add_corner(w < 0 || w >= lnv ? 0 : int(w));
+        ++n;
+      }
+      if (n < 3) fail(path, in.line_number(), "face with fewer than 3 corners");
     }
     // vn, vt, o, g, s, usemtl, mtllib: ignored
   }
-  if (in.bad()) fail(path, lineno, "read error");
-  const long nv = long(xyz.size() / 3);
+  if (in.error()) fail(path, in.line_number(), "read error");
+  if (v != nv || mesh.faces.size() != nf) fail(path, 0, "file changed while reading");
   if (nv == 0) fail(path, 0, "no vertex (empty or not an OBJ file)");
-  if (raw_faces.empty()) fail(path, 0, "no face");
-  mesh.positions = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), nv, 3);
-  mesh.faces.resize(raw_faces.size());
-  for (std::size_t f = 0; f < raw_faces.size(); ++f) {
-    for (long id : raw_faces[f]) {
-      const long v = id > 0 ? id - 1 : nv + id;  // negative: relative to the end
-      if (v < 0 || v >= nv) {
-        std::ostringstream os;
-        os << "face index " << id << " out of range (" << nv << " vertices)";
-        fail(path, face_lines[f], os.str());
-      }
-      mesh.faces[f].push_back(int(v));
-    }
+  if (nf == 0) fail(path, 0, "no face");
+  if (bad_index) {
+    std::ostringstream os;
+    os << "face index " << bad_index->second << " out of range (" << nv << " vertices)";
+    fail(path, bad_index->first, os.str());
   }
   return mesh;
 }
@@ -96,17 +107,29 @@ void write_obj(const std::string& path, const PolygonMesh& mesh) {
   for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
     for (int c = 0; c < 3; ++c)
       io_detail::require_finite(mesh.positions(v, c), path, "OBJ", "vertex", (long long)v + 1);
-  io_detail::OutputFile f(path, "OBJ");
-  std::fprintf(f.get(), "# corrlap mesh: %lld vertices, %zu faces\n", (long long)mesh.positions.rows(),
-               mesh.faces.size());
-  for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
-    std::fprintf(f.get(), "v %.17g %.17g %.17g\n", mesh.positions(v, 0), mesh.positions(v, 1), mesh.positions(v, 2));
-  for (const auto& face : mesh.faces) {
-    std::fputc('f', f.get());
-    for (int id : face) std::fprintf(f.get(), " %d", id + 1);
-    std::fputc('\n', f.get());
+  io_detail::TextWriter out(path, "OBJ");
+  out.write("# corrlap mesh: ");
+  out.write_int(mesh.positions.rows());
+  out.write(" vertices, ");
+  out.write_int(mesh.faces.size());
+  out.write(" faces\n");
+  for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v) {
+    out.write('v');
+    for (int c = 0; c < 3; ++c) {
+      out.write(' ');
+      out.write_double(mesh.positions(v, c));
+    }
+    out.write('\n');
   }
-  f.commit();
+  for (const auto face : mesh.faces) {
+    out.write('f');
+    for (int id : face) {
+      out.write(' ');
+      out.write_int(id + 1);
+    }
+    out.write('\n');
+  }
+  out.commit();
 }
 
 }  // namespace corrlap

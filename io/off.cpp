@@ -4,8 +4,9 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/line_reader.hpp>
+#include <corrlap/io/detail/tokens.hpp>
 #include <cstdint>
-#include <fstream>
 #include <sstream>
 #include <vector>
 
@@ -23,70 +24,63 @@ namespace {
   throw IoError(os.str());
 }
 
-// Tokens of the file with their line numbers; '#' starts a comment.
+// Tokens of the file's lines with their line numbers; '#' starts a comment. The tokens are views
+// into the reader's buffer, valid until the next line is read.
 class Tokens {
  public:
-  Tokens(std::istream& in, const std::string& path) : in_(in), path_(path) {}
+  Tokens(io_detail::LineReader& in, const std::string& path) : in_(in), path_(path) {}
   // Next non-empty line split into tokens; false at end of file.
-  bool next_line(std::vector<std::string>& toks) {
-    std::string line;
-    while (std::getline(in_, line)) {
-      ++line_;
-      const auto hash = line.find('#');
-      if (hash != std::string::npos) line.erase(hash);
-      std::istringstream ls(line);
+  bool next_line(std::vector<std::string_view>& toks) {
+    std::string_view line, t;
+    while (in_.next(line)) {
+      io_detail::Tokens ls(line.substr(0, line.find('#')));
       toks.clear();
-      std::string t;
-      while (ls >> t) toks.push_back(t);
+      while (ls.next(t)) toks.push_back(t);
       if (!toks.empty()) return true;
     }
-    if (in_.bad()) fail(path_, line_, "read error");
+    if (in_.error()) fail(path_, in_.line_number(), "read error");
     return false;
   }
-  std::size_t line() const { return line_; }
+  std::size_t line() const { return in_.line_number(); }
 
  private:
-  std::istream& in_;
+  io_detail::LineReader& in_;
   const std::string& path_;
-  std::size_t line_ = 0;
 };
 
-template <class T>
-bool parse(const std::string& s, T& v) {
-  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  return ec == std::errc() && p == s.data() + s.size();
-}
+std::string str(std::string_view s, std::size_t n = 40) { return std::string(s.substr(0, n)); }
 
 constexpr long long kMaxCount = 1LL << 31;
 
 }  // namespace
 
 PolygonMesh read_off(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) fail(path, 0, "cannot open");
+  io_detail::LineReader in(path);
+  if (!in.is_open()) fail(path, 0, "cannot open");
   Tokens tk(in, path);
-  std::vector<std::string> t;
+  std::vector<std::string_view> t;
   if (!tk.next_line(t)) fail(path, 0, "empty file");
   // Header: OFF, COFF, NOFF, CNOFF...: extra per-vertex columns (colours, normals) are ignored.
-  const std::string& kw = t[0];
+  const std::string kw(t[0]);
   if (kw.size() < 3 || kw.compare(kw.size() - 3, 3, "OFF") != 0)
     fail(path, tk.line(), "not an OFF file (header '" + kw.substr(0, 40) + "', expected OFF)");
   if (kw.find("4") != std::string::npos || kw.find("n") != std::string::npos)
     fail(path, tk.line(), "unsupported OFF variant '" + kw + "' (only 3D OFF/COFF/NOFF)");
-  std::vector<std::string> counts(t.begin() + 1, t.end());
+  std::vector<std::string_view> counts(t.begin() + 1, t.end());
   if (counts.empty() && !tk.next_line(counts)) fail(path, tk.line(), "truncated: missing the counts line");
   long long nv = 0, nf = 0;
-  if (counts.size() < 2 || !parse(counts[0], nv) || !parse(counts[1], nf) || nv < 0 || nf < 0)
+  if (counts.size() < 2 || !io_detail::parse_number(counts[0], nv) || !io_detail::parse_number(counts[1], nf) ||
+      nv < 0 || nf < 0)
     fail(path, tk.line(), "malformed counts line (expected 'nvertices nfaces nedges')");
   if (nv > kMaxCount || nf > kMaxCount)
     fail(path, tk.line(),
-         "absurd counts " + counts[0].substr(0, 40) + " " + counts[1].substr(0, 40) + " (limit " +
-             io_detail::readable_count(kMaxCount) + ")");
+         "absurd counts " + str(counts[0]) + " " + str(counts[1]) + " (limit " + io_detail::readable_count(kMaxCount) +
+             ")");
   if (nv == 0) fail(path, tk.line(), "no vertex");
   if (nf == 0) fail(path, tk.line(), "no face");
   // Every vertex needs a line "x y z" (at least 6 bytes), every face "3 a b c" (8 bytes): counts
   // the file cannot hold are rejected before anything is reserved.
-  const std::uint64_t file_bytes = io_detail::file_size(path);
+  const std::uint64_t file_bytes = in.file_size();
   const double needed = 6.0 * double(nv) + 8.0 * double(nf);
   if (needed > double(file_bytes))
     fail(path, tk.line(),
@@ -95,56 +89,51 @@ PolygonMesh read_off(const std::string& path) {
              io_detail::readable_bytes(needed) + ", more than the " + io_detail::readable_bytes(double(file_bytes)) +
              " the file holds (truncated file?)");
 
-  // Coordinates (24 bytes per vertex) and faces (a vector of at least 3 indices, ~40 bytes).
+  // Coordinates (24 bytes per vertex) and faces (at least 3 indices and an offset, 20 bytes).
   std::ostringstream label;
   label << "OFF file '" << path << "'";
-  io_detail::check_budget(label.str(), 24.0 * double(nv) + 40.0 * double(nf),
+  io_detail::check_budget(label.str(), 24.0 * double(nv) + 20.0 * double(nf),
                           io_detail::readable_count(std::uint64_t(nv)) + " vertices and " +
                               io_detail::readable_count(std::uint64_t(nf)) + " faces");
-  // Rows are added as they are read: a wrong count cannot make us allocate more than the file holds.
-  std::vector<double> xyz;
-  xyz.reserve(std::size_t(nv) * 3);
+  // The counts fit the file (checked above): the mesh is allocated at its size (faces: triangles
+  // assumed, more corners grow the array).
+  PolygonMesh mesh;
+  mesh.positions.resize(Eigen::Index(nv), 3);
   for (long long v = 0; v < nv; ++v) {
     if (!tk.next_line(t))
       fail(path, tk.line(), "truncated: expected " + std::to_string(nv) + " vertices, got " + std::to_string(v));
     if (t.size() < 3) fail(path, tk.line(), "vertex " + std::to_string(v) + " has fewer than 3 coordinates");
     for (int a = 0; a < 3; ++a) {
       double c = 0;
-      if (!parse(t[std::size_t(a)], c) || !std::isfinite(c))
+      if (!io_detail::parse_number(t[std::size_t(a)], c) || !std::isfinite(c))
         fail(path, tk.line(),
-             "vertex " + std::to_string(v) + ": malformed or non-finite coordinate '" +
-                 t[std::size_t(a)].substr(0, 40) + "'");
-      xyz.push_back(c);
+             "vertex " + std::to_string(v) + ": malformed or non-finite coordinate '" + str(t[std::size_t(a)]) + "'");
+      mesh.positions(Eigen::Index(v), a) = c;
     }
   }
-  PolygonMesh mesh;
-  mesh.positions =
-      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), Eigen::Index(nv), 3);
-  mesh.faces.reserve(std::size_t(nf));
+  mesh.faces.reserve(std::size_t(nf), 3 * std::size_t(nf));
   for (long long f = 0; f < nf; ++f) {
     if (!tk.next_line(t))
       fail(path, tk.line(), "truncated: expected " + std::to_string(nf) + " faces, got " + std::to_string(f));
     long long n = 0;
-    if (!parse(t[0], n) || n < 3)
+    if (!io_detail::parse_number(t[0], n) || n < 3)
       fail(path, tk.line(),
-           "face " + std::to_string(f) + ": malformed corner count '" + t[0].substr(0, 40) + "' (at least 3 needed)");
+           "face " + std::to_string(f) + ": malformed corner count '" + str(t[0]) + "' (at least 3 needed)");
     if (std::size_t(n) + 1 > t.size())
       fail(path, tk.line(),
            "face " + std::to_string(f) + ": announces " + std::to_string(n) + " corners, line has " +
                std::to_string(t.size() - 1));
-    std::vector<int> ids(static_cast<std::size_t>(n));
+    mesh.faces.start_face();  // extra columns after the ids (colour) are ignored
     for (long long k = 0; k < n; ++k) {
       long long id = -1;
-      if (!parse(t[std::size_t(k + 1)], id))
-        fail(path, tk.line(),
-             "face " + std::to_string(f) + ": malformed index '" + t[std::size_t(k + 1)].substr(0, 40) + "'");
+      if (!io_detail::parse_number(t[std::size_t(k + 1)], id))
+        fail(path, tk.line(), "face " + std::to_string(f) + ": malformed index '" + str(t[std::size_t(k + 1)]) + "'");
       if (id < 0 || id >= nv)
         fail(path, tk.line(),
              "face " + std::to_string(f) + ": vertex index " + std::to_string(id) + " out of range (" +
                  std::to_string(nv) + " vertices)");
-      ids[std::size_t(k)] = int(id);
+      mesh.faces.add_corner(int(id));
     }
-    mesh.faces.push_back(std::move(ids));  // extra columns after the ids (colour) are ignored
   }
   return mesh;
 }

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
-#include <corrlap/io/detail/output_file.hpp>
+#include <corrlap/io/detail/text_writer.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -176,13 +176,14 @@ class BodyReader {
   std::size_t line_;
 };
 
+// The whole file, read straight into a string of its size (no stream buffer copies).
 std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> in(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!in) fail(path, "cannot open");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) fail(path, "read error");
-  return ss.str();
+  std::string data(io_detail::file_size(path), '\0');
+  data.resize(std::fread(data.data(), 1, data.size(), in.get()));
+  if (std::ferror(in.get())) fail(path, "read error");
+  return data;
 }
 
 bool is_identifier(const std::string& s) {
@@ -331,10 +332,14 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
   PolygonMesh mesh;
   const Eigen::Index nv = Eigen::Index(vertex_el->count);
   mesh.positions.resize(nv, 3);
+  // Scalar properties other than x, y, z get a column each (x, y, z go straight to the positions).
   std::vector<Eigen::VectorXd> vprops(vertex_el->properties.size()), fprops(face_el->properties.size());
-  for (auto& v : vprops) v.resize(nv);
-  for (auto& v : fprops) v.resize(Eigen::Index(face_el->count));
-  mesh.faces.reserve(std::size_t(face_el->count));
+  for (std::size_t p = 0; p < vprops.size(); ++p)
+    if (!vertex_el->properties[p].count_type && int(p) != xyz[0] && int(p) != xyz[1] && int(p) != xyz[2])
+      vprops[p].resize(nv);
+  for (std::size_t p = 0; p < fprops.size(); ++p)
+    if (!face_el->properties[p].count_type) fprops[p].resize(Eigen::Index(face_el->count));
+  mesh.faces.reserve(std::size_t(face_el->count), 3 * std::size_t(face_el->count));
 
   for (const auto& e : elements) {
     const bool is_v = &e == vertex_el, is_f = &e == face_el;
@@ -348,7 +353,10 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
           if (is_v) {
             if (!std::isfinite(v))
               fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + pr.name + "'");
-            vprops[p][Eigen::Index(i)] = v;
+            if (int(p) == xyz[0] || int(p) == xyz[1] || int(p) == xyz[2])
+              mesh.positions(Eigen::Index(i), int(p) == xyz[0] ? 0 : int(p) == xyz[1] ? 1 : 2) = v;
+            else
+              vprops[p][Eigen::Index(i)] = v;
           } else if (is_f) {
             fprops[p][Eigen::Index(i)] = v;
           }
@@ -367,7 +375,7 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
         if (is_f && int(p) == face_list) {
           if (n < 3)
             fail(path, "face " + std::to_string(i) + " has " + std::to_string(n) + " corners (at least 3 needed)");
-          std::vector<int> ids(n);
+          mesh.faces.start_face();
           for (std::size_t k = 0; k < n; ++k) {
             const double id = body.read(*pr.type, "face");
             const auto checked = io_detail::checked_integer(id, 0, std::int64_t(nv) - 1);
@@ -375,9 +383,8 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
               fail(path, "face " + std::to_string(i) + ", property '" + pr.name + "': vertex index " +
                              io_detail::readable_number(id) + " out of range (" +
                              io_detail::readable_count(std::uint64_t(nv)) + " vertices)");
-            ids[k] = int(*checked);
+            mesh.faces.add_corner(int(*checked));
           }
-          mesh.faces.push_back(std::move(ids));
         } else {
           for (std::size_t k = 0; k < n; ++k) body.read(*pr.type, e.name.c_str());
         }
@@ -390,7 +397,6 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes) {
   if (!body.only_whitespace_left())
     fail(path, "trailing data after the last element (" + body.where() + "): header counts do not match the data");
 
-  for (int a = 0; a < 3; ++a) mesh.positions.col(a) = vprops[std::size_t(xyz[a])];
   if (attributes) {
     *attributes = MeshAttributes{};
     auto collect = [](const Element& e, const std::vector<Eigen::VectorXd>& props,
@@ -460,8 +466,10 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   for (const auto& [name, v] : a.face_scalars) h << "property double " << name << "\n";
   h << "end_header\n";
 
-  std::string out = h.str();
-  auto put = [&out](const auto& value) { out.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
+  // Streamed through the buffered writer: a temporary file that a non-finite value below removes.
+  io_detail::TextWriter out(path, "PLY", /*binary=*/true);
+  out.write(h.str());
+  auto put = [&out](const auto& value) { out.write_bytes(&value, sizeof(value)); };
   // Positions, normals and scalars: no NaN or infinity reaches the file (the element is named).
   auto put_finite = [&](double value, const char* element, Eigen::Index index, const std::string* scalar = nullptr) {
     if (!std::isfinite(value))
@@ -486,9 +494,7 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
       for (int c = 0; c < 3; ++c) put_finite(double(a.face_normals(f, c)), "normal at face", f);
     for (const auto& [name, s] : a.face_scalars) put_finite(double(s[f]), "face", f, &name);
   }
-  io_detail::OutputFile file(path, "PLY", /*binary=*/true);
-  if (std::fwrite(out.data(), 1, out.size(), file.get()) != out.size()) fail(path, "write error");
-  file.commit();
+  out.commit();
 }
 
 }  // namespace corrlap

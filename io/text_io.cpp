@@ -7,10 +7,11 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
-#include <corrlap/io/detail/output_file.hpp>
+#include <corrlap/io/detail/line_reader.hpp>
+#include <corrlap/io/detail/text_writer.hpp>
+#include <corrlap/io/detail/tokens.hpp>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -19,109 +20,131 @@
 namespace corrlap {
 
 namespace {
-// Reads rows of exactly `cols` finite numbers.
-std::vector<double> read_rows(const std::string& path, int cols, const char* what) {
-  std::ifstream in(path);
-  if (!in) throw IoError(std::string(what) + " file '" + path + "': cannot open");
-  std::vector<double> values;
-  std::string line;
-  std::size_t lineno = 0;
-  while (std::getline(in, line)) {
-    ++lineno;
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.erase(hash);
-    std::istringstream ls(line);
-    std::string tok;
+// Rows of exactly `cols` finite numbers (blank lines and # comments skipped) into Out (a matrix
+// with `cols` columns). A first pass counts the rows, so that the result is allocated once, at its
+// size, and parsed into directly.
+template <class Out>
+Out read_rows(const std::string& path, int cols, const char* what) {
+  io_detail::LineReader in(path);
+  if (!in.is_open()) throw IoError(std::string(what) + " file '" + path + "': cannot open");
+  auto data_of = [](std::string_view line) { return line.substr(0, line.find('#')); };
+  std::size_t rows = 0;
+  std::string_view line, tok;
+  while (in.next(line))
+    if (io_detail::Tokens(data_of(line)).more()) ++rows;
+  if (in.error()) throw IoError(std::string(what) + " file '" + path + "': read error");
+  if (rows == 0) throw IoError(std::string(what) + " file '" + path + "': no data (empty file)");
+  io_detail::check_budget(std::string(what) + " file '" + path + "'", 8.0 * double(rows) * cols,
+                          io_detail::readable_count(rows) + " rows");
+  Out out(Eigen::Index(rows), cols);
+  in.rewind();
+  std::size_t row = 0;
+  while (in.next(line)) {
+    io_detail::Tokens ls(data_of(line));
     int n = 0;
-    while (ls >> tok) {
+    while (ls.next(tok)) {
       double v = 0;
-      auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-      if (ec != std::errc() || p != tok.data() + tok.size() || !std::isfinite(v)) {
+      if (!io_detail::parse_number(tok, v) || !std::isfinite(v)) {
         std::ostringstream os;
-        os << what << " file '" << path << "', line " << lineno << ": malformed or non-finite number '"
+        os << what << " file '" << path << "', line " << in.line_number() << ": malformed or non-finite number '"
            << tok.substr(0, 40) << "'";
         throw IoError(os.str());
       }
-      values.push_back(v);
+      if (n < cols && row < rows) out(Eigen::Index(row), n) = v;
       ++n;
     }
     if (n != 0 && n != cols) {
       std::ostringstream os;
-      os << what << " file '" << path << "', line " << lineno << ": expected " << cols << " numbers, got " << n;
+      os << what << " file '" << path << "', line " << in.line_number() << ": expected " << cols << " numbers, got "
+         << n;
       throw IoError(os.str());
     }
+    if (n != 0 && ++row > rows) throw IoError(std::string(what) + " file '" + path + "': file changed while reading");
   }
-  if (values.empty()) throw IoError(std::string(what) + " file '" + path + "': no data (empty file)");
-  return values;
+  if (row != rows) throw IoError(std::string(what) + " file '" + path + "': file changed while reading");
+  return out;
 }
 
-// Exactly three whitespace-separated numbers (trailing '\r' allowed), nothing else on the line.
+// Exactly three whitespace-separated numbers (a trailing '\r' allowed), nothing else on the line.
 template <class A, class B, class C>
-bool parse_numbers(const std::string& line, A& a, B& b, C& c) {
-  std::istringstream ls(line);
-  std::string t[3], extra;
-  if (!(ls >> t[0] >> t[1] >> t[2]) || (ls >> extra)) return false;
-  auto one = [](const std::string& s, auto& v) {
-    auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-    return ec == std::errc() && p == s.data() + s.size();
-  };
-  return one(t[0], a) && one(t[1], b) && one(t[2], c);
+bool parse_numbers(std::string_view line, A& a, B& b, C& c) {
+  io_detail::Tokens ls(line);
+  std::string_view t[3];
+  if (!ls.next(t[0]) || !ls.next(t[1]) || !ls.next(t[2]) || ls.more()) return false;
+  return io_detail::parse_number(t[0], a) && io_detail::parse_number(t[1], b) && io_detail::parse_number(t[2], c);
 }
 }  // namespace
 
-Eigen::MatrixX3d read_normals(const std::string& path) {
-  std::vector<double> v = read_rows(path, 3, "normals");
-  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), Eigen::Index(v.size() / 3), 3);
-}
+Eigen::MatrixX3d read_normals(const std::string& path) { return read_rows<Eigen::MatrixX3d>(path, 3, "normals"); }
 
 void write_normals(const std::string& path, const Eigen::MatrixX3d& n) {
   for (Eigen::Index i = 0; i < n.rows(); ++i)
     for (int c = 0; c < 3; ++c) io_detail::require_finite(n(i, c), path, "normals", "row", (long long)i + 1);
-  io_detail::OutputFile f(path, "normals");
-  for (Eigen::Index i = 0; i < n.rows(); ++i) std::fprintf(f.get(), "%.17g %.17g %.17g\n", n(i, 0), n(i, 1), n(i, 2));
-  f.commit();
+  io_detail::TextWriter out(path, "normals");
+  for (Eigen::Index i = 0; i < n.rows(); ++i) {
+    out.write_double(n(i, 0));
+    out.write(' ');
+    out.write_double(n(i, 1));
+    out.write(' ');
+    out.write_double(n(i, 2));
+    out.write('\n');
+  }
+  out.commit();
 }
 
-Eigen::VectorXd read_scalars(const std::string& path) {
-  std::vector<double> v = read_rows(path, 1, "scalars");
-  return Eigen::Map<Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
-}
+Eigen::VectorXd read_scalars(const std::string& path) { return read_rows<Eigen::VectorXd>(path, 1, "scalars"); }
 
 void write_scalars(const std::string& path, const Eigen::VectorXd& values) {
   for (Eigen::Index i = 0; i < values.size(); ++i)
     io_detail::require_finite(values[i], path, "scalars", "row", (long long)i + 1);
-  io_detail::OutputFile f(path, "scalars");
-  for (Eigen::Index i = 0; i < values.size(); ++i) std::fprintf(f.get(), "%.17g\n", values[i]);
-  f.commit();
+  io_detail::TextWriter out(path, "scalars");
+  for (Eigen::Index i = 0; i < values.size(); ++i) {
+    out.write_double(values[i]);
+    out.write('\n');
+  }
+  out.commit();
 }
 
 void write_matrix_market(const std::string& path, const Eigen::SparseMatrix<double>& A) {
   for (Eigen::Index k = 0; k < A.nonZeros(); ++k)
     io_detail::require_finite(A.valuePtr()[k], path, "Matrix Market", "stored entry", (long long)k + 1);
-  io_detail::OutputFile f(path, "Matrix Market");
-  std::fprintf(f.get(), "%%%%MatrixMarket matrix coordinate real general\n%% written by corrlap\n");
-  std::fprintf(f.get(), "%lld %lld %lld\n", (long long)A.rows(), (long long)A.cols(), (long long)A.nonZeros());
+  io_detail::TextWriter out(path, "Matrix Market");
+  out.write("%%MatrixMarket matrix coordinate real general\n% written by corrlap\n");
+  out.write_int(A.rows());
+  out.write(' ');
+  out.write_int(A.cols());
+  out.write(' ');
+  out.write_int(A.nonZeros());
+  out.write('\n');
   for (Eigen::Index c = 0; c < A.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it)
-      std::fprintf(f.get(), "%lld %lld %.17g\n", (long long)it.row() + 1, (long long)it.col() + 1, it.value());
-  f.commit();
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it) {
+      out.write_int(it.row() + 1);
+      out.write(' ');
+      out.write_int(it.col() + 1);
+      out.write(' ');
+      out.write_double(it.value());
+      out.write('\n');
+    }
+  out.commit();
 }
 
 Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
   using io_detail::readable_count;
   auto fail = [&](const std::string& what) -> void { throw IoError("Matrix Market file '" + path + "': " + what); };
-  std::ifstream in(path);
-  if (!in) fail("cannot open");
-  const std::uint64_t file_bytes = io_detail::bytes_left(in);
-  std::string header;
-  if (!std::getline(in, header)) fail("missing %%MatrixMarket header (empty file)");
+  io_detail::LineReader in(path);
+  if (!in.is_open()) fail("cannot open");
+  const std::uint64_t file_bytes = in.file_size();
+  std::string_view header_line;
+  if (!in.next(header_line)) fail("missing %%MatrixMarket header (empty file)");
+  const std::string header(header_line);
   // Banner: %%MatrixMarket matrix coordinate real|integer|pattern general|symmetric (fields are
   // case-insensitive; each must be one word, matched exactly, not found anywhere in the line).
   std::vector<std::string> banner;
   {
-    std::istringstream hs(header);
-    std::string w;
-    while (hs >> w) {
+    io_detail::Tokens hs(header);
+    std::string_view word;
+    while (hs.next(word)) {
+      std::string w(word);
       std::transform(w.begin(), w.end(), w.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
       banner.push_back(w);
     }
@@ -136,20 +159,21 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
   if (banner[4] != "general" && banner[4] != "symmetric")
     fail("header '" + shown + "': unsupported symmetry '" + banner[4] + "' (general or symmetric)");
   const bool symmetric = banner[4] == "symmetric", pattern = banner[3] == "pattern";
-  std::string line;
+  std::string_view line;
   std::size_t lineno = 1;
   bool have_size = false;
-  while (std::getline(in, line)) {
+  while (in.next(line)) {
     ++lineno;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.find_first_not_of(" \t") != std::string::npos && line[0] != '%') {
+    line = io_detail::without_cr(line);
+    if (line.find_first_not_of(" \t") != std::string_view::npos && line[0] != '%') {
       have_size = true;
       break;
     }
   }
+  if (!have_size) line = {};
   long long r = 0, c = 0, nnz = 0;
   if (!have_size || !parse_numbers(line, r, c, nnz) || r <= 0 || c <= 0 || nnz < 0)
-    fail("line " + std::to_string(lineno) + ": malformed size line '" + line.substr(0, 80) +
+    fail("line " + std::to_string(lineno) + ": malformed size line '" + std::string(line.substr(0, 80)) +
          "' (expected 'rows columns entries')");
   const std::string size_at = "line " + std::to_string(lineno) + ": ";
   if (symmetric && r != c)
@@ -177,28 +201,34 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
   const double stored = double(nnz) * (symmetric ? 2.0 : 1.0);
   io_detail::check_budget("Matrix Market file '" + path + "'", stored * 28.0 + 8.0 * double(c),
                           readable_count(std::uint64_t(nnz)) + " entries");
-  std::vector<Eigen::Triplet<double>> t;
-  t.reserve(std::size_t(nnz) * (symmetric ? 2 : 1));
+  // Entries are parsed straight into the compressed storage of the result (rows and values, the
+  // columns aside): a file sorted by column then row without repeats (what write_matrix_market
+  // writes) needs no other copy. Other files (and symmetric ones) go through triplets.
+  Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+  A.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* rows = A.innerIndexPtr();
+  double* values = A.valuePtr();
+  std::vector<int> columns(static_cast<std::size_t>(nnz));
+  bool sorted = !symmetric;
   for (long long k = 0; k < nnz; ++k) {
     long long i = 0, j = 0;
     double v = 1.0;
-    std::string extra;
     ++lineno;
     auto entry = [&] { return "line " + std::to_string(lineno) + ", entry " + std::to_string(k + 1); };
-    if (!std::getline(in, line))
+    if (!in.next(line))
       fail(entry() + ": truncated: end of file after " + readable_count(std::uint64_t(k)) + " of " +
            readable_count(std::uint64_t(nnz)) + " declared entries");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+    line = io_detail::without_cr(line);
     bool ok = true;
     if (pattern) {
-      std::istringstream ls(line);
-      std::string a, b;
-      ok = (ls >> a >> b) && !(ls >> extra) && parse_numbers(a + " " + b + " 1", i, j, v);
+      io_detail::Tokens ls(line);
+      std::string_view a, b;
+      ok = ls.next(a) && ls.next(b) && !ls.more() && io_detail::parse_number(a, i) && io_detail::parse_number(b, j);
     } else {
       ok = parse_numbers(line, i, j, v);
     }
     if (!ok)
-      fail(entry() + ": malformed entry '" + line.substr(0, 80) + "' (expected '" +
+      fail(entry() + ": malformed entry '" + std::string(line.substr(0, 80)) + "' (expected '" +
            (pattern ? "row column" : "row column value") + "')");
     if (i < 1 || i > r || j < 1 || j > c)
       fail(entry() + ": index (" + std::to_string(i) + ", " + std::to_string(j) + ") out of range for a " +
@@ -207,16 +237,35 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
     if (symmetric && j > i)
       fail(entry() + ": (" + std::to_string(i) + ", " + std::to_string(j) +
            ") is above the diagonal; a symmetric file stores the lower triangle");
-    t.emplace_back(int(i - 1), int(j - 1), v);
-    if (symmetric && i != j) t.emplace_back(int(j - 1), int(i - 1), v);
+    const auto kk = std::size_t(k);
+    rows[kk] = int(i - 1);
+    columns[kk] = int(j - 1);
+    values[kk] = v;
+    if (k > 0 && sorted)
+      sorted = columns[kk] > columns[kk - 1] || (columns[kk] == columns[kk - 1] && rows[kk] > rows[kk - 1]);
   }
-  while (std::getline(in, line)) {
+  while (in.next(line)) {
     ++lineno;
-    if (line.find_first_not_of(" \t\r") != std::string::npos)
+    if (line.find_first_not_of(" \t\r") != std::string_view::npos)
       fail("line " + std::to_string(lineno) + ": more entries than the " + readable_count(std::uint64_t(nnz)) +
            " declared");
   }
-  Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+  if (in.error()) fail("read error");
+  if (sorted) {
+    int* outer = A.outerIndexPtr();  // counts per column, then their prefix sums
+    std::fill(outer, outer + c + 1, 0);
+    for (int j : columns) ++outer[j + 1];
+    for (long long j = 0; j < c; ++j) outer[j + 1] += outer[j];
+    return A;
+  }
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(std::size_t(nnz) * (symmetric ? 2 : 1));
+  for (std::size_t k = 0; k < std::size_t(nnz); ++k) {
+    t.emplace_back(rows[k], columns[k], values[k]);
+    if (symmetric && rows[k] != columns[k]) t.emplace_back(columns[k], rows[k], values[k]);
+  }
+  columns = {};
+  A = Eigen::SparseMatrix<double>(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
   A.setFromTriplets(t.begin(), t.end());
   return A;
 }

@@ -190,7 +190,7 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
   std::vector<float> colour(std::size_t(W) * std::size_t(H) * 3, 1.0f);  // white background
 
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    const std::vector<int>& face = mesh.faces[f];
+    const std::span<const int> face = mesh.faces[f];
     Eigen::Vector3d n = Eigen::Vector3d::Zero();  // Newell's normal of the polygon
     for (std::size_t k = 0; k < face.size(); ++k) {
       const Eigen::Vector3d a = mesh.positions.row(face[k]), b = mesh.positions.row(face[(k + 1) % face.size()]);

@@ -236,7 +236,7 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
   SharedSurface s;
   PolygonMesh moved;
   moved.positions = reference.positions.rowwise() + c.transpose();
-  moved.faces.reserve(std::size_t(reference.triangles.rows()));
+  moved.faces.reserve(std::size_t(reference.triangles.rows()), 3 * std::size_t(reference.triangles.rows()));
   for (Eigen::Index t = 0; t < reference.triangles.rows(); ++t)
     moved.faces.push_back({reference.triangles(t, 0), reference.triangles(t, 1), reference.triangles(t, 2)});
   MeshVoxelizationParams p;

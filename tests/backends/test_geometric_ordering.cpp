@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <corrlap/backends/cholmod.hpp>
 #include <corrlap/backends/detail/geometric_ordering.hpp>
-#include <corrlap/core/error.hpp>
 #include <corrlap/core/config.hpp>
+#include <corrlap/core/error.hpp>
 #include <numeric>
 
 #include "backends/fem_fixture.hpp"

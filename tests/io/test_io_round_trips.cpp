@@ -99,8 +99,9 @@ TEST_CASE("PLY faces of more than 255 corners use a wide count type") {
   const int n = 300;
   m.positions.resize(n, 3);
   for (int i = 0; i < n; ++i) m.positions.row(i) << std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), 0;
-  m.faces.resize(1);
-  for (int i = 0; i < n; ++i) m.faces[0].push_back(i);
+  std::vector<int> face(n);
+  for (int i = 0; i < n; ++i) face[std::size_t(i)] = i;
+  m.faces.push_back(face);
   const std::string p = tmp_path("wide.ply");
   write_ply(p, m);
   check_same(read_ply(p), m);
@@ -118,7 +119,7 @@ TEST_CASE("ASCII PLY with other types, extra elements and vertex_index is read")
   REQUIRE(m.positions.rows() == 4);
   CHECK(m.positions(3, 0) == 0.5);
   CHECK(m.positions(3, 2) == 1.0);
-  CHECK(m.faces == std::vector<std::vector<int>>{{0, 1, 2}, {0, 1, 3, 2}});
+  CHECK(m.faces == FaceList{{0, 1, 2}, {0, 1, 3, 2}});
   CHECK(a.vertex_scalars.at("red") == Eigen::Vector4d(255, 0, 1, 2));
   CHECK(a.face_scalars.at("flags") == Eigen::Vector2d(7, 8));
 }
@@ -128,7 +129,7 @@ TEST_CASE("smallest ASCII PLY without a final newline is read") {
   write_text(p,
              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
-  CHECK(read_ply(p).faces == std::vector<std::vector<int>>{{0, 1, 2}});
+  CHECK(read_ply(p).faces == FaceList{{0, 1, 2}});
 }
 
 TEST_CASE("OFF files are read (comments, counts on the header line, colours ignored)") {
@@ -139,7 +140,7 @@ TEST_CASE("OFF files are read (comments, counts on the header line, colours igno
   const PolygonMesh m = read_mesh(p);
   CHECK(m.positions.rows() == 4);
   CHECK(m.positions(3, 2) == 1.0);
-  CHECK(m.faces == std::vector<std::vector<int>>{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
+  CHECK(m.faces == FaceList{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
   const std::string q = tmp_path("tet2.off");
   write_text(q, "COFF 4 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n");
   CHECK(read_off(q).faces.size() == 1);

@@ -2,6 +2,7 @@
 // input gives the same bytes, PNG round trips, and bad input is named.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/render/render_mesh.hpp>
@@ -55,7 +56,7 @@ TEST_CASE("render: the nearer face is drawn, whatever the face order; the same i
   for (int c = 0; c < 3; ++c) CHECK(std::abs(centre[c] - expected[c]) <= 1.0);
   // The back square (scalar 0) drawn first, the front one second: the same picture.
   PolygonMesh swapped = two_squares(0.5);
-  std::swap(swapped.faces[0], swapped.faces[1]);
+  std::swap_ranges(swapped.faces[0].begin(), swapped.faces[0].end(), swapped.faces[1].begin());  // two quads
   ScalarField swapped_field{"s", Eigen::Vector2d(0.0, 1.0), true};
   CHECK(render_mesh(swapped, &swapped_field, o).rgb == front_first.rgb);
   // Moving the first square behind the second shows the second's colour.

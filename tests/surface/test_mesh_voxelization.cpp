@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
@@ -174,19 +175,18 @@ TEST_CASE("triangle soups, flipped orientation and polygon faces give the same v
   // soup: every triangle has its own copies of its vertices
   PolygonMesh soup;
   soup.positions.resize(Eigen::Index(3 * m.faces.size()), 3);
-  for (std::size_t f = 0; f < m.faces.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k)
       soup.positions.row(Eigen::Index(3 * f + std::size_t(k))) = m.positions.row(m.faces[f][std::size_t(k)]);
-      soup.faces.resize(m.faces.size());
-      soup.faces[f].push_back(int(3 * f) + k);
-    }
+    soup.faces.push_back({int(3 * f), int(3 * f) + 1, int(3 * f) + 2});
+  }
   MeshVoxelizationReport rs;
   CHECK(same_voxels(voxelize_mesh(soup, p, &rs), ref));
   CHECK(rs.merged_vertices == int(soup.positions.rows() - m.positions.rows()));
   CHECK(rs.closed());
   // flipped: every face reversed
   PolygonMesh flipped = m;
-  for (auto& f : flipped.faces) std::reverse(f.begin(), f.end());
+  for (auto f : flipped.faces) std::reverse(f.begin(), f.end());
   MeshVoxelizationReport rf;
   CHECK(same_voxels(voxelize_mesh(flipped, p, &rf), ref));
   CHECK(rf.inward_oriented);
@@ -203,7 +203,10 @@ TEST_CASE("triangle soups, flipped orientation and polygon faces give the same v
 
 TEST_CASE("open mesh: warning with counts, inside decided by the 6-ray vote") {
   PolygonMesh m = box_mesh({-1, -1, -1}, {1, 1, 1});
-  m.faces.erase(m.faces.begin() + 2, m.faces.begin() + 4);  // remove the top face (z = 1): 4 boundary edges
+  FaceList open;  // without the top face (triangles 2 and 3, z = 1): 4 boundary edges
+  for (std::size_t f = 0; f < m.faces.size(); ++f)
+    if (f != 2 && f != 3) open.push_back(m.faces[f]);
+  m.faces = open;
   MeshVoxelizationParams p;
   p.h = 0.125;
   MeshVoxelizationReport r;
@@ -284,7 +287,7 @@ TEST_CASE("voxelization input errors are clear") {
   m.positions(3, 1) = std::nan("");
   CHECK_THROWS_WITH_AS(voxelize_mesh(m, p), doctest::Contains("vertex 3 has a non-finite position"), InputError);
   m = box_mesh({0, 0, 0}, {1, 1, 1});
-  m.faces[5] = {0, 1, 9};
+  std::ranges::copy(std::initializer_list<int>{0, 1, 9}, m.faces[5].begin());  // face 5 is a triangle
   CHECK_THROWS_WITH_AS(voxelize_mesh(m, p), doctest::Contains("face 5 refers to vertex 9"), InputError);
   m = box_mesh({0, 0, 0}, {1, 1, 1});
   CHECK_THROWS_WITH_AS(voxelize_mesh(m, MeshVoxelizationParams{}),
