@@ -3,7 +3,7 @@
 // stage: the time, the resident memory after it (and the peak during it), and the bytes of what it
 // keeps, per surfel. Then the first-call cost of the FEM and interpolated assemblies: the first call,
 // a second one (fresh output again) and a refill of the previous output (assemble_into), with the
-// page faults of each (docs/performance.md "First call").
+// page faults of each (docs/scale.md "First call").
 //
 //   ./build/bench/bench_end_to_end [--h 0.002] [--system poisson|heat] [--ordering geometric|amd|metis]
 //                                  [--no-solve] [--first-call-only]
@@ -62,10 +62,11 @@ struct Table {
     std::printf("%-22s %9s %10s %10s %12s %12s\n", "stage", "seconds", "RSS MiB", "peak MiB", "kept B/surfel",
                 "RSS B/surfel");
   }
-  void row(const char* stage, double seconds, double kept_bytes) const {
-    const double rss = rss_mib();
-    std::printf("%-22s %9.3f %10.0f %10.0f %12.1f %12.1f\n", stage, seconds, rss, bench::peak_rss_mib(),
-                kept_bytes / faces, rss * 1048576.0 / faces);
+  void row(const char* stage, double seconds, double kept_bytes, double rss = -1.0, double peak = -1.0) const {
+    if (rss < 0.0) rss = rss_mib();
+    if (peak < 0.0) peak = bench::peak_rss_mib();
+    std::printf("%-22s %9.3f %10.0f %10.0f %12.1f %12.1f\n", stage, seconds, rss, peak, kept_bytes / faces,
+                rss * 1048576.0 / faces);
     std::fflush(stdout);
     bench::reset_peak_rss();
   }
@@ -91,19 +92,20 @@ void first_call_costs(const SurfelMesh& mesh, const NormalFields& normals, const
   d->assemble_into(mesh, normals, params, second);
   const double into_s = seconds_since(t0);
   const long into_faults = minor_faults() - faults;
-  // What zeroing that many fresh pages costs on its own: touch a fresh buffer of the same size.
-  const std::size_t bytes = std::size_t(first_faults) * 4096;
+  // What clearing fresh memory of the output's size costs on its own: touch a fresh buffer.
+  const std::size_t bytes = std::size_t(sparse_bytes(second.L) + sparse_bytes(second.M));
   double touch_s = 0.0;
   if (bytes > 0) {
-    char* p = static_cast<char*>(std::malloc(bytes));
+    volatile char* p = static_cast<char*>(std::malloc(bytes));
     t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < bytes; i += 4096) p[i] = 1;
     touch_s = seconds_since(t0);
-    std::free(p);
+    std::free(const_cast<char*>(p));
   }
-  std::printf("%-13s first %.3f s (%ld faults, touching as many fresh pages alone %.3f s), again %.3f s (%ld faults), "
-              "refill %.3f s (%ld faults)\n",
-              method, first_s, first_faults, touch_s, second_s, second_faults, into_s, into_faults);
+  std::printf(
+      "%-13s first %.3f s (%ld faults), again %.3f s (%ld faults), refill %.3f s (%ld faults); "
+      "touching %.0f MiB of fresh memory alone %.3f s\n",
+      method, first_s, first_faults, second_s, second_faults, into_s, into_faults, double(bytes) / 1048576.0, touch_s);
   std::fflush(stdout);
 }
 
@@ -126,7 +128,8 @@ int main(int argc, char** argv) {
     else if (a == "--first-call-only")
       first_call_only = true;
     else {
-      std::fprintf(stderr, "usage: %s [--h H] [--system poisson|heat] [--ordering NAME] [--no-solve] [--first-call-only]\n",
+      std::fprintf(stderr,
+                   "usage: %s [--h H] [--system poisson|heat] [--ordering NAME] [--no-solve] [--first-call-only]\n",
                    argv[0]);
       return 2;
     }
@@ -138,15 +141,17 @@ int main(int argc, char** argv) {
   auto t0 = std::chrono::steady_clock::now();
   VoxelGrid grid = digitize(shape, {.h = h, .min_aabb = -1.5, .max_aabb = 1.5});
   const double digitize_s = seconds_since(t0);
+  const double digitize_rss = rss_mib(), digitize_peak = bench::peak_rss_mib();
+  bench::reset_peak_rss();
   t0 = std::chrono::steady_clock::now();
   const SurfelMesh mesh = extract_surface(grid);
   const double extract_s = seconds_since(t0);
   table.faces = double(mesh.num_faces());
   std::printf("%d surfels, %d vertices\n", mesh.num_faces(), mesh.num_vertices());
   table.header();
-  table.row("digitize", digitize_s, double(grid.memory_bytes()));
-  const double mesh_bytes = double(mesh.positions.size()) * 8 + double(mesh.faces.size()) * 4 +
-                            double(mesh.surfels.size()) * sizeof(Surfel);
+  table.row("digitize", digitize_s, double(grid.memory_bytes()), digitize_rss, digitize_peak);
+  const double mesh_bytes =
+      double(mesh.positions.size()) * 8 + double(mesh.faces.size()) * 4 + double(mesh.surfels.size()) * sizeof(Surfel);
   table.row("extract surface", extract_s, mesh_bytes);
   grid = VoxelGrid();  // true normals need the shape only
   table.row("drop the voxels", 0.0, 0.0);
@@ -177,7 +182,7 @@ int main(int argc, char** argv) {
     A = ops.M - 0.035 * h * ops.L;
     unknown_positions = mesh.positions;
   } else {
-    A = SpMat(-ops.L).bottomRightCorner(n - 1, n - 1);
+    A = pinned_system(ops.L, 0);  // what solve_neumann_poisson factorizes
     unknown_positions = mesh.positions.bottomRows(n - 1);
   }
   A.makeCompressed();

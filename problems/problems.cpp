@@ -105,6 +105,16 @@ Eigen::VectorXd solve_dirichlet(const SpMat& L, const SpMat& M, const Eigen::Vec
   return u;
 }
 
+SpMat pinned_system(const SpMat& L, int pin) {
+  const Eigen::Index n = L.rows();
+  if (L.cols() != n || pin < 0 || pin >= n)
+    throw InputError("pinned system: pinned vertex " + std::to_string(pin) + " out of range for a " +
+                     std::to_string(L.rows()) + " x " + std::to_string(L.cols()) + " matrix");
+  std::vector<int> free_index(static_cast<std::size_t>(n));
+  for (Eigen::Index v = 0; v < n; ++v) free_index[std::size_t(v)] = v == pin ? -1 : int(v < pin ? v : v - 1);
+  return negated_free_block(L, free_index, n - 1);
+}
+
 double mass_weighted_mean(const SpMat& M, const Eigen::VectorXd& v) {
   if (M.rows() != v.size() || M.cols() != v.size())
     throw InputError("mass-weighted mean: M is " + std::to_string(M.rows()) + "x" + std::to_string(M.cols()) +

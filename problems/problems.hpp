@@ -22,6 +22,10 @@ Eigen::VectorXd solve_dirichlet(const Eigen::SparseMatrix<double>& L, const Eige
                                 const Eigen::VectorXd& f, const std::vector<int>& fixed, const Eigen::VectorXd& values,
                                 LinearSolver& solver, const Eigen::MatrixX3d* positions = nullptr);
 
+/// The SPD matrix solve_neumann_poisson factorizes: -L without row and column `pin` ((#V-1) x
+/// (#V-1), the rows and columns after `pin` shifted up by one). Built in place, without triplets.
+Eigen::SparseMatrix<double> pinned_system(const Eigen::SparseMatrix<double>& L, int pin = 0);
+
 /// M-weighted mean 1^T M v / 1^T M 1.
 double mass_weighted_mean(const Eigen::SparseMatrix<double>& M, const Eigen::VectorXd& v);
 

@@ -43,8 +43,8 @@ Matrix project_out(const Eigen::SparseMatrix<double>& M, const Eigen::Ref<const 
 
 }  // namespace
 
-BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& apply, const Eigen::SparseMatrix<double>& M,
-                                 int nev, const BlockLanczosOptions& options) {
+BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& apply,
+                                 const Eigen::SparseMatrix<double>& M, int nev, const BlockLanczosOptions& options) {
   const Eigen::Index n = M.rows();
   const int b = std::max(1, options.block_size);
   BlockLanczosResult result;
@@ -52,7 +52,7 @@ BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& app
   const int max_basis = int(std::min<Eigen::Index>(
       n, options.max_basis > 0 ? std::max(options.max_basis, nev + 2 * b) : std::max(3 * nev, nev + 8 * b)));
 
-  Matrix V(n, max_basis);                          // M-orthonormal basis, the first `used` columns
+  Matrix V(n, max_basis);                         // M-orthonormal basis, the first `used` columns
   Matrix T = Matrix::Zero(max_basis, max_basis);  // V^T M S V, filled block column by block column
   std::mt19937 rng(options.seed);
   std::normal_distribution<double> normal;
@@ -84,8 +84,7 @@ BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& app
       const int wanted = options.wanted > 0 ? std::min(options.wanted, nev) : nev;
       const Matrix residuals = R * Y.bottomRows(b).leftCols(wanted);
       bool all = true;
-      for (int i = 0; i < wanted && all; ++i)
-        all = residuals.col(i).norm() <= options.tolerance * std::abs(theta[i]);
+      for (int i = 0; i < wanted && all; ++i) all = residuals.col(i).norm() <= options.tolerance * std::abs(theta[i]);
       if (all) {
         result.theta = theta.head(nev);
         result.vectors = V.leftCols(used) * Y.leftCols(nev);

@@ -1,6 +1,9 @@
 #include "geometric_ordering.hpp"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
+#include <atomic>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -9,60 +12,61 @@ namespace corrlap::detail {
 
 namespace {
 
+// Parts above this many unknowns order their two halves as parallel tasks.
+constexpr int kParallelPart = 50000;
+// Ties could make the splits unbalanced; past this depth a part is a leaf.
+constexpr int kMaxDepth = 256;
+
 struct Dissection {
   const Eigen::SparseMatrix<double>& A;
   const Eigen::MatrixX3d& points;
   int leaf_size;
-  std::vector<int> ids;         // the unknowns, each part a contiguous range
-  std::vector<int> part;        // label of the part an unknown is in (lower halves get fresh labels)
-  std::vector<int> order;       // the result, filled leaves first
-  std::vector<int> separators;  // stack of pending separators (eliminated after their two halves)
-  int next_label = 1;
+  std::vector<int> ids;    // the unknowns; every part is a contiguous range ids[lo, hi)
+  std::vector<int> part;   // label of the part an unknown is in: 1 + the first index of its range
+  std::vector<int> order;  // the result
 
-  // Orders ids[lo, hi). Written with an explicit stack: the recursion depth is log2(n / leaf) but
-  // unbalanced ties could make it deeper.
-  void run(int lo, int hi) {
-    struct Task {
-      int lo, hi;
-      int separator_begin = -1, separator_end = -1;  // >= 0: emit this separator range instead
+  // Labels are read for the neighbours of a part while the tasks of other parts relabel theirs; a
+  // label is unique to one live range, so those writes never change what a part reads, but they
+  // are still concurrent accesses, hence atomic (relaxed).
+  int label(int v) const { return std::atomic_ref<const int>(part[std::size_t(v)]).load(std::memory_order_relaxed); }
+  void relabel(int v, int l) { std::atomic_ref<int>(part[std::size_t(v)]).store(l, std::memory_order_relaxed); }
+
+  // Orders ids[lo, hi) into order[out, out + hi - lo): lower half, upper half, then the separator.
+  void run(int lo, int hi, int out, int depth) {
+    const int split = depth < kMaxDepth ? bisect(lo, hi) : -1;
+    if (split < 0) {  // a leaf, or nothing to split on
+      std::copy(ids.begin() + lo, ids.begin() + hi, order.begin() + out);
+      return;
+    }
+    // ids[lo, split): lower half; ids[split, hi): upper half, whose unknowns with a neighbour in
+    // the lower half are moved to its end and become the separator.
+    const int lower_label = lo + 1;
+    const auto touches_lower = [&](int v) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(A, v); it; ++it)
+        if (it.row() != v && label(int(it.row())) == lower_label) return true;
+      return false;
     };
-    std::vector<Task> stack{{lo, hi}};
-    while (!stack.empty()) {
-      const Task t = stack.back();
-      stack.pop_back();
-      if (t.separator_begin >= 0) {
-        order.insert(order.end(), separators.begin() + t.separator_begin, separators.begin() + t.separator_end);
-        separators.resize(std::size_t(t.separator_begin));
-        continue;
-      }
-      const int split = bisect(t.lo, t.hi);
-      if (split < 0) {  // a leaf, or nothing to split on (all points on one plane position)
-        order.insert(order.end(), ids.begin() + t.lo, ids.begin() + t.hi);
-        continue;
-      }
-      // ids[lo, split): lower half; ids[split, hi): upper half, whose unknowns with a neighbour in
-      // the lower half are moved to its end and become the separator.
-      const int lower_label = part[std::size_t(ids[std::size_t(t.lo)])];
-      const auto touches_lower = [&](int v) {
-        for (Eigen::SparseMatrix<double>::InnerIterator it(A, v); it; ++it)
-          if (it.row() != v && part[std::size_t(it.row())] == lower_label) return true;
-        return false;
-      };
-      const auto sep =
-          std::stable_partition(ids.begin() + split, ids.begin() + t.hi, [&](int v) { return !touches_lower(v); });
-      const int upper_end = int(sep - ids.begin());
-      const int sep_begin = int(separators.size());
-      separators.insert(separators.end(), sep, ids.begin() + t.hi);
-      for (auto it = sep; it != ids.begin() + t.hi; ++it) part[std::size_t(*it)] = 0;  // out of every part
-      // Stack order: lower half first, then upper half, then the separator.
-      stack.push_back({0, 0, sep_begin, int(separators.size())});
-      if (upper_end > split) stack.push_back({split, upper_end});
-      stack.push_back({t.lo, split});
+    const auto sep =
+        std::stable_partition(ids.begin() + split, ids.begin() + hi, [&](int v) { return !touches_lower(v); });
+    const int upper_end = int(sep - ids.begin());
+    for (auto it = sep; it != ids.begin() + hi; ++it) relabel(*it, 0);  // out of every part
+    const int lower_size = split - lo, upper_size = upper_end - split;
+    std::copy(sep, ids.begin() + hi, order.begin() + out + lower_size + upper_size);
+    const auto lower = [&] { run(lo, split, out, depth + 1); };
+    const auto upper = [&] {
+      if (upper_size > 0) run(split, upper_end, out + lower_size, depth + 1);
+    };
+    if (hi - lo > kParallelPart) {
+      tbb::parallel_invoke(lower, upper);
+    } else {
+      lower();
+      upper();
     }
   }
 
-  // Splits ids[lo, hi) at the median of the longest side; relabels the two halves. Returns the first
-  // index of the upper half, or -1 when the range is a leaf or cannot be split.
+  // Splits ids[lo, hi) at the median of the longest side and labels the two halves (lo + 1 and
+  // split + 1). Returns the first index of the upper half, or -1 when the range is a leaf or
+  // cannot be split.
   int bisect(int lo, int hi) {
     if (hi - lo <= leaf_size) return -1;
     Eigen::Array3d low = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
@@ -85,9 +89,8 @@ struct Dissection {
       split = int(std::partition(ids.begin() + lo, ids.begin() + hi, [&](int v) { return coordinate(v) <= cut; }) -
                   ids.begin());
     if (split == lo || split == hi) return -1;
-    const int lower_label = next_label++, upper_label = next_label++;
-    for (int i = lo; i < split; ++i) part[std::size_t(ids[std::size_t(i)])] = lower_label;
-    for (int i = split; i < hi; ++i) part[std::size_t(ids[std::size_t(i)])] = upper_label;
+    for (int i = lo; i < split; ++i) relabel(ids[std::size_t(i)], lo + 1);
+    for (int i = split; i < hi; ++i) relabel(ids[std::size_t(i)], split + 1);
     return split;
   }
 };
@@ -99,11 +102,11 @@ std::vector<int> geometric_nested_dissection(const Eigen::SparseMatrix<double>& 
   const Eigen::Index n = A.rows();
   if (A.cols() != n || points.rows() != n)
     throw std::invalid_argument("geometric_nested_dissection: A and points must have one row per unknown");
-  Dissection d{A, points, std::max(1, leaf_size), {}, std::vector<int>(std::size_t(n), 0), {}, {}};
+  Dissection d{
+      A, points, std::max(1, leaf_size), {}, std::vector<int>(std::size_t(n), 0), std::vector<int>(std::size_t(n), 0)};
   d.ids.resize(std::size_t(n));
   std::iota(d.ids.begin(), d.ids.end(), 0);
-  d.order.reserve(std::size_t(n));
-  d.run(0, int(n));
+  d.run(0, int(n), 0, 0);
   return d.order;
 }
 

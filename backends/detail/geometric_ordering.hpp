@@ -16,7 +16,8 @@ namespace corrlap::detail {
 /// not read) with positions `points` (n x 3): order[k] is the unknown eliminated k-th. Recursively,
 /// the unknowns of a part are split at the median of their longest bounding-box side; the unknowns of
 /// the upper half that have a neighbour (an entry of A) in the lower half form the separator, which
-/// is eliminated after both halves. Parts of at most `leaf_size` unknowns keep their order.
+/// is eliminated after both halves. Parts of at most `leaf_size` unknowns keep their order. Large
+/// parts order their halves as parallel TBB tasks; the result does not depend on the threads.
 /// A permutation of 0..n-1 for any input (ties and disconnected parts included).
 std::vector<int> geometric_nested_dissection(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX3d& points,
                                              int leaf_size = 64);

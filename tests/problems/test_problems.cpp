@@ -131,3 +131,28 @@ TEST_CASE("forward_laplacian solves (M - dt L) X = L u; error_norms of a constan
   Mbc[0] = 0.0;
   CHECK(neumann_residual(op.L, op.M, b, Eigen::VectorXd::Zero(n)) == doctest::Approx(Mbc.norm() / full).epsilon(1e-14));
 }
+
+TEST_CASE("pinned_system is -L without the pinned row and column, and the solvers get it with the positions") {
+  const test::FlatFem fem = test::flat_fem_sphere(0.4);
+  const Eigen::Index n = fem.L.rows();
+  for (int pin : {0, 7, int(n - 1)}) {
+    CAPTURE(pin);
+    const SpMat A = pinned_system(fem.L, pin);
+    REQUIRE(A.rows() == n - 1);
+    Eigen::MatrixXd expected = -Eigen::MatrixXd(fem.L);
+    // Remove row and column `pin` of the dense copy.
+    Eigen::MatrixXd reduced(n - 1, n - 1);
+    for (Eigen::Index i = 0, ri = 0; i < n; ++i) {
+      if (i == pin) continue;
+      for (Eigen::Index j = 0, rj = 0; j < n; ++j) {
+        if (j == pin) continue;
+        reduced(ri, rj++) = expected(i, j);
+      }
+      ++ri;
+    }
+    CHECK((Eigen::MatrixXd(A) - reduced).norm() == 0.0);  // the same numbers, only moved
+    CHECK(A.isCompressed());
+  }
+  CHECK_THROWS_AS(pinned_system(fem.L, int(n)), InputError);
+  CHECK_THROWS_AS(pinned_system(fem.L, -1), InputError);
+}
