@@ -36,14 +36,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-double rss_mib() {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  return 0.0;
-}
-
 long minor_faults() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -63,7 +55,7 @@ struct Table {
                 "RSS B/surfel");
   }
   void row(const char* stage, double seconds, double kept_bytes, double rss = -1.0, double peak = -1.0) const {
-    if (rss < 0.0) rss = rss_mib();
+    if (rss < 0.0) rss = bench::rss_mib();
     if (peak < 0.0) peak = bench::peak_rss_mib();
     std::printf("%-22s %9.3f %10.0f %10.0f %12.1f %12.1f\n", stage, seconds, rss, peak, kept_bytes / faces,
                 rss * 1048576.0 / faces);
@@ -141,7 +133,7 @@ int main(int argc, char** argv) {
   auto t0 = std::chrono::steady_clock::now();
   VoxelGrid grid = digitize(shape, {.h = h, .min_aabb = -1.5, .max_aabb = 1.5});
   const double digitize_s = seconds_since(t0);
-  const double digitize_rss = rss_mib(), digitize_peak = bench::peak_rss_mib();
+  const double digitize_rss = bench::rss_mib(), digitize_peak = bench::peak_rss_mib();
   bench::reset_peak_rss();
   t0 = std::chrono::steady_clock::now();
   const SurfelMesh mesh = extract_surface(grid);

@@ -44,14 +44,6 @@ double seconds(const std::function<void()>& f) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-double rss_mib() {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  return 0.0;
-}
-
 template <class A>
 bool same_bits(const A& a, const A& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() &&
@@ -135,7 +127,7 @@ double read_peak_mib(const char* kind, const std::string& path) {
 }
 
 int peak_mode(const std::string& kind, const std::string& path) {
-  const double before = rss_mib();
+  const double before = bench::rss_mib();
   if (kind == "obj") benchmark::DoNotOptimize(read_obj(path).positions.data());
   if (kind == "ply") benchmark::DoNotOptimize(read_ply(path).positions.data());
   if (kind == "normals") benchmark::DoNotOptimize(read_normals(path).data());

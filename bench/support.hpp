@@ -3,6 +3,8 @@
 #include <cstddef>
 
 namespace corrlap::bench {
+/// Resident set size of this process now, in MiB (VmRSS).
+double rss_mib();
 /// Peak resident set size of this process so far, in MiB (VmHWM).
 double peak_rss_mib();
 /// Resets the peak RSS counter (Linux: writes 5 to /proc/self/clear_refs); false if unsupported.
