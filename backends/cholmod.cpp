@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <atomic>
+#include <corrlap/backends/detail/blas_threads.hpp>
 #include <corrlap/backends/detail/geometric_ordering.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <mutex>
@@ -11,8 +12,6 @@
 #include <sstream>
 #include <string_view>
 #include <type_traits>
-
-extern "C" void openblas_set_num_threads(int) __attribute__((weak));
 
 namespace corrlap {
 
@@ -118,8 +117,7 @@ std::atomic<bool> concurrency_seen{false};
 class ConcurrencyScope {
  public:
   ConcurrencyScope() {
-    if (active_calls.fetch_add(1) > 0 && !concurrency_seen.exchange(true) && openblas_set_num_threads)
-      openblas_set_num_threads(1);
+    if (active_calls.fetch_add(1) > 0 && !concurrency_seen.exchange(true)) detail::set_blas_threads(1);
   }
   ~ConcurrencyScope() { active_calls.fetch_sub(1); }
   ConcurrencyScope(const ConcurrencyScope&) = delete;
@@ -392,7 +390,7 @@ void CholmodSolver::configure(const Config& options) {
   if (blas < 0) throw InputError("linear solver 'cholmod': config key 'blas_threads' must be >= 0");
   if (blas > 0) {
     concurrency_seen = true;  // explicit choice: no automatic switch
-    if (openblas_set_num_threads) openblas_set_num_threads(blas);
+    detail::set_blas_threads(blas);
   }
   s.blas_threads = blas;
   s.supernodal = supernodal;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <corrlap/backends/detail/blas_threads.hpp>
 #include <corrlap/backends/detail/block_lanczos.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <new>
@@ -244,6 +245,10 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   if (s.positions.rows() == n) linear->set_positions(s.positions);
   ShiftInvertOp op(L, M, *linear);
   MassOp bop(M);
+  // The factorization with OpenBLAS as configured; the iteration's many small BLAS calls on one
+  // thread (detail/blas_threads.hpp: idle OpenBLAS workers spin, and gain nothing here).
+  op.set_shift(s.shift);
+  const detail::SerialBlasScope serial_blas;
   int restarts = 0;
   // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
   int block_runs = 0;
