@@ -114,6 +114,12 @@ int basis_size(Eigen::Index n, int nev, int ncv) {
 /// for every k (k = 5: dense is already 5x slower at n = 296).
 bool dense_is_cheaper(Eigen::Index n, int basis) { return n <= 2 * Eigen::Index(basis); }
 
+/// block_size=auto: blocks pay once the basis no longer fits in cache and streaming it per vector
+/// dominates. Measured with k = 49 (2026-12-03, bench/RESULTS.md): Spectra's single-vector run was
+/// faster up to 7 496 unknowns (1.63 s against 2.05 s), the 16-block one from 47 024 (9.3 s against
+/// 13.0 s) and at 188 456 (32.8 s against 58.3 s).
+int block_size_for(Eigen::Index n) { return n >= 20000 ? 16 : 1; }
+
 EigenResult dense_solve(const SpMat& L, const SpMat& M, int k) {
   const Eigen::MatrixXd K = -Eigen::MatrixXd(L);
   const Eigen::MatrixXd Md = Eigen::MatrixXd(M);
@@ -158,8 +164,8 @@ struct ShiftInvertEigenSolver::Impl {
   bool verify = true;
   int max_iterations = 1000;
   double tolerance = 1e-10;
-  int dense_threshold = -1;  // -1: by cost (dense_is_cheaper)
-  int block_size = 16;
+  int dense_threshold = -1;    // -1: by cost (dense_is_cheaper)
+  int block_size = 0;          // 0: auto (block_size_for)
   Config linear_config;        // includes "solver"
   Eigen::MatrixX3d positions;  // ordering hint for the linear solver
   SolverReport last_report;
@@ -179,9 +185,9 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
        "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
        "gets all its copies (auto: max(6, k/4))"},
       {"verify", "true", "deflate the pairs found and search the rest of the spectrum for missed copies"},
-      {"block_size", "16",
+      {"block_size", "auto",
        "vectors per Lanczos block (block Lanczos, BLAS-3 solves and orthogonalization); 1: Spectra's "
-       "single-vector Lanczos"},
+       "single-vector Lanczos; auto: 16 from 20 000 unknowns, 1 below (measured)"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
       {"dense_threshold", "auto",
@@ -212,8 +218,10 @@ void ShiftInvertEigenSolver::configure(const Config& options) {
   const int guard = guard_text == "auto" ? -1 : options.get_int("guard", 0);
   if (guard_text != "auto" && guard < 0) throw InputError("eigen solver 'shift-invert': guard must be >= 0 or auto");
   const int maxit = options.get_int("max_iterations", s.max_iterations);
-  const int block = options.get_int("block_size", s.block_size);
-  if (block < 1) throw InputError("eigen solver 'shift-invert': block_size must be >= 1");
+  const std::string block_text = options.get_string("block_size", "auto");
+  const int block = block_text == "auto" ? 0 : options.get_int("block_size", 1);
+  if (block_text != "auto" && block < 1)
+    throw InputError("eigen solver 'shift-invert': block_size must be >= 1 or auto");
   const double tol = options.get_double("tolerance", s.tolerance);
   const std::string dense_text = options.get_string("dense_threshold", "auto");
   const int dense = dense_text == "auto" ? -1 : options.get_int("dense_threshold", 0);
@@ -252,13 +260,14 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   int restarts = 0;
   // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
   int block_runs = 0;
+  const int block_size = s.block_size > 0 ? s.block_size : block_size_for(n);
   const auto run = [&](int nev, const Eigen::VectorXd* start, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
-    if (s.block_size > 1) {
+    if (block_size > 1) {
       // Block Lanczos (detail/block_lanczos.hpp); the single-vector run below is the fallback when
       // it stops without converging (a basis that lost rank, restarts exhausted).
       op.set_shift(s.shift);
       detail::BlockLanczosOptions o;
-      o.block_size = s.block_size;
+      o.block_size = block_size;
       o.max_basis = s.ncv;
       o.max_restarts = s.max_iterations;
       o.tolerance = s.tolerance;

@@ -27,13 +27,11 @@ TEST_CASE("SerialBlasScope runs OpenBLAS on one thread and restores the count; s
     });
     other.join();
     CHECK(openblas_get_num_threads() == 1);  // the inner scope's end did not restore
-    set_blas_threads(3);                      // deferred to the end of the last scope
+    set_blas_threads(3);                     // deferred to the end of the last scope
     CHECK(openblas_get_num_threads() == 1);
   }
   CHECK(openblas_get_num_threads() == 3);
-  {
-    const SerialBlasScope scope;
-  }
+  { const SerialBlasScope scope; }
   CHECK(openblas_get_num_threads() == 3);
   set_blas_threads(original);
 }
