@@ -258,9 +258,9 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   op.set_shift(s.shift);
   const detail::SerialBlasScope serial_blas;
   int restarts = 0;
-  // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
   int block_runs = 0;
   const int block_size = s.block_size > 0 ? s.block_size : block_size_for(n);
+  // One Lanczos run for the `nev` smallest mu of the (possibly deflated) problem, ascending.
   const auto run = [&](int nev, const Eigen::VectorXd* start, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
     if (block_size > 1) {
       // Block Lanczos (detail/block_lanczos.hpp); the single-vector run below is the fallback when
