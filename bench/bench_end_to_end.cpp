@@ -42,11 +42,6 @@ long minor_faults() {
   return u.ru_minflt;
 }
 
-double sparse_bytes(const SpMat& A) {
-  return double(A.nonZeros()) * (sizeof(double) + sizeof(SpMat::StorageIndex)) +
-         double(A.outerSize() + 1) * sizeof(SpMat::StorageIndex);
-}
-
 // One line per stage: seconds, RSS after, peak during (since the last reset), bytes kept per surfel.
 struct Table {
   double faces = 1.0;
@@ -85,7 +80,7 @@ void first_call_costs(const SurfelMesh& mesh, const NormalFields& normals, const
   const double into_s = seconds_since(t0);
   const long into_faults = minor_faults() - faults;
   // What clearing fresh memory of the output's size costs on its own: touch a fresh buffer.
-  const std::size_t bytes = std::size_t(sparse_bytes(second.L) + sparse_bytes(second.M));
+  const std::size_t bytes = std::size_t(bench::sparse_bytes(second.L) + bench::sparse_bytes(second.M));
   double touch_s = 0.0;
   if (bytes > 0) {
     volatile char* p = static_cast<char*>(std::malloc(bytes));
@@ -162,7 +157,7 @@ int main(int argc, char** argv) {
 
   t0 = std::chrono::steady_clock::now();
   Operators ops = make_discretization("fem")->assemble(mesh, normals, Config());
-  table.row("fem L, M", seconds_since(t0), sparse_bytes(ops.L) + sparse_bytes(ops.M));
+  table.row("fem L, M", seconds_since(t0), bench::sparse_bytes(ops.L) + bench::sparse_bytes(ops.M));
   if (!solve) return 0;
 
   // The system: -L without vertex 0's row and column (docs/math.md §10.4), or M - dt L (§10.3).
@@ -179,7 +174,7 @@ int main(int argc, char** argv) {
   }
   A.makeCompressed();
   Eigen::VectorXd b = A * Eigen::VectorXd::Ones(A.rows());
-  table.row("system matrix", seconds_since(t0), sparse_bytes(A));
+  table.row("system matrix", seconds_since(t0), bench::sparse_bytes(A));
 
   CholmodSolver solver;
   solver.configure(Config::from_key_values({"ordering=" + ordering}));

@@ -231,8 +231,7 @@ int main(int argc, char** argv) {
     w = seconds([&] { write_matrix_market(path, L); });
     Eigen::SparseMatrix<double> back;
     measure_read<Eigen::SparseMatrix<double>>([&] { return read_matrix_market(path); }, back, r, peak, "mtx", path);
-    const double held = 12.0 * double(back.nonZeros()) + 4.0 * double(back.outerSize() + 1);
-    row("MatrixMarket", path, w, r, peak, held, same_matrix(L, back));
+    row("MatrixMarket", path, w, r, peak, bench::sparse_bytes(back), same_matrix(L, back));
     std::filesystem::remove(path);
   }
   return 0;
