@@ -59,10 +59,10 @@ class ShiftInvertOp {
     y = solver_.solve(x);
     if (X_ != nullptr && X_->cols() > 0) y -= *X_ * (MX_.transpose() * y);
   }
-  /// P (K - sigma M)^{-1} M X for a block X: the operator S of the block Lanczos (one multi-column
-  /// solve). set_shift must have been called.
-  Eigen::MatrixXd apply_block(const Eigen::MatrixXd& X) const {
-    Eigen::MatrixXd Y = solver_.solve(M_ * X);
+  /// P (K - sigma M)^{-1} M X for a block X given as its M-image MX: the operator S of the block
+  /// Lanczos (one multi-column solve). set_shift must have been called.
+  Eigen::MatrixXd apply_block(const Eigen::MatrixXd& MX) const {
+    Eigen::MatrixXd Y = solver_.solve(MX);
     if (X_ != nullptr && X_->cols() > 0) Y -= *X_ * (MX_.transpose() * Y);
     return Y;
   }
@@ -184,7 +184,9 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
       {"guard", "auto",
        "extra eigenpairs computed and dropped so that a multiple eigenvalue at position k "
        "gets all its copies (auto: max(6, k/4))"},
-      {"verify", "true", "deflate the pairs found and search the rest of the spectrum for missed copies"},
+      {"verify", "true",
+       "deflate the pairs found and probe the rest of the spectrum for missed copies (a short block run; "
+       "the full search only when the probe does not rule them out)"},
       {"block_size", "auto",
        "vectors per Lanczos block (block Lanczos, BLAS-3 solves and orthogonalization); 1: Spectra's "
        "single-vector Lanczos; auto: 16 from 20 000 unknowns, 1 below (measured)"},
@@ -274,7 +276,7 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
       o.wanted = std::min(nev, k);
       o.seed = 12345u + unsigned(block_runs++);
       const detail::BlockLanczosResult r =
-          detail::block_lanczos([&](const Eigen::MatrixXd& X) { return op.apply_block(X); }, M, nev, o);
+          detail::block_lanczos([&](const Eigen::MatrixXd& MX) { return op.apply_block(MX); }, M, nev, o);
       s.last_report = linear->info();
       if (r.converged) {
         restarts += r.restarts;
@@ -305,12 +307,41 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
     vectors = eigs.eigenvectors();
   };
 
+  // Verification's first step, a probe of the deflated operator (the pairs found projected out):
+  // its largest theta = 1 / (mu - shift) is the smallest mu not found. A short block run from a
+  // random start estimates it by a Ritz value theta_1 <= theta_max with a residual r_1 that bounds
+  // theta_max - theta_1 once theta_1 estimates the top eigenvalue. It stops as soon as that decides
+  // against the k-th value: complete (theta_1 + r_1 below its theta) or a copy missed (theta_1
+  // above it). Measured at 188 K unknowns, k = 49: 2 block steps, where the full search below took
+  // 25 (60% of the solve).
+  enum class Probe { Complete, Missed, Undecided };
+  const auto probe = [&](double kth) {
+    const int b = int(std::min<Eigen::Index>(std::max(block_size, 4), n - 3));
+    if (b < 1) return Probe::Undecided;
+    const double bound = 1.0 / (kth - 1e-9 * std::max(1.0, std::abs(kth)) - s.shift);
+    detail::BlockLanczosOptions o;
+    o.block_size = b;
+    o.max_restarts = s.max_iterations;
+    o.tolerance = s.tolerance;
+    o.seed = 777u + unsigned(block_runs++);
+    o.stop = [&](const Eigen::VectorXd& theta, const Eigen::VectorXd& r) {
+      return theta[0] + r[0] < bound || theta[0] > bound;
+    };
+    const detail::BlockLanczosResult r =
+        detail::block_lanczos([&](const Eigen::MatrixXd& MX) { return op.apply_block(MX); }, M, 1, o);
+    if (!r.converged && !r.stopped) return Probe::Undecided;
+    restarts += r.restarts;
+    if (r.theta[0] + r.residuals[0] < bound) return Probe::Complete;
+    return r.theta[0] > bound ? Probe::Missed : Probe::Undecided;
+  };
+
   // Lanczos from one start vector sees the extra copies of a multiple eigenvalue only through
   // rounding, so it can converge with a copy missing and the next eigenvalue in its place (seen on
   // a digitized sphere: 7.897 x3 at positions 10-12 came out as 7.897 x2, 9.607; on a periodic grid
   // whole copies of 4- and 8-fold eigenvalues). Two defences: (1) `guard` extra eigenpairs, dropped
   // at the end; (2) verification: deflate everything found and look for eigenvalues below the k-th
-  // in the rest of the spectrum; add them and repeat until there are none.
+  // in the rest of the spectrum (the probe, then a full search when it does not rule them out); add
+  // them and repeat until there are none.
   Eigen::VectorXd values;
   Eigen::MatrixXd vectors;
   run(nev, nullptr, values, vectors);
@@ -320,6 +351,10 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
     const int m = int(std::min<Eigen::Index>(std::max(guard_wanted, 3), n - vectors.cols() - 2));
     if (m < 1) break;  // (almost) the whole space is found: nothing left to verify
     op.deflate(&vectors);
+    if (probe(values[k - 1]) == Probe::Complete) {
+      op.deflate(nullptr);
+      break;
+    }
     Eigen::VectorXd start(n);
     for (Eigen::Index i = 0; i < n; ++i) start[i] = normal(rng);
     start = op.project(start);

@@ -12,7 +12,9 @@
 //
 // Method: full reorthogonalization (classical Gram-Schmidt twice in the M inner product), new
 // blocks M-orthonormalized by Cholesky QR twice, Rayleigh-Ritz on the projected matrix
-// T = V^T M S V, thick restart (the best Ritz vectors kept) when the basis is full.
+// T = V^T M S V, thick restart (the best Ritz vectors kept) when the basis is full. The M-image of
+// the newest block is carried along (updated by the QR factor, not recomputed): three products
+// with M per block step.
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <functional>
@@ -26,17 +28,24 @@ struct BlockLanczosOptions {
   double tolerance = 1e-10;  ///< a pair converges when |S x - theta x|_M <= tolerance |theta|
   int wanted = 0;            ///< the first `wanted` pairs must converge (0: all nev)
   unsigned seed = 12345;     ///< of the random start block (fixed: reproducible results)
+  /// Optional: called after each Rayleigh-Ritz step (once the basis holds nev + block_size vectors)
+  /// with the nev largest Ritz values and their residual norms; true ends the run early with those
+  /// pairs (`stopped`). For a question the first pairs answer before they converge.
+  std::function<bool(const Eigen::VectorXd& theta, const Eigen::VectorXd& residuals)> stop;
 };
 
 struct BlockLanczosResult {
-  Eigen::VectorXd theta;    ///< nev largest eigenvalues of S, descending
-  Eigen::MatrixXd vectors;  ///< n x nev, M-orthonormal
+  Eigen::VectorXd theta;      ///< nev largest eigenvalues of S, descending
+  Eigen::MatrixXd vectors;    ///< n x nev, M-orthonormal
+  Eigen::VectorXd residuals;  ///< |S x - theta x|_M of each pair
   int restarts = 0;
   int block_steps = 0;
   bool converged = false;  ///< false: the basis lost rank or the restarts ran out (use another method)
+  bool stopped = false;    ///< ended by options.stop before converging
 };
 
-/// `apply` maps an n x b block X to S X (n = M.rows()). Needs nev + block_size < n.
+/// `apply` maps the M-image B = M X of an n x b block X to S X (n = M.rows()): the caller's S is
+/// (K - sigma M)^{-1} M, whose M X the iteration has at hand. Needs nev + block_size < n.
 BlockLanczosResult block_lanczos(const std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>& apply,
                                  const Eigen::SparseMatrix<double>& M, int nev, const BlockLanczosOptions& options);
 
