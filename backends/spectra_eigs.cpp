@@ -115,10 +115,10 @@ int basis_size(Eigen::Index n, int nev, int ncv) {
 bool dense_is_cheaper(Eigen::Index n, int basis) { return n <= 2 * Eigen::Index(basis); }
 
 /// block_size=auto: blocks pay once the basis no longer fits in cache and streaming it per vector
-/// dominates. Measured with k = 49 (2026-12-03, bench/RESULTS.md): Spectra's single-vector run was
-/// faster up to 7 496 unknowns (1.63 s against 2.05 s), the 16-block one from 47 024 (9.3 s against
-/// 13.0 s) and at 188 456 (32.8 s against 58.3 s).
-int block_size_for(Eigen::Index n) { return n >= 20000 ? 16 : 1; }
+/// dominates. Measured with k = 49 on digitized spheres (2026-12-03, bench/RESULTS.md, with the
+/// carried M-image and the local first pass): equal up to 3 800 unknowns (0.27 s), the 16-block run
+/// faster from 7 500 (0.54 s against 0.89 s) and at 26 000 (1.38 s against 4.09 s).
+int block_size_for(Eigen::Index n) { return n >= 4000 ? 16 : 1; }
 
 EigenResult dense_solve(const SpMat& L, const SpMat& M, int k) {
   const Eigen::MatrixXd K = -Eigen::MatrixXd(L);
@@ -189,7 +189,7 @@ std::vector<ParameterInfo> ShiftInvertEigenSolver::options() const {
        "the full search only when the probe does not rule them out)"},
       {"block_size", "auto",
        "vectors per Lanczos block (block Lanczos, BLAS-3 solves and orthogonalization); 1: Spectra's "
-       "single-vector Lanczos; auto: 16 from 20 000 unknowns, 1 below (measured)"},
+       "single-vector Lanczos; auto: 16 from 4 000 unknowns, 1 below (measured)"},
       {"max_iterations", "1000", "restarts of the Lanczos iteration"},
       {"tolerance", "1e-10", "relative accuracy of the Ritz values"},
       {"dense_threshold", "auto",

@@ -11,17 +11,11 @@
 
 namespace corrlap::detail {
 
-namespace {
-
-using Matrix = Eigen::MatrixXd;
-using SpMat = Eigen::SparseMatrix<double>;
-
-/// M X for the symmetric M, by rows in parallel: row i of M X is the sum over column i of M of
-/// M(c, i) X.row(c). X is copied to row-major order first, so that each entry of M meets one
-/// contiguous row of X, not b scattered ones (Eigen's serial column-major product streams M once
-/// per column of X: 3x slower at 188 K unknowns and b = 16, and this runs three times per block
-/// step). For a symmetric M the sums run over the same entries in the same order as M * X.
-Matrix mass_times(const SpMat& M, const Matrix& X) {
+// Row i of M X is the sum over column i of M of M(c, i) X.row(c). X is copied to row-major order
+// first, so that each entry of M meets one contiguous row of X, not b scattered ones (Eigen's
+// serial column-major product streams M once per column of X: 3x slower at 188 K unknowns and
+// b = 16, and the iteration runs it three times per block step).
+Eigen::MatrixXd symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X) {
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const RowMajor x = X;
   RowMajor y(M.rows(), X.cols());
@@ -29,11 +23,16 @@ Matrix mass_times(const SpMat& M, const Matrix& X) {
     for (Eigen::Index i = rows.begin(); i < rows.end(); ++i) {
       auto yi = y.row(i);
       yi.setZero();
-      for (SpMat::InnerIterator entry(M, i); entry; ++entry) yi.noalias() += entry.value() * x.row(entry.index());
+      for (Eigen::SparseMatrix<double>::InnerIterator entry(M, i); entry; ++entry) yi.noalias() += entry.value() * x.row(entry.index());
     }
   });
   return y;
 }
+
+namespace {
+
+using Matrix = Eigen::MatrixXd;
+using SpMat = Eigen::SparseMatrix<double>;
 
 /// W = Q R with Q^T M Q = I (Cholesky QR, twice: one pass leaves an orthogonality error of about
 /// eps * cond(W)^2, the second brings it to eps). MW = M W on entry and M Q on return (updated
@@ -98,12 +97,12 @@ Matrix project_out(const SpMat& M, const Eigen::Ref<const Matrix>& V, Eigen::Ind
   for (int pass = 0; pass < 2; ++pass) {
     const Eigen::Index from = pass == 0 ? local : 0;
     const auto part = V.middleCols(from, V.cols() - from);
-    MW = mass_times(M, W);
+    MW = symmetric_times(M, W);
     const Matrix P = transpose_times(part, MW);
     subtract_times(W, part, P);
     coefficients.middleRows(from, V.cols() - from) += P;
   }
-  MW = mass_times(M, W);
+  MW = symmetric_times(M, W);
   return coefficients;
 }
 
@@ -147,7 +146,7 @@ BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& app
   Matrix block(n, b), R;
   for (Eigen::Index j = 0; j < b; ++j)
     for (Eigen::Index i = 0; i < n; ++i) block(i, j) = normal(rng);
-  Matrix M_block = mass_times(M, block);  // M times the newest block, carried along
+  Matrix M_block = symmetric_times(M, block);  // M times the newest block, carried along
   if (!m_orthonormalize(block, M_block, R)) return result;
   V.leftCols(b) = block;
   int used = b;

@@ -102,6 +102,22 @@ TEST_CASE("shift-invert eigen solver finds every copy of multiple eigenvalues (k
   ShiftInvertEigenSolver eigs;
   CHECK_THROWS_WITH_AS(eigs.configure(Config::from_key_values({"guard=-2"})), doctest::Contains("guard"), InputError);
   CHECK_THROWS_AS(eigs.configure(Config::from_key_values({"verify=maybe"})), InputError);
+  // Without verification and guard pairs, single-vector Lanczos does miss copies here: the cases
+  // above are a test of the verification (its probe, then the full search), not of luck.
+  int missed = 0;
+  for (const int k : {5, 9, 13, 17, 21, 25, 40}) {
+    ShiftInvertEigenSolver unverified;
+    unverified.configure(Config::from_key_values({"dense_threshold=0", "guard=0", "verify=false", "block_size=1"}));
+    missed += (unverified.solve(L, M, k).values - ref.values.head(k)).lpNorm<Eigen::Infinity>() > 1e-6;
+  }
+  CHECK(missed > 0);
+  // The block run (its start block sees several copies at once) with the probe, on the same cuts.
+  for (const int k : {5, 9, 13, 17}) {
+    CAPTURE(k);
+    ShiftInvertEigenSolver blocks;
+    blocks.configure(Config::from_key_values({"dense_threshold=0", "guard=0", "block_size=8"}));
+    CHECK((blocks.solve(L, M, k).values - ref.values.head(k)).lpNorm<Eigen::Infinity>() < 1e-9);
+  }
   // Guard pairs alone (no verification) still give a correct, M-orthonormal result when the cut
   // does not fall inside a cluster that Lanczos missed.
   eigs.configure(Config::from_key_values({"dense_threshold=0", "verify=false"}));
@@ -163,4 +179,31 @@ TEST_CASE("detail::block_lanczos: the largest eigenvalues of a known operator, a
     for (int i = 0; i < 4; ++i) CHECK(t.theta[i] == doctest::Approx(1.0).epsilon(1e-10));
   // Too small for a block: not converged, nothing computed.
   CHECK_FALSE(detail::block_lanczos(apply, SpMat(M.topLeftCorner(20, 20)), 10, o).converged);
+  // An early stop: the question "is the largest theta above 0.9?" is answered by the first Ritz
+  // value (a lower bound of it) before the pair converges.
+  o.block_size = 4;
+  o.tolerance = 1e-14;
+  int calls = 0;
+  o.stop = [&](const Eigen::VectorXd& theta, const Eigen::VectorXd& residuals) {
+    ++calls;
+    CHECK(residuals.size() == theta.size());
+    return theta[0] > 0.9;
+  };
+  const detail::BlockLanczosResult s = detail::block_lanczos(apply, M, 1, o);
+  CHECK(s.stopped);
+  CHECK_FALSE(s.converged);
+  CHECK(calls == s.block_steps - 1);  // asked from the second step on (basis of nev + block_size)
+  CHECK(s.theta[0] > 0.9);
+  CHECK(s.theta[0] <= 1.0 + 1e-12);
+  CHECK(s.residuals[0] > 0.0);
+}
+
+TEST_CASE("detail::symmetric_times equals M * X entry by entry") {
+  const auto& op = sphere();  // an assembled mass matrix, exactly symmetric
+  REQUIRE((SpMat(op.M.transpose()) - op.M).norm() == 0.0);
+  for (const int b : {1, 3, 16}) {
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(op.M.rows(), b);
+    const Eigen::MatrixXd expected = op.M * X;
+    CHECK((detail::symmetric_times(op.M, X).array() == expected.array()).all());
+  }
 }
