@@ -3,7 +3,9 @@ assembly, scipy.sparse.csc_matrix out) against the bare C++ assembly of the same
 the same process by corrlap._core._time_fem_assembly. Results in bench/RESULTS.md ("Python overhead").
 
     PYTHONPATH=build/python python3 bench/bench_python.py [--h 0.005] [--repeat 7] [--threads 0]
-Exits 1 when the median overhead exceeds --limit (default 15 %).
+Exits 1 when the overhead exceeds --limit (default 15 %). The overhead is taken from the best of
+the interleaved runs: on a shared machine the medians move by tens of percent with the other
+tenants' load, the best times do not (both are printed).
 """
 import argparse
 import statistics
@@ -34,11 +36,12 @@ def main():
         del L, M
         cpp.append(_core._time_fem_assembly(V, F, fn))
     mp, mc = statistics.median(py), statistics.median(cpp)
-    overhead = mp / mc - 1
+    overhead = min(py) / min(cpp) - 1
     print(f"{'':24s} {'median ms':>10s} {'min ms':>8s}")
     print(f"{'python laplacian(fem)':24s} {1e3 * mp:10.1f} {1e3 * min(py):8.1f}")
     print(f"{'C++ assembly':24s} {1e3 * mc:10.1f} {1e3 * min(cpp):8.1f}")
-    print(f"overhead (medians): {100 * overhead:+.1f} % (limit {100 * a.limit:.0f} %)")
+    print(f"overhead: {100 * overhead:+.1f} % of the best times (limit {100 * a.limit:.0f} %), "
+          f"{100 * (mp / mc - 1):+.1f} % of the medians")
     return 0 if overhead <= a.limit else 1
 
 

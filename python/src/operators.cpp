@@ -38,13 +38,14 @@ void bind_operators(py::module_& m) {
         const Config config = config_arg(params, method);
         const NormalKind need = disc->required_normals();
         NormalFields normals = method_normals(mesh, need, face_normals, vertex_normals);
-        Operators ops;
-        {
+        // Initialized from the call, not assigned: Eigen 3.4's SparseMatrix has no move assignment,
+        // so assigning Operators would copy L and M (a third of the time at 750K faces).
+        Operators ops = [&] {
           py::gil_scoped_release release;
           if (need == NormalKind::Vertex && !normals.has_vertex() && normals.has_face())
             normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
-          ops = disc->assemble(mesh, normals, config);
-        }
+          return disc->assemble(mesh, normals, config);
+        }();
         py::list warnings;
         for (const auto& w : ops.warnings) warnings.append(w);
         const char* domain = ops.domain == Operators::Domain::Faces ? "faces" : "vertices";

@@ -28,14 +28,13 @@ void bind_regularization(py::module_& m) {
         if (!size.is_none()) o.size = size.cast<double>();
         o.solver = config_arg(solver_options, solver);
         o.solver.set("solver", solver);
-        RegularizedSurface r;
-        {
+        const RegularizedSurface r = [&] {
           py::gil_scoped_release release;
           // As `corrlap regularize`: vertex normals are the normalized sum of the face normals unless given.
           if (!normals.has_vertex())
             normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
-          r = regularize_surface(mesh, normals, o);
-        }
+          return regularize_surface(mesh, normals, o);
+        }();
         py::list warnings;
         for (const auto& w : r.warnings) warnings.append(w);
         return py::make_tuple(to_numpy(r.mesh.positions), to_numpy(r.H), warnings);
