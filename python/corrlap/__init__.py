@@ -1,0 +1,276 @@
+"""corrlap: corrected Laplace-Beltrami operators on digital surfaces, from numpy and scipy.
+
+    import corrlap
+    V, F = corrlap.digitize("sphere1", h=0.1, bbox=(-1.5, 1.5))   # V (n, 3) float64, F (m, 4) int64
+    fn = corrlap.true_normals("sphere1", V, F)                      # (m, 3) unit normals per face
+    L, M = corrlap.laplacian(V, F, method="fem", face_normals=fn)   # scipy.sparse.csc_matrix, #V by #V
+    vals, vecs = corrlap.eigs(L, M, k=10)
+
+Sign convention (the C++ library's, docs/math.md section 0): L is NEGATIVE semi-definite, L 1 = 0,
+u^T L u <= 0, M^-1 L approximates the Laplace-Beltrami operator, and the eigenvalues of
+L u = lambda M u are <= 0 (-lambda ~ l(l+1) on the unit sphere). ``positive=True`` on laplacian and
+eigs gives -L and -lambda instead, the convention of robust_laplacian and gpytoolbox.
+
+Arrays in may be any numpy array-like of int32/int64/float32/float64 in C or Fortran order; a wrong
+dtype or shape, a NaN or an out-of-range face index raises ValueError naming the argument. The C++
+library's errors keep their message: bad input (including unreadable files) raises ValueError, a
+failed solve RuntimeError. The long calls release the GIL, and use the threads of set_threads(n).
+"""
+
+import numpy as _np
+import scipy.sparse as _sparse
+
+from . import _core
+
+__all__ = [
+    "digitize", "digitize_volume", "read_mesh", "write_mesh", "true_normals", "ii_normals", "curvature",
+    "laplacian", "solve", "eigs", "regularize", "set_threads", "get_threads", "methods", "backends",
+]
+
+def _csc(parts):
+    data, indices, indptr, shape = parts
+    # The arrays view the C++ matrix's storage (no copy); scipy keeps them as they are.
+    return _sparse.csc_matrix((data, indices, indptr), shape=shape, copy=False)
+
+
+def _sparse_parts(A, name):
+    """(data, indices, indptr, rows, cols) of A as a canonical float64 CSC matrix."""
+    if not _sparse.issparse(A):
+        A = _np.asarray(A)
+        if A.dtype.kind not in "iuf" or A.ndim != 2:
+            raise ValueError(f"{name}: expected a scipy sparse matrix or a 2D real array, got "
+                             f"{A.ndim}D dtype {A.dtype}")
+    if A.dtype.kind not in "iuf":
+        raise ValueError(f"{name}: dtype {A.dtype} is not supported (expected a real matrix)")
+    A = _sparse.csc_matrix(A, dtype=_np.float64)
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()  # also sorts the row indices
+    return A.data, A.indices, A.indptr, A.shape[0], A.shape[1]
+
+
+def _warn(messages):
+    import warnings
+    for m in messages:
+        warnings.warn(m, RuntimeWarning, stacklevel=3)
+
+
+def _bbox(bbox):
+    lo, hi = bbox
+    return float(lo), float(hi)
+
+
+def digitize(shape, h, bbox=(-10.0, 10.0), offset=5, center=(0.0, 0.0, 0.0)):
+    """Digital surface of an implicit shape {P <= 0} (Gauss digitization, docs/math.md 1.2-1.4).
+
+    shape   name of a built-in shape (sphere1, sphere9, ellipsoid, cylinder, torus, rcube, goursat,
+            goursat-hole, distel, leopold, diabolo, heart, crixxi) or a polynomial in x, y, z
+            such as "x^2+y^2+z^2-1"
+    h       grid step (world units per voxel)
+    bbox    (min, max) of the digitization box on every axis (reference default (-10, 10))
+    offset  extra voxels around the box (default 5)
+    center  (3,) translation of the shape
+
+    Returns V (#V, 3) float64 vertex positions and F (#F, 4) int64 quads, counter-clockwise seen
+    from outside, numbered as the reference implementation and `corrlap digitize` number them.
+    """
+    lo, hi = _bbox(bbox)
+    return _core.digitize(str(shape), float(h), lo, hi, int(offset), _np.reshape(center, (1, 3)))
+
+
+def digitize_volume(volume, h=None, threshold=0.0):
+    """Digital surface of the voxels of a 3D array: voxel (x, y, z) is volume[x, y, z], inside when
+    its value is > threshold (bool arrays: True), centred at the origin as `corrlap digitize --volume`
+    centres a volume file.
+
+    volume     (nx, ny, nz) bool or real array
+    h          grid step; None: 2 / max(nx, ny, nz), so that the longest side spans 2 (the CLI's default)
+    threshold  inside iff value > threshold
+
+    Returns V (#V, 3) float64 and F (#F, 4) int64 quads.
+    """
+    return _core.digitize_volume(volume, 0.0 if h is None else float(h), float(threshold))
+
+
+def read_mesh(path):
+    """Reads an .obj, .ply or .off mesh. Returns V (#V, 3) float64 and F (#F, d) int64 (d = 4 for
+    quad meshes; every face must have the same number of corners d)."""
+    return _core.read_mesh(str(path))
+
+
+def write_mesh(path, V, F, vertex_scalars=None, face_scalars=None, vertex_normals=None, face_normals=None):
+    """Writes a quad mesh V (#V, 3), F (#F, 4) as .obj (positions and faces) or binary .ply (with
+    attributes): vertex_scalars {name: (#V,)}, face_scalars {name: (#F,)}, vertex_normals (#V, 3),
+    face_normals (#F, 3)."""
+    _core.write_mesh(str(path), V, F, dict(vertex_scalars or {}), dict(face_scalars or {}), vertex_normals,
+                     face_normals)
+
+
+def true_normals(shape, V, F, at="faces", center=(0.0, 0.0, 0.0)):
+    """True normals of an implicit shape (docs/math.md 1.5): exact radial normals on spheres, else
+    the gradient at the projection onto {P = 0}.
+
+    shape  as in digitize; V (#V, 3), F (#F, 4)
+    at     "faces": one normal per face at its centroid, (#F, 3); "vertices": the normalized sum of
+           the incident face normals, (#V, 3) (what `--normals true` gives every CLI command)
+    """
+    return _core.true_normals(str(shape), V, F, at, _np.reshape(center, (1, 3)))
+
+
+def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbox=(-10.0, 10.0), offset=5,
+               center=(0.0, 0.0, 0.0), threshold=0.0):
+    """Integral-invariant normals (docs/math.md 7): covariance of the voxels in a ball of radius
+    k h^alpha around each surfel.
+
+    volume_or_shape  a shape name or polynomial (digitized again with h, bbox, offset, center) or
+                     a 3D array (digitized as digitize_volume with h, threshold); V, F must be the
+                     surface digitize / digitize_volume returned for it
+    h                grid step (required for shapes; volumes: None means 2 / longest side)
+    alpha, k         radius exponent and factor (defaults 0.33 and 3, the CLI's; the paper says 1/3)
+    at               "faces": (#F, 3); "vertices": normalized sums of face normals, (#V, 3)
+    """
+    if isinstance(volume_or_shape, str):
+        if h is None:
+            raise ValueError("h: required with a shape")
+        lo, hi = _bbox(bbox)
+        return _core.ii_normals_shape(volume_or_shape, V, F, float(h), lo, hi, int(offset),
+                                      _np.reshape(center, (1, 3)), float(k), float(alpha), at)
+    return _core.ii_normals_volume(volume_or_shape, V, F, 0.0 if h is None else float(h), float(threshold),
+                                   float(k), float(alpha), at)
+
+
+def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vertices", constant=False):
+    """Corrected curvature measures (docs/math.md 8) in balls of the given radius.
+
+    V (#V, 3), F (#F, 4); face_normals (#F, 3) and/or vertex_normals (#V, 3). By default the normals
+    are interpolated from the vertex normals (the normalized sum of the face normals when only
+    those are given), as `corrlap curvature --normals ...`; constant=True uses the face normals as
+    constant per face.
+    at  "vertices" (balls at vertices, arrays of #V rows) or "faces" (at face centroids, #F rows)
+
+    Returns H, G, k1, k2 (n,) mean, Gaussian and principal curvatures (k1 <= k2; the unit sphere
+    has H = 1) and d1, d2 (n, 3) their unit principal directions.
+    """
+    return _core.curvature(V, F, face_normals, vertex_normals, float(radius), at, bool(constant))
+
+
+def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, lam=None, kappa=None, t=None,
+              cutoff=None, assembly=None, mass=None, orientation=None, h=None, positive=False, **params):
+    """Stiffness L and mass M of a discretization of the registry (docs/discretizations.md).
+
+    V (#V, 3) positions, F (#F, 4) quads (a digital surface, e.g. from digitize).
+    method          fem (face normals), interpolated (vertex normals), polydec, projected-polydec
+                    (face), vrm, corrected-vrm (vertex), heat-kernel (face), cotan; see methods()
+    face_normals    (#F, 3) unit normals, for methods on face normals
+    vertex_normals  (#V, 3), for methods on vertex normals; default: the normalized sum of the face
+                    normals (as every CLI command makes them)
+    lam, kappa, t, cutoff, assembly, mass, orientation
+                    the method parameters of `corrlap operators` (--lambda, --kappa, ...); any other
+                    parameter of the method as a keyword (e.g. normalize=True, variant="primal");
+                    an unknown key raises ValueError listing the valid ones
+    h               grid step of the surface (heat-kernel's default t and lattice); None: unknown,
+                    the mean edge length is used, as for a mesh read from a file. Give the h of
+                    digitize to get what `corrlap operators --shape ... --h` gives.
+    positive        positive=True returns -L (positive semi-definite), the convention of
+                    robust_laplacian and gpytoolbox
+
+    Returns L, M as scipy.sparse.csc_matrix, #V by #V (the heat-kernel's default variant: #F by #F,
+    on surfel centres). L is negative semi-definite: L 1 = 0, u^T L u <= 0, M^-1 L approximates
+    the Laplace-Beltrami operator, eigenvalues of L u = lambda M u are <= 0. M is symmetric
+    positive definite for consistent normals. Bitwise what `corrlap operators` writes for the same
+    surface, normals and parameters.
+    """
+    named = {"lambda": lam, "kappa": kappa, "t": t, "cutoff": cutoff, "assembly": assembly, "mass": mass,
+             "orientation": orientation}
+    params.update({k: v for k, v in named.items() if v is not None})
+    Lp, Mp, _domain, warnings = _core.laplacian(V, F, str(method), face_normals, vertex_normals,
+                                                0.0 if h is None else float(h), params)
+    _warn(warnings)
+    L = _csc(Lp)
+    if positive:
+        L.data *= -1.0  # exact, in place: L's arrays are fresh
+    return L, _csc(Mp)
+
+
+def solve(A, b, solver="cholmod", positions=None, **options):
+    """Solves A x = b for a symmetric positive (semi-)definite A with a linear solver backend.
+
+    A          (n, n) scipy sparse matrix (any format) or dense array, e.g. M - dt L: laplacian's L
+               is negative semi-definite, so M - dt L (dt > 0) is positive definite
+    b          (n,) or (n, k) right-hand sides; x has the same shape
+    solver     cholmod (default), eigen-ldlt, eigen-llt, cg; see backends()
+    positions  (n, 3) points of the unknowns (e.g. V), the ordering hint of direct solvers
+    options    the backend's options as keywords (`corrlap backends`), e.g. ordering="metis",
+               preconditioner="ichol", tolerance=1e-12; an unknown key raises ValueError listing
+               the valid ones, a failed solve RuntimeError with the backend's message.
+    """
+    data, indices, indptr, rows, cols = _sparse_parts(A, "A")
+    return _core.solve(data, indices, indptr, rows, cols, b, str(solver), options, positions)
+
+
+def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, positive=False, **options):
+    """The k eigenpairs of L u = lambda M u of smallest |lambda| (docs/math.md 10.5).
+
+    L, M          #V by #V scipy sparse matrices from laplacian (L negative semi-definite, M SPD)
+    k             number of pairs
+    solver        linear solver of shift-invert (default cholmod), as `corrlap eigs --solver`
+    eigen_solver  shift-invert (Spectra's Lanczos, default) or dense (small problems)
+    positions     (#V, 3) points of the unknowns (the CLI passes V), the solver's ordering hint
+    options       eigen and linear solver options as keywords (`corrlap backends`), e.g. tolerance
+    positive      return -lambda >= 0 (the robust_laplacian/gpytoolbox convention)
+
+    Returns vals (k,) and vecs (#V, k), M-orthonormal columns. Eigenvalues follow L's sign: L is
+    negative semi-definite, so vals <= 0, from the one nearest 0 (vals[0] ~ 0 on a closed surface)
+    to the most negative; with positive=True they are -lambda >= 0, ascending, the values
+    `corrlap eigs` prints.
+    """
+    Lp = _sparse_parts(L, "L")
+    Mp = _sparse_parts(M, "M")
+    values, vectors, _method, _iterations = _core.eigs(Lp, Mp, int(k), solver or "", str(eigen_solver), options,
+                                                       positions)
+    return (values if positive else -values), vectors
+
+
+def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0=10.0,
+               curvature_radius=None, size=None, solver="cholmod", solver_options=None, return_curvature=False,
+               **params):
+    """Regularized positions of a closed digital surface (paper 4.1, docs/regularization.md): the
+    positions P minimizing the distance to V plus the corrected Dirichlet energy, with
+    Delta p = -2 H n from the corrected mean curvature H.
+
+    V (#V, 3), F (#F, 4); face_normals (#F, 3) and/or vertex_normals (#V, 3) (default: normalized
+    sums of the face normals). method: a vertex-based discretization (its parameters as keywords).
+    h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
+    curvature_radius, size: as `corrlap regularize` (defaults 0.1 size and half the bounding box).
+    solver, solver_options: the linear solver and its options.
+
+    Returns P (#V, 3), and H (#V,) too when return_curvature.
+    """
+    P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), 0.0 if h is None else float(h),
+                                      params, float(alpha0), curvature_radius, size, str(solver),
+                                      dict(solver_options or {}))
+    _warn(warnings)
+    return (P, H) if return_curvature else P
+
+
+def set_threads(n):
+    """Limits the worker threads of every later call (TBB and OpenBLAS) to n; n <= 0: all cores.
+    Process-wide, the last call wins. Results are bitwise the same for any thread count."""
+    _core.set_threads(int(n))
+
+
+def get_threads():
+    """The current thread limit (the hardware concurrency unless set_threads was called)."""
+    return _core.get_threads()
+
+
+def methods():
+    """{method: (normals needed: "face" | "vertex" | "none", [(parameter, default, description)])}
+    of every discretization laplacian accepts."""
+    return _core.methods()
+
+
+def backends():
+    """({linear solver: [(option, default, description)]}, {eigen solver: [...]}): the names and
+    keyword options of solve and eigs."""
+    return _core.backends()

@@ -1,0 +1,28 @@
+#pragma once
+// The module corrlap._core is bound stage by stage, one file each (surface, normals, operators,
+// solvers, regularization); the Python package corrlap (python/corrlap/__init__.py) wraps it with
+// keyword arguments, scipy matrices and the docstrings.
+#include <pybind11/pybind11.h>
+
+#include <corrlap/core/voxel_grid.hpp>
+#include <string>
+
+namespace corrlap::python {
+
+namespace py = pybind11;
+
+void bind_surface(py::module_& m);
+void bind_normals(py::module_& m);
+void bind_operators(py::module_& m);
+void bind_solvers(py::module_& m);
+void bind_regularization(py::module_& m);
+
+/// Voxels of an implicit shape (a name of `corrlap digitize --shape`, or a polynomial) digitized as
+/// the CLI does (docs/math.md §1.2).
+VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, double bbox_max, int offset,
+                       py::handle center);
+/// Voxels of a 3D array indexed volume[x, y, z], inside = value > threshold, centred as the CLI
+/// centres a volume file (docs/io.md); h <= 0: the longest side spans 2.
+VoxelGrid array_voxels(py::handle volume, double h, double threshold);
+
+}  // namespace corrlap::python

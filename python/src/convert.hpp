@@ -1,0 +1,49 @@
+#pragma once
+// Conversions between Python values (numpy arrays, dicts) and the library's Eigen types, with the
+// checks the bindings promise (docs/python.md): dtype, shape, finite values and index range, each
+// failure a ValueError naming the argument. Outputs are numpy arrays the caller owns.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <Eigen/Core>
+#include <Eigen/Sparse>
+#include <corrlap/core/config.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <string>
+
+namespace corrlap::python {
+
+namespace py = pybind11;
+using FaceMatrix = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+/// Rows x 3 floats (any of int32/int64/float32/float64, any order), finite. `rows` < 0: any count.
+Eigen::MatrixX3d points_arg(py::handle obj, const std::string& name, Eigen::Index rows = -1);
+/// Quads: m x 4 integers in [0, num_vertices).
+FaceMatrix faces_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices);
+/// A vector of `rows` finite values (rows < 0: any length).
+Eigen::VectorXd vector_arg(py::handle obj, const std::string& name, Eigen::Index rows = -1);
+/// (rows,) or (rows, k) finite values as rows x k; `was_vector` tells which it was.
+Eigen::MatrixXd matrix_arg(py::handle obj, const std::string& name, Eigen::Index rows, bool& was_vector);
+/// The array behind `obj` as numpy, refusing complex, object, string and (unless allow_bool) bool dtypes.
+py::array numeric_array(py::handle obj, const std::string& name, bool allow_bool = false);
+
+/// V, F and the grid step (0: unknown, as for a mesh read from a file) as a SurfelMesh without surfels.
+SurfelMesh mesh_arg(py::handle V, py::handle F, double h);
+
+/// Keyword options as a Config: bool, int, float and str values (the types of the CLI's key=value).
+Config config_arg(const py::dict& options, const std::string& what);
+
+/// CSC arrays (data, indices, indptr, shape) viewing the matrix's own storage: the matrix is moved
+/// into the arrays' owner, so no entry is copied.
+py::tuple sparse_out(Eigen::SparseMatrix<double>&& matrix);
+/// A CSC matrix from scipy's arrays (float64 data, integer indices and indptr), checked.
+Eigen::SparseMatrix<double> sparse_in(py::handle data, py::handle indices, py::handle indptr, Eigen::Index rows,
+                                      Eigen::Index cols, const std::string& name);
+
+/// Row-major numpy copies (n, 3) / (n,) / (n, k) / (m, 4) int64.
+py::array_t<double> to_numpy(const Eigen::MatrixX3d& m);
+py::array_t<double> to_numpy(const Eigen::VectorXd& v);
+py::array_t<double> to_numpy(const Eigen::MatrixXd& m);
+py::array_t<std::int64_t> faces_to_numpy(const FaceMatrix& f);
+
+}  // namespace corrlap::python

@@ -1,0 +1,121 @@
+// Voxels -> digital surface, and mesh files: digitize, digitize_volume, read_mesh, write_mesh.
+#include <corrlap/core/error.hpp>
+#include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/volume_io.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+
+#include "bindings.hpp"
+#include "convert.hpp"
+
+namespace corrlap::python {
+namespace {
+
+py::tuple surface_of(const VoxelGrid& grid) {
+  SurfelMesh mesh;
+  {
+    py::gil_scoped_release release;
+    mesh = extract_surface(grid);
+  }
+  return py::make_tuple(to_numpy(mesh.positions), faces_to_numpy(mesh.faces));
+}
+
+}  // namespace
+
+VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, double bbox_max, int offset,
+                       py::handle center) {
+  const Eigen::MatrixX3d c = points_arg(center, "center", 1);
+  const ImplicitShape s = make_implicit_shape(shape, c.row(0).transpose());
+  if (!(h > 0.0) || !std::isfinite(h)) throw py::value_error("h: must be positive");
+  py::gil_scoped_release release;
+  return digitize(s, {.h = h, .min_aabb = bbox_min, .max_aabb = bbox_max, .offset = offset});
+}
+
+VoxelGrid array_voxels(py::handle volume, double h, double threshold) {
+  const py::array a = numeric_array(volume, "volume", /*allow_bool=*/true);
+  if (a.ndim() != 3)
+    throw py::value_error("volume: expected a 3D array, got " + std::to_string(a.ndim()) + " dimensions");
+  const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  const Eigen::Vector3i size(int(a.shape(0)), int(a.shape(1)), int(a.shape(2)));
+  if (size.minCoeff() == 0) throw py::value_error("volume: empty array");
+  py::gil_scoped_release release;
+  // The box of read_volume_as_voxels(centered): one voxel of padding, the centre at the origin.
+  const Eigen::Vector3i shift = volume_centering_shift(size);
+  VoxelGrid grid(Eigen::Vector3i::Constant(-1) - shift, size - shift, h > 0.0 ? h : unit_size_grid_step(size));
+  const double* p = values.data();
+  std::int64_t inside = 0;
+  for (int x = 0; x < size.x(); ++x)
+    for (int y = 0; y < size.y(); ++y)
+      for (int z = 0; z < size.z(); ++z) {
+        const double v = p[(std::int64_t(x) * size.y() + y) * size.z() + z];
+        if (std::isnan(v))
+          throw InputError("volume: value at [" + std::to_string(x) + ", " + std::to_string(y) + ", " +
+                           std::to_string(z) + "] is NaN");
+        if (v > threshold) {
+          grid.set(x - shift.x(), y - shift.y(), z - shift.z(), true);
+          ++inside;
+        }
+      }
+  if (inside == 0) throw InputError("volume: no voxel above the threshold (empty volume)");
+  return grid;
+}
+
+void bind_surface(py::module_& m) {
+  m.def(
+      "digitize",
+      [](const std::string& shape, double h, double bbox_min, double bbox_max, int offset, py::handle center) {
+        return surface_of(shape_voxels(shape, h, bbox_min, bbox_max, offset, center));
+      },
+      py::arg("shape"), py::arg("h"), py::arg("bbox_min"), py::arg("bbox_max"), py::arg("offset"), py::arg("center"));
+  m.def(
+      "digitize_volume",
+      [](py::handle volume, double h, double threshold) { return surface_of(array_voxels(volume, h, threshold)); },
+      py::arg("volume"), py::arg("h"), py::arg("threshold"));
+  m.def(
+      "read_mesh",
+      [](const std::string& path) {
+        PolygonMesh mesh;
+        {
+          py::gil_scoped_release release;
+          mesh = read_mesh(path);
+        }
+        // Quads stay (m, 4); any other single face degree d gives (m, d).
+        const Eigen::Index m_faces = Eigen::Index(mesh.faces.size());
+        const std::size_t degree = m_faces ? mesh.faces[0].size() : 4;
+        py::array_t<std::int64_t> F({m_faces, Eigen::Index(degree)});
+        std::int64_t* out = F.mutable_data();
+        for (Eigen::Index f = 0; f < m_faces; ++f) {
+          const auto face = mesh.faces[std::size_t(f)];
+          if (face.size() != degree)
+            throw InputError("read_mesh: '" + path + "' mixes faces of " + std::to_string(degree) + " and " +
+                             std::to_string(face.size()) + " corners (face " + std::to_string(f) + ")");
+          for (std::size_t j = 0; j < degree; ++j) *out++ = face[j];
+        }
+        return py::make_tuple(to_numpy(mesh.positions), F);
+      },
+      py::arg("path"));
+  m.def(
+      "write_mesh",
+      [](const std::string& path, py::handle V, py::handle F, const py::dict& vertex_scalars,
+         const py::dict& face_scalars, py::object vertex_normals, py::object face_normals) {
+        const SurfelMesh mesh = mesh_arg(V, F, 0.0);
+        MeshAttributes attributes;
+        for (const auto& [name, values] : vertex_scalars)
+          attributes.vertex_scalars[py::str(name)] =
+              vector_arg(values, "vertex_scalars['" + std::string(py::str(name)) + "']", mesh.num_vertices());
+        for (const auto& [name, values] : face_scalars)
+          attributes.face_scalars[py::str(name)] =
+              vector_arg(values, "face_scalars['" + std::string(py::str(name)) + "']", mesh.num_faces());
+        if (!vertex_normals.is_none())
+          attributes.vertex_normals = points_arg(vertex_normals, "vertex_normals", mesh.num_vertices());
+        if (!face_normals.is_none())
+          attributes.face_normals = points_arg(face_normals, "face_normals", mesh.num_faces());
+        py::gil_scoped_release release;
+        write_mesh(path, mesh, attributes);
+      },
+      py::arg("path"), py::arg("V"), py::arg("F"), py::arg("vertex_scalars"), py::arg("face_scalars"),
+      py::arg("vertex_normals"), py::arg("face_normals"));
+}
+
+}  // namespace corrlap::python
