@@ -15,18 +15,26 @@ namespace corrlap::detail {
 // first, so that each entry of M meets one contiguous row of X, not b scattered ones (Eigen's
 // serial column-major product streams M once per column of X: 3x slower at 188 K unknowns and
 // b = 16, and the iteration runs it three times per block step).
-Eigen::MatrixXd symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X) {
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  const RowMajor x = X;
-  RowMajor y(M.rows(), X.cols());
+void symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y,
+                     RowMajorMatrix& scratch) {
+  scratch = X;
+  Y.resize(M.rows(), X.cols());
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, M.rows(), 4096), [&](const auto& rows) {
+    Eigen::RowVectorXd sum(X.cols());
     for (Eigen::Index i = rows.begin(); i < rows.end(); ++i) {
-      auto yi = y.row(i);
-      yi.setZero();
-      for (Eigen::SparseMatrix<double>::InnerIterator entry(M, i); entry; ++entry) yi.noalias() += entry.value() * x.row(entry.index());
+      sum.setZero();
+      for (Eigen::SparseMatrix<double>::InnerIterator entry(M, i); entry; ++entry)
+        sum.noalias() += entry.value() * scratch.row(entry.index());
+      Y.row(i) = sum;
     }
   });
-  return y;
+}
+
+Eigen::MatrixXd symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X) {
+  Eigen::MatrixXd Y;
+  RowMajorMatrix scratch;
+  symmetric_times(M, X, Y, scratch);
+  return Y;
 }
 
 namespace {
@@ -47,8 +55,8 @@ bool m_orthonormalize(Matrix& W, Matrix& MW, Matrix& R) {
     // A pivot far below the largest: the block has (almost) lost a direction.
     const double largest = U.diagonal().cwiseAbs().maxCoeff();
     if (!(U.diagonal().cwiseAbs().minCoeff() > 1e-10 * largest)) return false;
-    W = llt.matrixU().solve<Eigen::OnTheRight>(W);  // W U^{-1}
-    MW = llt.matrixU().solve<Eigen::OnTheRight>(MW);
+    llt.matrixU().solveInPlace<Eigen::OnTheRight>(W);  // W U^{-1}
+    llt.matrixU().solveInPlace<Eigen::OnTheRight>(MW);
     R = U * R;
   }
   return true;
@@ -92,17 +100,18 @@ void subtract_times(Matrix& W, const Eigen::Ref<const Matrix>& V, const Matrix& 
 /// second pass, are all local; the full pass removes what rounding left elsewhere. It halves the
 /// streaming of the basis, the larger part of a block step. Right after a thick restart the new
 /// block couples to every kept Ritz vector, and `local` is 0.
-Matrix project_out(const SpMat& M, const Eigen::Ref<const Matrix>& V, Eigen::Index local, Matrix& W, Matrix& MW) {
+Matrix project_out(const SpMat& M, const Eigen::Ref<const Matrix>& V, Eigen::Index local, Matrix& W, Matrix& MW,
+                   RowMajorMatrix& scratch) {
   Matrix coefficients = Matrix::Zero(V.cols(), W.cols());
   for (int pass = 0; pass < 2; ++pass) {
     const Eigen::Index from = pass == 0 ? local : 0;
     const auto part = V.middleCols(from, V.cols() - from);
-    MW = symmetric_times(M, W);
+    symmetric_times(M, W, MW, scratch);
     const Matrix P = transpose_times(part, MW);
     subtract_times(W, part, P);
     coefficients.middleRows(from, V.cols() - from) += P;
   }
-  MW = symmetric_times(M, W);
+  symmetric_times(M, W, MW, scratch);
   return coefficients;
 }
 
@@ -146,7 +155,9 @@ BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& app
   Matrix block(n, b), R;
   for (Eigen::Index j = 0; j < b; ++j)
     for (Eigen::Index i = 0; i < n; ++i) block(i, j) = normal(rng);
-  Matrix M_block = symmetric_times(M, block);  // M times the newest block, carried along
+  RowMajorMatrix scratch;  // of symmetric_times, reused: fresh pages of an n x b block cost more than the product
+  Matrix M_block;          // M times the newest block, carried along
+  symmetric_times(M, block, M_block, scratch);
   if (!m_orthonormalize(block, M_block, R)) return result;
   V.leftCols(b) = block;
   int used = b;
@@ -158,7 +169,8 @@ BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& app
     const int first = used - b;
     Matrix W = apply(M_block);
     ++result.block_steps;
-    T.block(0, first, used, b) = project_out(M, V.leftCols(used), restarted ? 0 : std::max(0, first - b), W, M_block);
+    T.block(0, first, used, b) =
+        project_out(M, V.leftCols(used), restarted ? 0 : std::max(0, first - b), W, M_block, scratch);
     restarted = false;
     if (!m_orthonormalize(W, M_block, R)) return result;  // an invariant subspace or a breakdown
 
