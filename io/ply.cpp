@@ -19,6 +19,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <type_traits>
 #include <vector>
 
 #include "mesh_io.hpp"
@@ -107,57 +108,77 @@ inline double decode(Kind k, const char* p) {
 // the line reader's blocks. Line numbers count from the top of the file, header included.
 class AsciiBody {
  public:
-  AsciiBody(const std::string& path, io_detail::LineReader& in) : path_(path), in_(in), pos_(in.offset()) {}
+  AsciiBody(const std::string& path, io_detail::LineReader& in) : path_(path), in_(in), line_offset_(in.offset()) {}
 
   double read(const TypeInfo& t, const char* context) {
-    std::string_view tok;
-    if (!next_token(tok)) fail(path_, std::string("truncated data: end of file while reading ") + context);
-    const char *b = tok.data(), *e = b + tok.size();
+    if (!seek()) fail(path_, std::string("truncated data: end of file while reading ") + context);
+    // The number is parsed where it starts and must end at a blank: one pass over its characters.
     if (is_integer(t.kind)) {
-      // Counts and indices are integers: parsed as such, faster; "3.0" or "1e2" still go the double way.
-      long long i = 0;
-      const auto [ptr, ec] = std::from_chars(b, e, i);
-      if (ec == std::errc() && ptr == e) return i == 0 && *b == '-' ? -0.0 : double(i);
+      std::int64_t i = 0;
+      const bool minus = *cur_ == '-';
+      if (parse_here(i)) return i == 0 && minus ? -0.0 : double(i);  // "-0" as before: -0.0
+    } else {
+      double v = 0;
+      if (parse_here(v)) return v;
     }
+    return read_slowly(t, context);
+  }
+  /// An integer token as an integer (false, nothing consumed, for anything else: read() says why).
+  bool read_integer(std::int64_t& v) { return seek() && parse_here(v); }
+  std::uint64_t remaining() const {
+    const std::uint64_t pos = line_offset_ + std::uint64_t(cur_ - line_);
+    return in_.file_size() > pos ? in_.file_size() - pos : 0;
+  }
+  /// Most values the rest of the body can hold: a digit and a separator each.
+  std::size_t max_values(const TypeInfo&) const { return std::size_t((remaining() + 1) / 2); }
+  std::string where() const { return "line " + std::to_string(in_.line_number()); }
+  /// Only whitespace left; otherwise where() is the line of what is left.
+  bool at_end() { return !seek(); }
+  std::string what_is_left() const { return where(); }
+
+ private:
+  // To the next non-blank character, on this line or a later one; false at the end of the file.
+  bool seek() {
+    for (;;) {
+      while (cur_ != end_ && io_detail::is_blank(*cur_)) ++cur_;
+      if (cur_ != end_) return true;
+      line_offset_ = in_.offset();
+      std::string_view line;
+      if (!in_.next(line)) {
+        if (in_.error()) fail(path_, "read error");
+        return false;
+      }
+      line_ = cur_ = line.data();
+      end_ = cur_ + line.size();
+    }
+  }
+  template <class T>
+  bool parse_here(T& v) {
+    const auto [ptr, ec] = std::from_chars(cur_, end_, v);
+    if (ec != std::errc() || (ptr != end_ && !io_detail::is_blank(*ptr))) return false;
+    cur_ = ptr;
+    return true;
+  }
+  // The whole token: "3.0" or "1e2" for an integer property, or an error naming it.
+  double read_slowly(const TypeInfo& t, const char* context) {
+    const char* e = cur_;
+    while (e != end_ && !io_detail::is_blank(*e)) ++e;
+    const std::string_view tok(cur_, std::size_t(e - cur_));
     double v = 0;
-    const auto [ptr, ec] = std::from_chars(b, e, v);
+    const auto [ptr, ec] = std::from_chars(cur_, e, v);
     if (ec != std::errc() || ptr != e)
       fail(path_, where() + ": malformed number '" + std::string(tok.substr(0, 40)) + "' in " + context);
     if (is_integer(t.kind) && !(std::isfinite(v) && v == std::floor(v)))
       fail(path_, where() + ": non-integer value '" + std::string(tok.substr(0, 40)) + "' for an integer property in " +
                       context);
+    cur_ = e;
     return v;
-  }
-  std::uint64_t remaining() const { return in_.file_size() > pos_ ? in_.file_size() - pos_ : 0; }
-  /// Most values the rest of the body can hold: a digit and a separator each.
-  std::size_t max_values(const TypeInfo&) const { return std::size_t((remaining() + 1) / 2); }
-  std::string where() const { return "line " + std::to_string(in_.line_number()); }
-  /// Only whitespace left; otherwise where() is the line of what is left.
-  bool at_end() {
-    std::string_view tok;
-    return !next_token(tok);
-  }
-  std::string what_is_left() const { return where(); }
-
- private:
-  bool next_token(std::string_view& tok) {
-    while (!tokens_.next(tok)) {
-      line_offset_ = in_.offset();
-      if (!in_.next(line_)) {
-        if (in_.error()) fail(path_, "read error");
-        return false;
-      }
-      tokens_ = io_detail::Tokens(line_);
-    }
-    pos_ = line_offset_ + std::uint64_t(tok.data() + tok.size() - line_.data());
-    return true;
   }
 
   const std::string& path_;
   io_detail::LineReader& in_;
-  std::string_view line_;
-  io_detail::Tokens tokens_{std::string_view{}};
-  std::uint64_t line_offset_ = 0, pos_;  // file offsets of the current line and of the end of its last token
+  const char *line_ = nullptr, *cur_ = nullptr, *end_ = nullptr;  // the current line; cur_: next unread
+  std::uint64_t line_offset_;                                     // file offset of line_
 };
 
 // The body of a binary file, taken from the line reader's blocks as they come.
@@ -174,14 +195,19 @@ class BinaryBody {
     p_ += bytes;
     return p;
   }
-  /// The next run of values of `bytes` bytes each, between 1 and `most` of them, as many as the
-  /// block holds; returns how many, their bytes at p (consumed).
-  std::size_t take_run(std::size_t bytes, std::size_t most, const char*& p, const char* context) {
-    if (std::size_t(end_ - p_) < bytes && !fill(bytes))
-      fail(path_, std::string("truncated binary data: end of file while reading ") + context);
+  /// The next run of items of `bytes` bytes each, up to `most` of them, as many as the block
+  /// holds; returns how many (0: the file ends before one more), their bytes at p (consumed).
+  std::size_t run(std::size_t bytes, std::size_t most, const char*& p) {
+    if (std::size_t(end_ - p_) < bytes && !fill(bytes)) return 0;
     const std::size_t n = std::min(most, std::size_t(end_ - p_) / bytes);
     p = p_;
     p_ += n * bytes;
+    return n;
+  }
+  /// A run of at least one item.
+  std::size_t take_run(std::size_t bytes, std::size_t most, const char*& p, const char* context) {
+    const std::size_t n = run(bytes, most, p);
+    if (n == 0) fail(path_, std::string("truncated binary data: end of file while reading ") + context);
     return n;
   }
   std::uint64_t offset() const { return in_.offset() + std::uint64_t(p_ - begin_); }
@@ -227,18 +253,25 @@ struct CornerSink {
     if (!checked) out_of_range(face, id);
     faces.add_corner(int(*checked));
   }
+  void add_integer(std::uint64_t face, std::int64_t id) {
+    if (id < 0 || id >= vertices) out_of_range(face, double(id));
+    faces.add_corner(int(id));
+  }
   template <class T>
   void add_integers(std::uint64_t face, const char* p, std::size_t n) {
-    for (std::size_t k = 0; k < n; ++k, p += sizeof(T)) {
-      const auto id = std::int64_t(load<T>(p));
-      if (id < 0 || id >= vertices) out_of_range(face, double(id));
-      faces.add_corner(int(id));
-    }
+    for (std::size_t k = 0; k < n; ++k, p += sizeof(T)) add_integer(face, std::int64_t(load<T>(p)));
   }
 };
 
 void read_corners(AsciiBody& body, CornerSink& sink, std::uint64_t face, std::size_t n) {
-  for (std::size_t k = 0; k < n; ++k) sink.add(face, body.read(*sink.list.type, "face"));
+  const bool integers = is_integer(sink.list.type->kind);
+  for (std::size_t k = 0; k < n; ++k) {
+    std::int64_t id = 0;
+    if (integers && body.read_integer(id))
+      sink.add_integer(face, id);
+    else
+      sink.add(face, body.read(*sink.list.type, "face"));
+  }
 }
 
 // Integer ids are checked as integers, whole runs at a time (the common int and uint lists).
@@ -329,18 +362,42 @@ void read_elements(Body& body, const std::string& path, const std::vector<Elemen
       reserve.emplace(out.mesh.faces, std::size_t(e.count));
       sink.emplace(CornerSink{path, e.properties[std::size_t(face_list)], std::int64_t(nv), out.mesh.faces});
     }
-    for (std::uint64_t i = 0; i < e.count; ++i) {
+    auto store = [&](std::uint64_t i, std::size_t p, double v) {
+      if (is_v && !std::isfinite(v))
+        fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + e.properties[p].name + "'");
+      const Target& t = targets[p];
+      if (t.what == Target::Position)
+        out.mesh.positions(Eigen::Index(i), t.column) = v;
+      else if (t.what == Target::Scalar)
+        t.values[i] = v;
+    };
+    std::uint64_t first = 0;  // entries before it are read
+    if constexpr (std::is_same_v<Body, BinaryBody>) {
+      // Binary records of scalars only (vertices, mostly) have one layout: decoded at fixed offsets,
+      // whole blocks of records at a time. A last partial record is left to the loop below, which
+      // names the value that is missing.
+      std::vector<std::size_t> offsets;
+      std::size_t record = 0;
+      for (const auto& pr : e.properties) {
+        offsets.push_back(record);
+        record += pr.count_type ? 0 : std::size_t(pr.type->bytes);
+      }
+      const bool fixed = std::none_of(e.properties.begin(), e.properties.end(),
+                                      [](const Property& pr) { return pr.count_type != nullptr; });
+      for (const char* r = nullptr; fixed && first < e.count;) {
+        const std::size_t n = body.run(record, std::size_t(e.count - first), r);
+        if (n == 0) break;
+        for (std::size_t k = 0; k < n; ++k, ++first, r += record)
+          for (std::size_t p = 0; p < offsets.size(); ++p)
+            store(first, p, decode(e.properties[p].type->kind, r + offsets[p]));
+      }
+    }
+    for (std::uint64_t i = first; i < e.count; ++i) {
       for (std::size_t p = 0; p < e.properties.size(); ++p) {
         const Property& pr = e.properties[p];
         const Target& t = targets[p];
         if (!pr.count_type) {
-          const double v = body.read(*pr.type, e.name.c_str());
-          if (is_v && !std::isfinite(v))
-            fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + pr.name + "'");
-          if (t.what == Target::Position)
-            out.mesh.positions(Eigen::Index(i), t.column) = v;
-          else if (t.what == Target::Scalar)
-            t.values[i] = v;
+          store(i, p, body.read(*pr.type, e.name.c_str()));
           continue;
         }
         const double cnt = body.read(*pr.count_type, e.name.c_str());
