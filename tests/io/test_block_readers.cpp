@@ -199,7 +199,7 @@ TEST_CASE("PLY: errors are the same whatever the block size") {
   std::string bad_id = bin, bad_z = bin, cut = bin.substr(0, bin.size() - 2);
   bad_id[body + 5 * 39 + 1 + 4] = char(9);  // second id of the first face: 9 (5 vertices)
   const float inf = std::numeric_limits<float>::infinity();
-  std::memcpy(&bad_z[body + 39 * 3 + 8], &inf, 4);  // z of vertex 3
+  std::memcpy(&bad_z[body + 39 * 3 + 8], &inf, 4);         // z of vertex 3
   const std::size_t quad = ascii.find("\n4 1 2 3 4") + 9;  // the quad's last id
   const std::string ascii_bad = ascii.substr(0, quad) + "x" + ascii.substr(quad + 1);
   const std::vector<std::pair<std::string, std::string>> cases = {
@@ -213,8 +213,9 @@ TEST_CASE("PLY: errors are the same whatever the block size") {
       {ascii + "9\n", "trailing data after the last element (line 31)"},
   };
   const std::string p = tmp_path("blocks_errors.ply");
-  for (const auto& [content, fragment] : cases) {
-    write_text(p, content);
+  for (const auto& c : cases) {  // no structured binding: CAPTURE's lambda cannot take one in clang 14
+    const std::string& fragment = c.second;
+    write_text(p, c.first);
     const std::string expected = error_of([&] { read_ply(p); });
     CAPTURE(fragment);
     CAPTURE(expected);
@@ -247,17 +248,19 @@ TEST_CASE("PLY round trip of extreme doubles is exact through small blocks, bina
   const std::string p = tmp_path("extreme_blocks.ply");
   write_ply(p, m, a);
   // The same values as ASCII with 17 digits.
-  std::string text = "ply\nformat ascii 1.0\nelement vertex 300\nproperty double x\nproperty double y\n"
-                     "property double z\nelement face " +
-                     std::to_string(m.faces.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 300\nproperty double x\nproperty double y\n"
+      "property double z\nelement face " +
+      std::to_string(m.faces.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
   char buf[32];
   for (Eigen::Index v = 0; v < 300; ++v)
     for (int c = 0; c < 3; ++c) {
       std::snprintf(buf, sizeof buf, c == 2 ? "%.17g\n" : "%.17g ", m.positions(v, c));
       text += buf;
     }
-  for (const auto f : m.faces) text += "4 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " +
-                                       std::to_string(f[2]) + " " + std::to_string(f[3]) + "\n";
+  for (const auto f : m.faces)
+    text += "4 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + " " +
+            std::to_string(f[3]) + "\n";
   const std::string q = tmp_path("extreme_blocks_ascii.ply");
   write_text(q, text);
   for (std::size_t block : kBlocks) {
@@ -331,8 +334,7 @@ TEST_CASE("OFF reads the same at every block size; quads and mixed faces") {
 
 TEST_CASE("Matrix Market: sorted, unsorted, repeated and symmetric entries at every block size") {
   const std::string p = tmp_path("blocks.mtx");
-  auto expect = [&](const std::string& text, int rows, int cols,
-                    const std::vector<Eigen::Triplet<double>>& entries) {
+  auto expect = [&](const std::string& text, int rows, int cols, const std::vector<Eigen::Triplet<double>>& entries) {
     write_text(p, text);
     Eigen::SparseMatrix<double> want(rows, cols);
     want.setFromTriplets(entries.begin(), entries.end());  // sums repeats in file order
