@@ -9,9 +9,10 @@
 // Each file is written and read once (the files are hundreds of MB: one run is long enough to time;
 // the first read may include the page cache warming up, so the file is read twice and the faster
 // read is shown). "read peak" is the growth of the peak resident memory during the read (measured
-// in a fresh process running `bench_textio --peak obj|ply|normals|scalars|mtx FILE`), "held" the
+// in a fresh process running `bench_textio --peak obj|ply|off|normals|scalars|mtx FILE`), "held" the
 // bytes of the arrays the read returns; "exact" says whether every array read back is bitwise equal
-// to what was written. The ASCII PLY is written by this file (the library writes binary PLY).
+// to what was written. The ASCII PLY and the OFF file are written by this file (the library writes
+// binary PLY and does not write OFF).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Sparse>
@@ -75,11 +76,12 @@ double mesh_bytes(const PolygonMesh& m) {
   return 24.0 * double(m.positions.rows()) + 4.0 * corners + 8.0 * double(m.faces.size() + 1);
 }
 
-// ASCII PLY with x y z as double (17 digits) and int face lists.
-void write_ascii_ply(const std::string& path, const PolygonMesh& m) {
-  std::string out = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(m.positions.rows()) +
-                    "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
-                    std::to_string(m.faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+// ASCII PLY (or OFF) with x y z as double (17 digits) and "n i1 .. in" face lines.
+void write_ascii_mesh(const std::string& path, const PolygonMesh& m, bool off) {
+  std::string out = off ? "OFF\n" + std::to_string(m.positions.rows()) + " " + std::to_string(m.faces.size()) + " 0\n"
+                        : "ply\nformat ascii 1.0\nelement vertex " + std::to_string(m.positions.rows()) +
+                              "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+                              std::to_string(m.faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
   char buf[32];
   auto put = [&](auto v, char sep) {
     char* e;
@@ -130,6 +132,7 @@ int peak_mode(const std::string& kind, const std::string& path) {
   const double before = bench::rss_mib();
   if (kind == "obj") benchmark::DoNotOptimize(read_obj(path).positions.data());
   if (kind == "ply") benchmark::DoNotOptimize(read_ply(path).positions.data());
+  if (kind == "off") benchmark::DoNotOptimize(read_off(path).positions.data());
   if (kind == "normals") benchmark::DoNotOptimize(read_normals(path).data());
   if (kind == "scalars") benchmark::DoNotOptimize(read_scalars(path).data());
   if (kind == "mtx") benchmark::DoNotOptimize(read_matrix_market(path).valuePtr());
@@ -204,10 +207,18 @@ int main(int argc, char** argv) {
   }
   {
     const std::string path = dir + "/bench_textio_ascii.ply";
-    write_ascii_ply(path, mesh);
+    write_ascii_mesh(path, mesh, false);
     PolygonMesh back;
     measure_read<PolygonMesh>([&] { return read_ply(path); }, back, r, peak, "ply", path);
     row("PLY ascii", path, 0, r, peak, mesh_bytes(back), same_mesh(mesh, back));
+    std::filesystem::remove(path);
+  }
+  {
+    const std::string path = dir + "/bench_textio.off";
+    write_ascii_mesh(path, mesh, true);
+    PolygonMesh back;
+    measure_read<PolygonMesh>([&] { return read_off(path); }, back, r, peak, "off", path);
+    row("OFF", path, 0, r, peak, mesh_bytes(back), same_mesh(mesh, back));
     std::filesystem::remove(path);
   }
   {

@@ -3,7 +3,9 @@
 #include <charconv>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/block_readers.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/corner_reserve.hpp>
 #include <corrlap/io/detail/line_reader.hpp>
 #include <corrlap/io/detail/tokens.hpp>
 #include <cstdint>
@@ -26,9 +28,9 @@ namespace {
 
 // Tokens of the file's lines with their line numbers; '#' starts a comment. The tokens are views
 // into the reader's buffer, valid until the next line is read.
-class Tokens {
+class LineTokens {
  public:
-  Tokens(io_detail::LineReader& in, const std::string& path) : in_(in), path_(path) {}
+  LineTokens(io_detail::LineReader& in, const std::string& path) : in_(in), path_(path) {}
   // Next non-empty line split into tokens; false at end of file.
   bool next_line(std::vector<std::string_view>& toks) {
     std::string_view line, t;
@@ -54,10 +56,10 @@ constexpr long long kMaxCount = 1LL << 31;
 
 }  // namespace
 
-PolygonMesh read_off(const std::string& path) {
-  io_detail::LineReader in(path);
+PolygonMesh io_detail::read_off(const std::string& path, std::size_t block_bytes) {
+  io_detail::LineReader in(path, block_bytes);
   if (!in.is_open()) fail(path, 0, "cannot open");
-  Tokens tk(in, path);
+  LineTokens tk(in, path);
   std::vector<std::string_view> t;
   if (!tk.next_line(t)) fail(path, 0, "empty file");
   // Header: OFF, COFF, NOFF, CNOFF...: extra per-vertex columns (colours, normals) are ignored.
@@ -95,8 +97,8 @@ PolygonMesh read_off(const std::string& path) {
   io_detail::check_budget(label.str(), 24.0 * double(nv) + 20.0 * double(nf),
                           io_detail::readable_count(std::uint64_t(nv)) + " vertices and " +
                               io_detail::readable_count(std::uint64_t(nf)) + " faces");
-  // The counts fit the file (checked above): the mesh is allocated at its size (faces: triangles
-  // assumed, more corners grow the array).
+  // The counts fit the file (checked above): the positions are allocated at their size, the
+  // corners as the faces come (io/detail/corner_reserve.hpp: exact for triangles only or quads only).
   PolygonMesh mesh;
   mesh.positions.resize(Eigen::Index(nv), 3);
   for (long long v = 0; v < nv; ++v) {
@@ -111,7 +113,7 @@ PolygonMesh read_off(const std::string& path) {
       mesh.positions(Eigen::Index(v), a) = c;
     }
   }
-  mesh.faces.reserve(std::size_t(nf), 3 * std::size_t(nf));
+  io_detail::CornerReserve reserve(mesh.faces, std::size_t(nf));
   for (long long f = 0; f < nf; ++f) {
     if (!tk.next_line(t))
       fail(path, tk.line(), "truncated: expected " + std::to_string(nf) + " faces, got " + std::to_string(f));
@@ -123,6 +125,9 @@ PolygonMesh read_off(const std::string& path) {
       fail(path, tk.line(),
            "face " + std::to_string(f) + ": announces " + std::to_string(n) + " corners, line has " +
                std::to_string(t.size() - 1));
+    // Each further corner needs a digit and a separator.
+    const std::uint64_t rest = in.file_size() > in.offset() ? in.file_size() - in.offset() : 0;
+    reserve.before_face(std::size_t(n), std::size_t(n) + std::size_t((rest + 1) / 2));
     mesh.faces.start_face();  // extra columns after the ids (colour) are ignored
     for (long long k = 0; k < n; ++k) {
       long long id = -1;
@@ -136,6 +141,10 @@ PolygonMesh read_off(const std::string& path) {
     }
   }
   return mesh;
+}
+
+PolygonMesh read_off(const std::string& path) {
+  return io_detail::read_off(path, io_detail::LineReader::kDefaultBlock);
 }
 
 }  // namespace corrlap

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/block_readers.hpp>
 #include <corrlap/io/detail/checked.hpp>
 #include <corrlap/io/detail/line_reader.hpp>
 #include <corrlap/io/detail/text_writer.hpp>
@@ -15,6 +16,8 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace corrlap {
@@ -73,6 +76,67 @@ bool parse_numbers(std::string_view line, A& a, B& b, C& c) {
   if (!ls.next(t[0]) || !ls.next(t[1]) || !ls.next(t[2]) || ls.more()) return false;
   return io_detail::parse_number(t[0], a) && io_detail::parse_number(t[1], b) && io_detail::parse_number(t[2], c);
 }
+
+// Replaces the entries of `parsed` (rows and values in its storage, in file order, and their
+// columns) by the compressed matrix they make: a counting sort by column, then rows sorted within
+// each column and repeated entries summed in file order, as setFromTriplets would, without its
+// triplets and transposed copy. A symmetric file's entries below the diagonal are mirrored above.
+// (In place: Eigen 3.4's SparseMatrix has no move constructor, a returned matrix is copied.)
+void by_columns(Eigen::SparseMatrix<double>& parsed, std::vector<int>& columns, bool symmetric) {
+  const Eigen::Index cols = parsed.cols();
+  const std::size_t n = columns.size();
+  const int* rows = parsed.innerIndexPtr();
+  const double* values = parsed.valuePtr();
+  Eigen::SparseMatrix<double> A(parsed.rows(), cols);
+  int* outer = A.outerIndexPtr();  // counts per column, then their starts
+  for (std::size_t k = 0; k < n; ++k) {
+    ++outer[columns[k] + 1];
+    if (symmetric && rows[k] != columns[k]) ++outer[rows[k] + 1];
+  }
+  for (Eigen::Index j = 0; j < cols; ++j) outer[j + 1] += outer[j];
+  A.resizeNonZeros(outer[cols]);
+  int* out_rows = A.innerIndexPtr();
+  double* out_values = A.valuePtr();
+  {
+    std::vector<int> next(outer, outer + cols);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int at = next[std::size_t(columns[k])]++;
+      out_rows[at] = rows[k];
+      out_values[at] = values[k];
+      if (symmetric && rows[k] != columns[k]) {
+        const int mirrored = next[std::size_t(rows[k])]++;
+        out_rows[mirrored] = columns[k];
+        out_values[mirrored] = values[k];
+      }
+    }
+  }
+  columns = {};
+  // Sort each column by row (stable: repeats keep the file order) and sum repeats, compacting.
+  std::vector<std::pair<int, double>> column;
+  int kept = 0;
+  for (Eigen::Index j = 0; j < cols; ++j) {
+    const int b = outer[j], e = outer[j + 1];
+    outer[j] = kept;
+    if (!std::is_sorted(out_rows + b, out_rows + e)) {
+      column.clear();
+      for (int k = b; k < e; ++k) column.emplace_back(out_rows[k], out_values[k]);
+      std::stable_sort(column.begin(), column.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (int k = b; k < e; ++k) std::tie(out_rows[k], out_values[k]) = column[std::size_t(k - b)];
+    }
+    for (int k = b; k < e; ++k) {
+      if (kept > outer[j] && out_rows[kept - 1] == out_rows[k]) {
+        out_values[kept - 1] += out_values[k];
+      } else {
+        out_rows[kept] = out_rows[k];
+        out_values[kept] = out_values[k];
+        ++kept;
+      }
+    }
+  }
+  outer[cols] = kept;
+  A.resizeNonZeros(kept);
+  parsed.swap(A);
+}
 }  // namespace
 
 Eigen::MatrixX3d read_normals(const std::string& path) { return read_rows<Eigen::MatrixX3d>(path, 3, "normals"); }
@@ -128,10 +192,10 @@ void write_matrix_market(const std::string& path, const Eigen::SparseMatrix<doub
   out.commit();
 }
 
-Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
+Eigen::SparseMatrix<double> io_detail::read_matrix_market(const std::string& path, std::size_t block_bytes) {
   using io_detail::readable_count;
   auto fail = [&](const std::string& what) -> void { throw IoError("Matrix Market file '" + path + "': " + what); };
-  io_detail::LineReader in(path);
+  io_detail::LineReader in(path, block_bytes);
   if (!in.is_open()) fail("cannot open");
   const std::uint64_t file_bytes = in.file_size();
   std::string_view header_line;
@@ -197,19 +261,24 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
          " for " + readable_count(std::uint64_t(nnz)) +
          " entries (each dimension is limited to max(1 048 576, 4 x entries) = " +
          readable_count(std::uint64_t(dim_limit)) + ")");
-  // Triplets (16 bytes each, twice for symmetric files) and the compressed matrix (12 bytes per entry).
+  // At most: the entries as parsed (rows, values, columns: 16 bytes each) and the compressed matrix they
+  // are sorted into (12 bytes per stored entry, twice as many for symmetric files); rounded up.
   const double stored = double(nnz) * (symmetric ? 2.0 : 1.0);
   io_detail::check_budget("Matrix Market file '" + path + "'", stored * 28.0 + 8.0 * double(c),
                           readable_count(std::uint64_t(nnz)) + " entries");
-  // Entries are parsed straight into the compressed storage of the result (rows and values, the
-  // columns aside): a file sorted by column then row without repeats (what write_matrix_market
-  // writes) needs no other copy. Other files (and symmetric ones) go through triplets.
+  // Entries are parsed straight into the compressed storage of the result, rows and values in
+  // place. While the file is sorted by column, then row, without repeats (what write_matrix_market
+  // writes), the column starts are set as the columns come and nothing else is held. From the
+  // first entry out of that order on (at once for symmetric files) every entry's column is kept and
+  // the entries are sorted into a second matrix at the end (by_columns).
   Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
   A.resizeNonZeros(static_cast<Eigen::Index>(nnz));
   int* rows = A.innerIndexPtr();
   double* values = A.valuePtr();
-  std::vector<int> columns(static_cast<std::size_t>(nnz));
+  int* outer = A.outerIndexPtr();
   bool sorted = !symmetric;
+  std::vector<int> columns(sorted ? 0 : std::size_t(nnz));
+  int last = -1;  // sorted: the column of the last entry; outer[0..last] are set
   for (long long k = 0; k < nnz; ++k) {
     long long i = 0, j = 0;
     double v = 1.0;
@@ -238,11 +307,19 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
       fail(entry() + ": (" + std::to_string(i) + ", " + std::to_string(j) +
            ") is above the diagonal; a symmetric file stores the lower triangle");
     const auto kk = std::size_t(k);
-    rows[kk] = int(i - 1);
-    columns[kk] = int(j - 1);
+    const int row = int(i - 1), col = int(j - 1);
+    if (sorted && col > last) {
+      std::fill(outer + last + 1, outer + col + 1, int(k));
+      last = col;
+    } else if (sorted && (col < last || row <= rows[kk - 1])) {
+      sorted = false;  // the columns of the entries so far, from the column starts
+      columns.resize(std::size_t(nnz));
+      for (int q = 0; q <= last; ++q)
+        std::fill(columns.begin() + outer[q], columns.begin() + (q < last ? outer[q + 1] : int(k)), q);
+    }
+    if (!sorted) columns[kk] = col;
+    rows[kk] = row;
     values[kk] = v;
-    if (k > 0 && sorted)
-      sorted = columns[kk] > columns[kk - 1] || (columns[kk] == columns[kk - 1] && rows[kk] > rows[kk - 1]);
   }
   while (in.next(line)) {
     ++lineno;
@@ -251,23 +328,15 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
            " declared");
   }
   if (in.error()) fail("read error");
-  if (sorted) {
-    int* outer = A.outerIndexPtr();  // counts per column, then their prefix sums
-    std::fill(outer, outer + c + 1, 0);
-    for (int j : columns) ++outer[j + 1];
-    for (long long j = 0; j < c; ++j) outer[j + 1] += outer[j];
-    return A;
-  }
-  std::vector<Eigen::Triplet<double>> t;
-  t.reserve(std::size_t(nnz) * (symmetric ? 2 : 1));
-  for (std::size_t k = 0; k < std::size_t(nnz); ++k) {
-    t.emplace_back(rows[k], columns[k], values[k]);
-    if (symmetric && rows[k] != columns[k]) t.emplace_back(columns[k], rows[k], values[k]);
-  }
-  columns = {};
-  A = Eigen::SparseMatrix<double>(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
-  A.setFromTriplets(t.begin(), t.end());
+  if (sorted)
+    std::fill(outer + last + 1, outer + c + 1, int(nnz));
+  else
+    by_columns(A, columns, symmetric);
   return A;
+}
+
+Eigen::SparseMatrix<double> read_matrix_market(const std::string& path) {
+  return io_detail::read_matrix_market(path, io_detail::LineReader::kDefaultBlock);
 }
 
 }  // namespace corrlap

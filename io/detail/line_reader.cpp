@@ -26,6 +26,7 @@ void LineReader::rewind() {
   if (!file_) return;
   std::rewind(file_);
   begin_ = end_ = line_ = 0;
+  base_ = 0;
   eof_ = error_ = false;
 }
 
@@ -35,6 +36,7 @@ bool LineReader::refill() {
   if (begin_ != 0) {
     std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
     end_ -= begin_;
+    base_ += begin_;
     begin_ = 0;
   }
   if (end_ == buffer_.size()) buffer_.resize(2 * buffer_.size());
@@ -45,6 +47,12 @@ bool LineReader::refill() {
     error_ = std::ferror(file_) != 0;
   }
   return got != 0;
+}
+
+bool LineReader::fill(std::size_t n) {
+  while (end_ - begin_ < n)
+    if (!refill()) return false;
+  return true;
 }
 
 bool LineReader::next(std::string_view& line) {

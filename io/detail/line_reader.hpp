@@ -2,7 +2,8 @@
 // Lines of a text file read in large blocks (internal). The readers parse each line in place with
 // std::from_chars (io/detail/tokens.hpp): no stream, no string per line or per token. A line split
 // across two blocks is moved to the front of the buffer before the next block is read; a line
-// longer than the buffer grows it.
+// longer than the buffer grows it. The same blocks serve raw bytes after a text header (binary PLY):
+// fill / buffered / consume.
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -36,13 +37,23 @@ class LineReader {
   /// Back to the first line, for a second pass.
   void rewind();
 
+  /// At least n unread bytes in the buffer (it grows when n is larger); false when the file ends
+  /// first. Invalidates the views next() and buffered() returned.
+  bool fill(std::size_t n);
+  /// The unread bytes in the buffer (possibly none), valid until the next call to next or fill.
+  std::string_view buffered() const { return {buffer_.data() + begin_, end_ - begin_}; }
+  /// Marks the first n bytes of buffered() as read.
+  void consume(std::size_t n) { begin_ += n; }
+  /// Offset in the file of the first unread byte (after next(): the start of the following line).
+  std::uint64_t offset() const { return base_ + begin_; }
+
  private:
   bool refill();
 
   std::FILE* file_ = nullptr;
   std::vector<char> buffer_;
   std::size_t begin_ = 0, end_ = 0, line_ = 0;
-  std::uint64_t size_ = 0;
+  std::uint64_t size_ = 0, base_ = 0;  // base_: file offset of buffer_[0]
   bool eof_ = false, error_ = false;
 };
 
