@@ -42,26 +42,6 @@ namespace {
 using Matrix = Eigen::MatrixXd;
 using SpMat = Eigen::SparseMatrix<double>;
 
-/// W = Q R with Q^T M Q = I (Cholesky QR, twice: one pass leaves an orthogonality error of about
-/// eps * cond(W)^2, the second brings it to eps). MW = M W on entry and M Q on return (updated
-/// with R, not recomputed). False when W is (numerically) rank deficient.
-bool m_orthonormalize(Matrix& W, Matrix& MW, Matrix& R) {
-  R = Matrix::Identity(W.cols(), W.cols());
-  for (int pass = 0; pass < 2; ++pass) {
-    const Matrix G = W.transpose() * MW;
-    Eigen::LLT<Matrix> llt(0.5 * (G + G.transpose()));
-    if (llt.info() != Eigen::Success) return false;
-    const Matrix U = llt.matrixU();
-    // A pivot far below the largest: the block has (almost) lost a direction.
-    const double largest = U.diagonal().cwiseAbs().maxCoeff();
-    if (!(U.diagonal().cwiseAbs().minCoeff() > 1e-10 * largest)) return false;
-    llt.matrixU().solveInPlace<Eigen::OnTheRight>(W);  // W U^{-1}
-    llt.matrixU().solveInPlace<Eigen::OnTheRight>(MW);
-    R = U * R;
-  }
-  return true;
-}
-
 // The tall products below (n rows against a basis of a few hundred columns) are most of the
 // iteration's arithmetic. They run on fixed blocks of rows in parallel, each block one serial BLAS
 // call (the iteration keeps OpenBLAS on one thread: detail/blas_threads.hpp); sums over the blocks
@@ -90,6 +70,35 @@ void subtract_times(Matrix& W, const Eigen::Ref<const Matrix>& V, const Matrix& 
     const Eigen::Index first = i * kRowBlock, count = std::min(kRowBlock, n - first);
     W.middleRows(first, count).noalias() -= V.middleRows(first, count) * P;
   });
+}
+
+/// W <- W U^{-1} for an upper triangular U, row block by row block.
+void divide_by_upper(Matrix& W, const Matrix& U) {
+  tbb::parallel_for(Eigen::Index(0), row_blocks(W.rows()), [&](Eigen::Index i) {
+    const Eigen::Index first = i * kRowBlock, count = std::min(kRowBlock, W.rows() - first);
+    auto rows = W.middleRows(first, count);
+    U.triangularView<Eigen::Upper>().solveInPlace<Eigen::OnTheRight>(rows);
+  });
+}
+
+/// W = Q R with Q^T M Q = I (Cholesky QR, twice: one pass leaves an orthogonality error of about
+/// eps * cond(W)^2, the second brings it to eps). MW = M W on entry and M Q on return (updated
+/// with R, not recomputed). False when W is (numerically) rank deficient.
+bool m_orthonormalize(Matrix& W, Matrix& MW, Matrix& R) {
+  R = Matrix::Identity(W.cols(), W.cols());
+  for (int pass = 0; pass < 2; ++pass) {
+    const Matrix G = transpose_times(W, MW);
+    Eigen::LLT<Matrix> llt(0.5 * (G + G.transpose()));
+    if (llt.info() != Eigen::Success) return false;
+    const Matrix U = llt.matrixU();
+    // A pivot far below the largest: the block has (almost) lost a direction.
+    const double largest = U.diagonal().cwiseAbs().maxCoeff();
+    if (!(U.diagonal().cwiseAbs().minCoeff() > 1e-10 * largest)) return false;
+    divide_by_upper(W, U);  // W U^{-1}
+    divide_by_upper(MW, U);
+    R = U * R;
+  }
+  return true;
 }
 
 /// W <- W - V (V^T M W) in two passes (classical Gram-Schmidt with reorthogonalization): the first
