@@ -116,8 +116,8 @@ bool dense_is_cheaper(Eigen::Index n, int basis) { return n <= 2 * Eigen::Index(
 
 /// block_size=auto: blocks pay once the basis no longer fits in cache and streaming it per vector
 /// dominates. Measured with k = 49 on digitized spheres (2026-12-03, bench/RESULTS.md, with the
-/// carried M-image and the local first pass): equal up to 3 800 unknowns (0.27 s), the 16-block run
-/// faster from 7 500 (0.54 s against 0.89 s) and at 26 000 (1.38 s against 4.09 s).
+/// carried M-image and the local first pass): equal up to 3 848 unknowns (0.27 s), the 16-block run
+/// faster from 7 496 (0.54 s against 0.89 s) and at 21 032 (1.38 s against 4.09 s).
 int block_size_for(Eigen::Index n) { return n >= 4000 ? 16 : 1; }
 
 EigenResult dense_solve(const SpMat& L, const SpMat& M, int k) {
