@@ -255,7 +255,9 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
 
 def set_threads(n):
     """Limits the worker threads of every later call (TBB and OpenBLAS) to n; n <= 0: all cores.
-    Process-wide, the last call wins. Results are bitwise the same for any thread count."""
+    Process-wide, the last call wins. Surfaces, normals, curvature and operators are bitwise the
+    same for any thread count; solves and eigenpairs agree to rounding (OpenBLAS's sums depend on
+    its thread count)."""
     _core.set_threads(int(n))
 
 
