@@ -5,6 +5,7 @@
 #include <cmath>
 #include <corrlap/backends/detail/block_cg.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
+#include <corrlap/backends/detail/symmetric_product.hpp>
 #include <new>
 #include <optional>
 #include <sstream>

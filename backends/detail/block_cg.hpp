@@ -1,18 +1,11 @@
 #pragma once
-// Preconditioned conjugate gradient on every column of a right-hand side at once, with a parallel
-// product for symmetric matrices. Internal to backends/ (the "cg" backend, iterative.cpp).
+// Preconditioned conjugate gradient on every column of a right-hand side at once. Internal to
+// backends/ (the "cg" backend, iterative.cpp).
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <functional>
 
 namespace corrlap::detail {
-
-/// Yt = (A X)^T for a symmetric n x n A stored with both triangles, column-major; Xt = X^T is
-/// k x n. Because A = A^T, row j of A X is column j of A dotted with X: the rows are independent
-/// and run in parallel (TBB), each summed in storage order, so the result does not depend on the
-/// thread count. Equals the readable (A * X).transpose() up to the order of the sums. The
-/// transposed layout makes each row of X that a column of A gathers contiguous.
-void symmetric_product_transposed(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt);
 
 /// Zt = P^{-1} Rt for k residuals stored as the rows of Rt (k x n).
 using Preconditioner = std::function<void(const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt)>;

@@ -6,36 +6,11 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <corrlap/backends/detail/symmetric_product.hpp>
 #include <random>
 #include <vector>
 
 namespace corrlap::detail {
-
-// Row i of M X is the sum over column i of M of M(c, i) X.row(c). X is copied to row-major order
-// first, so that each entry of M meets one contiguous row of X, not b scattered ones (Eigen's
-// serial column-major product streams M once per column of X: 3x slower at 188 K unknowns and
-// b = 16, and the iteration runs it three times per block step).
-void symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y,
-                     RowMajorMatrix& scratch) {
-  scratch = X;
-  Y.resize(M.rows(), X.cols());
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, M.rows(), 4096), [&](const auto& rows) {
-    Eigen::RowVectorXd sum(X.cols());
-    for (Eigen::Index i = rows.begin(); i < rows.end(); ++i) {
-      sum.setZero();
-      for (Eigen::SparseMatrix<double>::InnerIterator entry(M, i); entry; ++entry)
-        sum.noalias() += entry.value() * scratch.row(entry.index());
-      Y.row(i) = sum;
-    }
-  });
-}
-
-Eigen::MatrixXd symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X) {
-  Eigen::MatrixXd Y;
-  RowMajorMatrix scratch;
-  symmetric_times(M, X, Y, scratch);
-  return Y;
-}
 
 namespace {
 
@@ -110,7 +85,7 @@ bool m_orthonormalize(Matrix& W, Matrix& MW, Matrix& R) {
 /// streaming of the basis, the larger part of a block step. Right after a thick restart the new
 /// block couples to every kept Ritz vector, and `local` is 0.
 Matrix project_out(const SpMat& M, const Eigen::Ref<const Matrix>& V, Eigen::Index local, Matrix& W, Matrix& MW,
-                   RowMajorMatrix& scratch) {
+                   SymmetricProductWorkspace& scratch) {
   Matrix coefficients = Matrix::Zero(V.cols(), W.cols());
   for (int pass = 0; pass < 2; ++pass) {
     const Eigen::Index from = pass == 0 ? local : 0;
@@ -164,8 +139,8 @@ BlockLanczosResult block_lanczos(const std::function<Matrix(const Matrix&)>& app
   Matrix block(n, b), R;
   for (Eigen::Index j = 0; j < b; ++j)
     for (Eigen::Index i = 0; i < n; ++i) block(i, j) = normal(rng);
-  RowMajorMatrix scratch;  // of symmetric_times, reused: fresh pages of an n x b block cost more than the product
-  Matrix M_block;          // M times the newest block, carried along
+  SymmetricProductWorkspace scratch;  // of symmetric_times, kept between calls
+  Matrix M_block;                     // M times the newest block, carried along
   symmetric_times(M, block, M_block, scratch);
   if (!m_orthonormalize(block, M_block, R)) return result;
   V.leftCols(b) = block;

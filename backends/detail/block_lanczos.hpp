@@ -44,14 +44,6 @@ struct BlockLanczosResult {
   bool stopped = false;    ///< ended by options.stop before converging
 };
 
-/// M X for a symmetric M (n x n) and a block X (n x b), by rows in parallel: equal to M * X entry by
-/// entry (the same products summed in the same order) when M is exactly symmetric.
-Eigen::MatrixXd symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X);
-using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-/// The same into Y (resized; not X), with `scratch` for X in row-major order kept between calls.
-void symmetric_times(const Eigen::SparseMatrix<double>& M, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y,
-                     RowMajorMatrix& scratch);
-
 /// `apply` maps the M-image B = M X of an n x b block X to S X (n = M.rows()): the caller's S is
 /// (K - sigma M)^{-1} M, whose M X the iteration has at hand. Needs nev + block_size < n.
 BlockLanczosResult block_lanczos(const std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>& apply,

@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <corrlap/backends/detail/block_lanczos.hpp>
+#include <corrlap/backends/detail/symmetric_product.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/backends/spectra_eigs.hpp>
 #include <corrlap/core/error.hpp>

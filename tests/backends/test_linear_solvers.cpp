@@ -6,6 +6,7 @@
 #include <corrlap/backends/cholmod.hpp>
 #include <corrlap/backends/detail/block_cg.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
+#include <corrlap/backends/detail/symmetric_product.hpp>
 #include <corrlap/backends/eigen_direct.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <random>
