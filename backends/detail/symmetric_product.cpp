@@ -29,12 +29,16 @@ void gather_rows(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& Xt
   }
 }
 
-void gather_rows_dynamic(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt,
-                         Eigen::Index first, Eigen::Index last) {
+// Row j of A X for any number of right-hand sides, handed to store(j, row) (a column of Yt, or a
+// row of a column-major Y).
+template <class Store>
+void gather_rows_dynamic(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& Xt, Eigen::Index first,
+                         Eigen::Index last, const Store& store) {
+  Eigen::VectorXd y(Xt.rows());
   for (Eigen::Index j = first; j != last; ++j) {
-    auto y = Yt.col(j);
     y.setZero();
     for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it) y.noalias() += it.value() * Xt.col(it.row());
+    store(j, y);
   }
 }
 }  // namespace
@@ -55,16 +59,20 @@ void symmetric_product_transposed(const Eigen::SparseMatrix<double>& A, const Ei
         gather_rows<3>(A, Xt, Yt, r.begin(), r.end());
         break;
       default:
-        gather_rows_dynamic(A, Xt, Yt, r.begin(), r.end());
+        gather_rows_dynamic(A, Xt, r.begin(), r.end(),
+                            [&](Eigen::Index j, const Eigen::VectorXd& y) { Yt.col(j) = y; });
     }
   });
 }
 
 void symmetric_times(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y,
                      SymmetricProductWorkspace& workspace) {
-  workspace.Xt = X.transpose();
-  symmetric_product_transposed(A, workspace.Xt, workspace.Yt);
-  Y = workspace.Yt.transpose();
+  workspace.Xt = X.transpose();  // each row of X that a column of A gathers is contiguous
+  Y.resize(A.rows(), X.cols());
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, A.cols(), 512), [&](const auto& r) {
+    gather_rows_dynamic(A, workspace.Xt, r.begin(), r.end(),
+                        [&](Eigen::Index j, const Eigen::VectorXd& y) { Y.row(j) = y.transpose(); });
+  });
 }
 
 Eigen::MatrixXd symmetric_times(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& X) {

@@ -13,12 +13,13 @@ namespace corrlap::detail {
 /// transposed layout makes each row of X that a column of A gathers contiguous.
 void symmetric_product_transposed(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt);
 
-/// Y = A X (n x b, column-major) for a symmetric A: symmetric_product_transposed on X^T, so equal
-/// to A * X entry by entry when A is exactly symmetric (the same products summed in the same order).
-/// `workspace` keeps the transposed blocks between calls: fresh pages of a large block (96 MB at
-/// 753 K unknowns and b = 16) cost more than the product.
+/// Y = A X (n x b, column-major) for a symmetric A: the same row gathers as
+/// symmetric_product_transposed, from X^T, written straight into Y; equal to A * X entry by entry
+/// when A is exactly symmetric (the same products summed in the same order). `workspace` keeps X^T
+/// between calls: fresh pages of a large block (96 MB at 753 K unknowns and b = 16) cost more than
+/// the product.
 struct SymmetricProductWorkspace {
-  Eigen::MatrixXd Xt, Yt;
+  Eigen::MatrixXd Xt;
 };
 void symmetric_times(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y,
                      SymmetricProductWorkspace& workspace);
