@@ -3,6 +3,7 @@
 // whose message names the offending input (file, element, key) and the problem.
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace corrlap {
 
@@ -13,9 +14,17 @@ class Error : public std::runtime_error {
 };
 
 /// Bad user input: malformed file, wrong config key, inconsistent normals, empty volume...
+/// The message speaks in library terms. When one parameter is at fault, `parameter()` is its
+/// library name ("ii_radius", "lambda"): each front end adds its own spelling of it (the CLI's
+/// --ii-radius, a Python keyword) when it reports the error.
 class InputError : public Error {
  public:
-  using Error::Error;
+  explicit InputError(const std::string& what, std::string parameter = {})
+      : Error(what), parameter_(std::move(parameter)) {}
+  const std::string& parameter() const noexcept { return parameter_; }
+
+ private:
+  std::string parameter_;
 };
 
 /// A file could not be read or written, or its content is malformed.
