@@ -17,6 +17,7 @@
 #include <corrlap/core/linear_solver.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <corrlap/core/parameters.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/threads.hpp>

@@ -33,6 +33,8 @@ class Config {
   bool has(const std::string& key) const { return values_.count(key) != 0; }
   bool empty() const { return values_.empty(); }
   std::vector<std::string> keys() const;
+  /// The value of a present key (std::out_of_range otherwise), to copy it between configs.
+  const Value& get_value(const std::string& key) const { return values_.at(key); }
 
   /// Typed getters: default when absent; InputError naming the key when the type is wrong.
   std::string get_string(const std::string& key, const std::string& fallback) const;

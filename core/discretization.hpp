@@ -8,9 +8,11 @@
 #include <Eigen/Sparse>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config.hpp"
+#include "parameters.hpp"
 #include "normal_fields.hpp"
 #include "surfel_mesh.hpp"
 
@@ -48,6 +50,22 @@ inline void reset_for_reuse(Operators& ops) {
   ops.contract_risk.clear();
 }
 
+/// Moves every field of `from` into `out` (L and M by swap: Eigen 3.4's SparseMatrix has no move
+/// assignment, and a copy would double the peak memory), for a method that computes its operators
+/// elsewhere and refills `out`. This and reset_for_reuse are the two places that list the fields.
+inline void move_operators(Operators& from, Operators& out) {
+  out.L.swap(from.L);
+  out.M.swap(from.M);
+  out.M_lumped = std::move(from.M_lumped);
+  out.D0 = std::move(from.D0);
+  out.sharp = std::move(from.sharp);
+  out.flat = std::move(from.flat);
+  out.M1 = std::move(from.M1);
+  out.domain = from.domain;
+  out.warnings = std::move(from.warnings);
+  out.contract_risk = std::move(from.contract_risk);
+}
+
 /// What a policy does with normals inconsistent with the surfel orientation (u.n <= 0).
 enum class OrientationPolicy { Error, Warn, Clamp };
 
@@ -56,9 +74,9 @@ enum class OrientationPolicy { Error, Warn, Clamp };
 /// so that core does not depend on discretizations.
 class QuadPattern;
 
-/// Virtual interface: name, required_normals, parameters, assemble (one-shot) and
-/// assemble_into(..., const QuadPattern*, out) (the refill with an optional pattern). The other
-/// overloads are conveniences over these two.
+/// A discretization: name, the normals it needs, its declared parameters, and one assembly entry
+/// point, `assemble_into`. The `assemble` overloads are non-virtual conveniences over it, so every
+/// path (one-shot, with a pattern, refill) runs the same code and fills every field of Operators.
 class Discretization {
  public:
   virtual ~Discretization() = default;
@@ -66,47 +84,41 @@ class Discretization {
   virtual std::string name() const = 0;
   /// Normal field the method needs (NormalKind::None for uncorrected methods).
   virtual NormalKind required_normals() const = 0;
-  /// Accepted parameters with their defaults (the reference's).
-  virtual std::vector<ParameterInfo> parameters() const = 0;
-  /// Builds the operators (one-shot: no pattern is built, the quad methods gather directly).
-  /// Throws InputError on missing or invalid normals, unknown parameter keys, or an invalid mesh.
-  virtual Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const = 0;
-  /// Same result, bit for bit, through a pattern built for this mesh's connectivity (InputError if
-  /// it was built for another one). Methods that do not use a pattern ignore it.
+  /// The method's parameters, declared once (core/parameters.hpp): names, types, defaults (the
+  /// reference's), allowed values, docs.
+  virtual const ParameterList& parameters() const = 0;
+
+  /// Builds the operators into `out`. Every field of `out` is replaced; the storage of out.L and
+  /// out.M is reused when it is large enough, so repeated assembly on one mesh (a regularization
+  /// loop, a study) fills memory that is already mapped. `pattern` (nullptr = none) is used by the
+  /// quad methods that gather by vertex (fem, polydec, projected-polydec, interpolated, vrm,
+  /// corrected-vrm) and ignored by the others; the result is bitwise the same with or without it
+  /// (InputError if it was built for another connectivity). Throws InputError on missing or
+  /// invalid normals, unknown or invalid parameters (ParameterList::read), or an invalid mesh.
+  virtual void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+                             const QuadPattern* pattern, Operators& out) const = 0;
+
+  /// One-shot: a fresh Operators, no pattern.
+  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const {
+    Operators ops;
+    assemble_into(mesh, normals, params, nullptr, ops);
+    return ops;
+  }
+  /// A fresh Operators through `pattern`.
   Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
                      const QuadPattern& pattern) const {
     Operators ops;
     assemble_into(mesh, normals, params, &pattern, ops);
     return ops;
   }
-  /// Same result, bit for bit, written into `out`, without a pattern.
+  /// Refill without a pattern.
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params, Operators& out) const {
     assemble_into(mesh, normals, params, nullptr, out);
   }
-  /// Same result, bit for bit, written into `out` through `pattern`.
+  /// Refill through `pattern`.
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
                      const QuadPattern& pattern, Operators& out) const {
     assemble_into(mesh, normals, params, &pattern, out);
-  }
-  /// Same result, bit for bit, written into `out`; `pattern` (nullptr = none) is used by the quad
-  /// methods that gather by vertex (fem, polydec, projected-polydec, interpolated, vrm,
-  /// corrected-vrm), which also reuse the storage of out.L and out.M when it is large enough, so
-  /// repeated assembly on one mesh (a regularization loop, a study) fills memory that is already
-  /// mapped instead of faulting in fresh pages (at h = 0.005 that is most of fem's cost on a VM).
-  /// Default: assemble() and swap.
-  virtual void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
-                             const QuadPattern* pattern, Operators& out) const {
-    (void)pattern;
-    Operators fresh = assemble(mesh, normals, params);
-    out.L.swap(fresh.L);  // Eigen 3.4's SparseMatrix has no move assignment: swap, not copy
-    out.M.swap(fresh.M);
-    out.M_lumped = std::move(fresh.M_lumped);
-    out.D0 = std::move(fresh.D0);
-    out.sharp = std::move(fresh.sharp);
-    out.flat = std::move(fresh.flat);
-    out.M1 = std::move(fresh.M1);
-    out.domain = fresh.domain;
-    out.warnings = std::move(fresh.warnings);
   }
 };
 

@@ -82,27 +82,22 @@ class CorrectedFem final : public Discretization {
  public:
   std::string name() const override { return "fem"; }
   NormalKind required_normals() const override { return NormalKind::Face; }
-  std::vector<ParameterInfo> parameters() const override {
-    std::vector<ParameterInfo> p = {
-        {"mass", "full", "mass matrix: full (consistent) | lumped (diagonal), docs/math.md §4.4"}, extras_parameter()};
-    for (auto& q : normal_policy_parameters()) p.push_back(q);
-    return p;
-  }
-
-  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    Operators ops;
-    assemble_into(mesh, normals, params, nullptr, ops);
-    return ops;
+  const ParameterList& parameters() const override {
+    static const ParameterList list =
+        ParameterList{Parameter::choice("mass", {"full", "lumped"}, "mass matrix: full (consistent) | lumped (diagonal)",
+                                        "§4.4"),
+                      extras_parameter()}
+            .append(normal_policy_parameters());
+    return list;
   }
 
   // L and M are filled by the fast assembly (corrected_fem_fast.cpp), whose resize keeps the
   // matrices' allocated storage: with a reused `ops` nothing is allocated for them.
-  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& config,
                      const QuadPattern* pattern, Operators& ops) const override {
-    params.check_parameters(parameters(), "fem parameters");
-    const std::string mass = params.get_string("mass", "full");
-    if (mass != "full" && mass != "lumped") throw InputError("fem: mass '" + mass + "': expected full or lumped");
-    const bool extras = params.get_bool("extras", false);
+    const ParameterValues params = parameters().read(config, "fem");
+    const std::string mass = params.choice("mass");
+    const bool extras = params.boolean("extras");
     check_quad_mesh(mesh, "fem");
 
     reset_for_reuse(ops);

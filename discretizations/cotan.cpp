@@ -81,21 +81,23 @@ class Cotan final : public Discretization {
  public:
   std::string name() const override { return "cotan"; }
   NormalKind required_normals() const override { return NormalKind::None; }
-  std::vector<ParameterInfo> parameters() const override {
-    return {{"mass", "voronoi", "lumped mass: voronoi (mixed Voronoi, Meyer et al.) | barycentric (A/3)"}};
+  const ParameterList& parameters() const override {
+    static const ParameterList list = {Parameter::choice(
+        "mass", {"voronoi", "barycentric"}, "lumped mass: voronoi (mixed Voronoi, Meyer et al.) | barycentric (A/3)")};
+    return list;
   }
-  Operators assemble(const SurfelMesh& mesh, const NormalFields&, const Config& params) const override {
-    params.check_parameters(parameters(), name());
+  void assemble_into(const SurfelMesh& mesh, const NormalFields&, const Config& config, const QuadPattern*,
+                     Operators& out) const override {
+    const ParameterValues params = parameters().read(config, name());
     mesh.validate("cotan");
-    const std::string m = params.get_string("mass", "voronoi");
-    if (m != "voronoi" && m != "barycentric")
-      throw InputError("cotan: mass '" + m + "': expected voronoi or barycentric");
+    const std::string m = params.choice("mass");
     TriangleIndices T(2 * mesh.num_faces(), 3);
     for (int f = 0; f < mesh.num_faces(); ++f) {  // split along x0-x2 (documented in cotan.hpp)
       T.row(2 * f) << mesh.faces(f, 0), mesh.faces(f, 1), mesh.faces(f, 2);
       T.row(2 * f + 1) << mesh.faces(f, 0), mesh.faces(f, 2), mesh.faces(f, 3);
     }
-    return assemble_cotan(mesh.positions, T, m == "voronoi" ? CotanMass::Voronoi : CotanMass::Barycentric);
+    Operators ops = assemble_cotan(mesh.positions, T, m == "voronoi" ? CotanMass::Voronoi : CotanMass::Barycentric);
+    move_operators(ops, out);
   }
 };
 

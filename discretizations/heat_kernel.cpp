@@ -283,25 +283,31 @@ class HeatKernel final : public Discretization {
  public:
   std::string name() const override { return "heat-kernel"; }
   NormalKind required_normals() const override { return NormalKind::Face; }
-  std::vector<ParameterInfo> parameters() const override {
-    std::vector<ParameterInfo> p = {
-        {"t", "k*h^alpha", "diffusion time (docs/math.md §6); when absent, t = k h^alpha"},
-        {"k", "0.1", "t = k h^alpha"},
-        {"alpha", "0.6666666666666666", "t = k h^alpha"},
-        {"cutoff", "3", "couple points closer than cutoff * sqrt(2t) (docs/math.md §6, K)"},
-        {"distance", "euclidean",
-         "euclidean (docs/math.md §6) | tangent: distances in the plane of the mean normal (corrlap extension; "
-         "removes the O(h^2/t) error of off-surface surfel centres; dual variant only)"},
-        {"variant", "dual", "dual: surfel values (domain Faces) | primal: vertex values"},
-        {"mass", "measure", "measure: L = diag(mu) A symmetric, M = diag(mu) | identity: L = A pointwise, M = I"}};
-    for (auto& q : normal_policy_parameters()) p.push_back(q);
-    return p;
+  const ParameterList& parameters() const override {
+    static const ParameterList list =
+        ParameterList{
+            Parameter::computed_real("t", "k h^alpha", "diffusion time; when absent, t = k h^alpha", "§6").above(0.0),
+            Parameter::real("k", 0.1, "t = k h^alpha when t is absent", "§6").above(0.0),
+            Parameter::real("alpha", 2.0 / 3.0, "t = k h^alpha when t is absent", "§6"),
+            Parameter::real("cutoff", 3.0, "couple points closer than cutoff * sqrt(2t) (K)", "§6").above(0.0),
+            Parameter::choice("distance", {"euclidean", "tangent"},
+                              "euclidean | tangent: distances in the plane of the mean normal (corrlap extension; "
+                              "removes the O(h^2/t) error of off-surface surfel centres; dual variant only)",
+                              "§6"),
+            Parameter::choice("variant", {"dual", "primal"}, "dual: surfel values (domain Faces) | primal: vertex values",
+                              "§6"),
+            Parameter::choice("mass", {"measure", "identity"},
+                              "measure: L = diag(mu) A symmetric, M = diag(mu) | identity: L = A pointwise, M = I",
+                              "§6")}
+            .append(normal_policy_parameters());
+    return list;
   }
 
-  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params, const QuadPattern*,
+                     Operators& out) const override {
     Setup s = setup(mesh, normals, params);
     // swap, not assign: Eigen 3.4's SparseMatrix has no move assignment, and a copy would double
-    // the peak memory of the largest operator (9 GB at h = 0.01).
+    // the peak memory of the largest operator.
     Eigen::SparseMatrix<double> L = heat_kernel_matrix(
         s.points, s.mu, s.t, s.cutoff, s.symmetric ? HeatKernelForm::Symmetric : HeatKernelForm::Pointwise,
         HeatKernelStorage::Full, s.tangent ? &s.normals : nullptr);
@@ -310,8 +316,8 @@ class HeatKernel final : public Discretization {
     D.reserve(Eigen::VectorXi::Ones(s.mu.size()));
     for (Eigen::Index i = 0; i < s.mu.size(); ++i) D.insert(i, i) = s.symmetric ? s.mu[i] : 1.0;
     D.makeCompressed();
-    s.ops.M = D;
-    return std::move(s.ops);
+    s.ops.M.swap(D);
+    move_operators(s.ops, out);
   }
 
   // Everything but the matrix: points, measures, t, cut-off and the Operators' other fields.
@@ -323,29 +329,23 @@ class HeatKernel final : public Discretization {
     Operators ops;
   };
 
-  Setup setup(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const {
-    params.check_parameters(parameters(), name());
+  Setup setup(const SurfelMesh& mesh, const NormalFields& normals, const Config& config) const {
+    const ParameterValues params = parameters().read(config, name());
     mesh.validate("heat-kernel");
-    const std::string variant = params.get_string("variant", "dual");
-    const std::string mass = params.get_string("mass", "measure");
-    if (variant != "dual" && variant != "primal")
-      throw InputError("heat-kernel: variant '" + variant + "': expected dual or primal");
-    if (mass != "measure" && mass != "identity")
-      throw InputError("heat-kernel: mass '" + mass + "': expected measure or identity");
+    const std::string variant = params.choice("variant");
+    const std::string mass = params.choice("mass");
     const double h = mesh.grid_step();
-    double t = params.get_double("t", -1.0);
-    if (params.has("t")) {
-      if (!(t > 0)) throw InputError("heat-kernel: t must be positive");
+    double t = 0.0;
+    if (const std::optional<double> given = params.optional_real("t")) {
+      t = *given;
     } else {
-      t = heat_kernel_time(h, params.get_double("k", 0.1), params.get_double("alpha", 2.0 / 3.0));
-      if (!(t > 0) || !std::isfinite(t)) throw InputError("heat-kernel: k h^alpha must be positive");
+      t = heat_kernel_time(h, params.real("k"), params.real("alpha"));
+      if (!(t > 0) || !std::isfinite(t)) throw InputError("heat-kernel: k h^alpha must be positive", "k");
     }
-    const double cutoff = params.get_double("cutoff", 3.0);
-    const std::string distance = params.get_string("distance", "euclidean");
-    if (distance != "euclidean" && distance != "tangent")
-      throw InputError("heat-kernel: distance '" + distance + "': expected euclidean or tangent");
+    const double cutoff = params.real("cutoff");
+    const std::string distance = params.choice("distance");
     if (distance == "tangent" && variant != "dual")
-      throw InputError("heat-kernel: distance=tangent needs variant=dual (one normal per surfel)");
+      throw InputError("heat-kernel: distance=tangent needs variant=dual (one normal per surfel)", "distance");
 
     Setup s;
     s.t = t;

@@ -127,37 +127,28 @@ class InterpolatedCorrected final : public Discretization {
  public:
   std::string name() const override { return "interpolated"; }
   NormalKind required_normals() const override { return NormalKind::Vertex; }
-  std::vector<ParameterInfo> parameters() const override {
-    std::vector<ParameterInfo> p = {
-        {"lambda", "0.1", "stabilization weight of M1 (docs/math.md §3.5; DGtal constructor default)"},
-        {"kappa", "2", "flat correction factor (docs/math.md §3.4): 2 = DGtal, 1 = paper"},
-        {"assembly", "global", "global (docs/math.md §3.6a, DGtal L0(), 2-ring stencil) | local (§3.6b, sum of L_f)"},
-        extras_parameter()};
-    for (auto& q : normal_policy_parameters()) p.push_back(q);
-    return p;
-  }
-
-  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    Operators ops;
-    assemble_into(mesh, normals, params, nullptr, ops);
-    return ops;
+  const ParameterList& parameters() const override {
+    static const ParameterList list =
+        ParameterList{
+            Parameter::real("lambda", 0.1, "stabilization weight of M1 (DGtal constructor default)", "§3.5")
+                .at_least(0.0),
+            Parameter::real("kappa", 2.0, "flat correction factor: 2 = DGtal, 1 = paper", "§3.4"),
+            Parameter::choice("assembly", {"global", "local"},
+                              "global (DGtal L0(), 2-ring stencil, §3.6a) | local (sum of L_f, §3.6b)", "§3.6"),
+            extras_parameter()}
+            .append(normal_policy_parameters());
+    return list;
   }
 
   // Refills ops.L and ops.M in their existing storage (allocate_like and gather_quad_rows resize,
-  // which keeps the allocation): on a VM the page faults of fresh output were ~130 ms of the
-  // ~350 ms per call at h = 0.005.
-  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+  // which keeps the allocation), so repeated calls do not fault in fresh pages.
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& config,
                      const QuadPattern* pattern, Operators& ops) const override {
-    params.check_parameters(parameters(), "interpolated parameters");
-    const double lambda = params.get_double("lambda", 0.1);
-    const double kappa = params.get_double("kappa", 2.0);
-    if (!(std::isfinite(lambda) && lambda >= 0.0)) throw InputError("interpolated: lambda must be finite and >= 0");
-    if (!std::isfinite(kappa)) throw InputError("interpolated: kappa must be finite");
-    const std::string assembly = params.get_string("assembly", "global");
-    if (assembly != "global" && assembly != "local")
-      throw InputError("interpolated: assembly '" + assembly + "': expected global or local");
-    const bool global = assembly == "global";
-    const bool extras = params.get_bool("extras", false);
+    const ParameterValues params = parameters().read(config, "interpolated");
+    const double lambda = params.real("lambda");
+    const double kappa = params.real("kappa");
+    const bool global = params.choice("assembly") == "global";
+    const bool extras = params.boolean("extras");
     check_quad_mesh(mesh, "interpolated");
 
     reset_for_reuse(ops);

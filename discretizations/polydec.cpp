@@ -51,33 +51,32 @@ PolyDecLocal polydec_local(const QuadCorners& X, double lambda) {
 
 namespace {
 
+const ParameterList& plain_parameters() {
+  static const ParameterList list = {
+      Parameter::real("lambda", 1.0, "stabilization weight of M1 (DGtal L0() uses 1)", "§2.2").at_least(0.0),
+      extras_parameter()};
+  return list;
+}
+
+const ParameterList& projected_parameters() {
+  static const ParameterList list = ParameterList(plain_parameters()).append(normal_policy_parameters());
+  return list;
+}
+
 class PolyDec final : public Discretization {
  public:
   explicit PolyDec(bool projected) : projected_(projected) {}
   std::string name() const override { return projected_ ? "projected-polydec" : "polydec"; }
   NormalKind required_normals() const override { return projected_ ? NormalKind::Face : NormalKind::None; }
-  std::vector<ParameterInfo> parameters() const override {
-    std::vector<ParameterInfo> p = {
-        {"lambda", "1", "stabilization weight of M1 (docs/math.md §2.2; DGtal L0() uses 1)"}, extras_parameter()};
-    if (projected_)
-      for (auto& q : normal_policy_parameters()) p.push_back(q);
-    return p;
-  }
-
-  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    Operators ops;
-    assemble_into(mesh, normals, params, nullptr, ops);
-    return ops;
-  }
+  const ParameterList& parameters() const override { return projected_ ? projected_parameters() : plain_parameters(); }
 
   // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
-  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& config,
                      const QuadPattern* pattern, Operators& ops) const override {
     const std::string who = name();
-    params.check_parameters(parameters(), who + " parameters");
-    const double lambda = params.get_double("lambda", 1.0);
-    if (!(std::isfinite(lambda) && lambda >= 0.0)) throw InputError(who + ": lambda must be finite and >= 0");
-    const bool extras = params.get_bool("extras", false);
+    const ParameterValues params = parameters().read(config, who);
+    const double lambda = params.real("lambda");
+    const bool extras = params.boolean("extras");
     check_quad_mesh(mesh, who);
 
     reset_for_reuse(ops);

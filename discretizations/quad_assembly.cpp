@@ -127,8 +127,8 @@ void check_quad_mesh(const SurfelMesh& mesh, const std::string& method) {
   validate_mesh(mesh, (method + ": mesh").c_str());
 }
 
-ParameterInfo extras_parameter() {
-  return {"extras", "false", "also build D0, sharp, flat, M1 and M_lumped (docs/math.md §2.3, §3.6)"};
+Parameter extras_parameter() {
+  return Parameter::boolean("extras", false, "also build D0, sharp, flat, M1 and M_lumped", "§2.3, §3.6");
 }
 
 }  // namespace corrlap

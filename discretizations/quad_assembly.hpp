@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <corrlap/core/config.hpp>
+#include <corrlap/core/parameters.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/discretizations/assembly/parallel_assembly.hpp>
@@ -52,6 +53,6 @@ void validate_mesh(const SurfelMesh& mesh, const char* what);
 void check_quad_mesh(const SurfelMesh& mesh, const std::string& method);
 
 /// The parameter "extras" (build D0, sharp, flat, M1 and M_lumped besides L and M).
-ParameterInfo extras_parameter();
+Parameter extras_parameter();
 
 }  // namespace corrlap

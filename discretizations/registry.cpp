@@ -7,6 +7,8 @@
 #include "polydec.hpp"
 #include "virtual_refinement.hpp"
 
+#include <sstream>
+
 namespace corrlap {
 
 namespace {
@@ -34,6 +36,23 @@ DiscretizationRegistry& discretization_registry() {
 
 std::unique_ptr<Discretization> make_discretization(const std::string& name) {
   return discretization_registry().create(name);
+}
+
+std::string method_parameters_markdown() {
+  // "|" inside a cell would end it: Markdown tables escape it.
+  const auto cell = [](const std::string& text) {
+    std::string out;
+    for (const char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+    return out;
+  };
+  std::ostringstream os;
+  os << "| method | parameter | type | default | allowed | meaning | docs/math.md |\n";
+  os << "|---|---|---|---|---|---|---|\n";
+  for (const std::string& name : discretization_registry().names())
+    for (const Parameter& p : make_discretization(name)->parameters().items())
+      os << "| `" << name << "` | `" << p.name << "` | " << to_string(p.type) << " | " << cell(p.default_text())
+         << " | " << cell(p.allowed_text()) << " | " << cell(p.doc) << " | " << p.math << " |\n";
+  return os.str();
 }
 
 }  // namespace corrlap

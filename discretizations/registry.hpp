@@ -3,6 +3,7 @@
 // fem, vrm, corrected-vrm, heat-kernel, cotan).
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/core/registry.hpp>
+#include <string>
 
 namespace corrlap {
 
@@ -13,5 +14,10 @@ DiscretizationRegistry& discretization_registry();
 
 /// Shortcut: discretization_registry().create(name).
 std::unique_ptr<Discretization> make_discretization(const std::string& name);
+
+/// The parameters of every registered method as a Markdown table (method, parameter, type,
+/// default, allowed values, meaning, docs/math.md section), rendered from the declarations: the
+/// table of docs/discretizations.md ("Parameters"), which a test keeps equal to this.
+std::string method_parameters_markdown();
 
 }  // namespace corrlap

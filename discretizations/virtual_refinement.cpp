@@ -268,26 +268,24 @@ class Vrm final : public Discretization {
   explicit Vrm(bool corrected) : corrected_(corrected) {}
   std::string name() const override { return corrected_ ? "corrected-vrm" : "vrm"; }
   NormalKind required_normals() const override { return corrected_ ? NormalKind::Vertex : NormalKind::None; }
-  std::vector<ParameterInfo> parameters() const override {
-    if (!corrected_) return {};
-    std::vector<ParameterInfo> p = {
-        {"mass", "full", "full: M_f = P^T M_fan P (4x4, docs/math.md §5.2); lumped: its row sums"},
-        {"max_iterations", "50", "virtual-point minimizer: iteration limit (docs/math.md §5.2)"},
-        {"gradient_tolerance", "1e-12", "virtual-point minimizer: stop when |grad E/h^4| is below"}};
-    for (auto& q : normal_policy_parameters()) p.push_back(q);
-    return p;
-  }
-
-  Operators assemble(const SurfelMesh& mesh, const NormalFields& normals, const Config& params) const override {
-    Operators ops;
-    assemble_into(mesh, normals, params, nullptr, ops);
-    return ops;
+  const ParameterList& parameters() const override {
+    static const ParameterList none;
+    static const ParameterList corrected =
+        ParameterList{
+            Parameter::choice("mass", {"full", "lumped"}, "full: M_f = P^T M_fan P (4x4) | lumped: its row sums",
+                              "§5.2"),
+            Parameter::integer("max_iterations", 50, "virtual-point minimizer: iteration limit", "§5.2").at_least(1),
+            Parameter::real("gradient_tolerance", 1e-12, "virtual-point minimizer: stop when |grad E/h^4| is below",
+                            "§5.2")
+                .above(0.0)}
+            .append(normal_policy_parameters());
+    return corrected_ ? corrected : none;
   }
 
   // Refills ops.L and ops.M in their existing storage (gather_quad_rows keeps the allocation).
-  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
+  void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& config,
                      const QuadPattern* pattern, Operators& ops) const override {
-    params.check_parameters(parameters(), name());
+    const ParameterValues params = parameters().read(config, name());
     validate_mesh(mesh, name().c_str());
     reset_for_reuse(ops);
     const int F = mesh.num_faces();
@@ -296,17 +294,12 @@ class Vrm final : public Discretization {
     bool lumped_mass = false;
     VirtualPointOptions vopt;
     Eigen::MatrixX3d u, n;
-    std::string policy = kDefaultOrientation;
+    std::string policy;
     if (corrected_) {
-      const std::string mass = params.get_string("mass", "full");
-      if (mass != "full" && mass != "lumped")
-        throw InputError(name() + ": mass '" + mass + "': expected full or lumped");
-      lumped_mass = mass == "lumped";
-      vopt.max_iterations = params.get_int("max_iterations", 50);
-      vopt.gradient_tolerance = params.get_double("gradient_tolerance", 1e-12);
-      if (vopt.max_iterations < 1) throw InputError(name() + ": max_iterations must be >= 1");
-      if (!(vopt.gradient_tolerance > 0)) throw InputError(name() + ": gradient_tolerance must be > 0");
-      policy = params.get_string("orientation", kDefaultOrientation);
+      lumped_mass = params.choice("mass") == "lumped";
+      vopt.max_iterations = params.integer("max_iterations");
+      vopt.gradient_tolerance = params.real("gradient_tolerance");
+      policy = params.choice("orientation");
       u = prepare_normals(mesh, normals, NormalKind::Vertex, params, name(), ops).matrix();
       n = trivial_face_normals(mesh);  // docs/math.md §1.3/§1.5: outward trivial normal
     }

@@ -57,8 +57,7 @@ void StudyOptions::validate() const {
   for (const std::string& kv : method_params) {
     const std::string key = kv.substr(0, kv.find('='));
     bool known_key = false;
-    for (const std::string& m : methods)
-      for (const ParameterInfo& p : make_discretization(m)->parameters()) known_key = known_key || p.name == key;
+    for (const std::string& m : methods) known_key = known_key || make_discretization(m)->parameters().find(key);
     if (kv.find('=') == std::string::npos || !known_key)
       throw InputError("study: method parameter '" + kv + "': no method of the study has the key '" + key + "'");
   }
@@ -171,8 +170,7 @@ Config params_for(const Discretization& d, const std::vector<std::string>& key_v
   std::vector<std::string> mine;
   for (const std::string& kv : key_values) {
     const std::string key = kv.substr(0, kv.find('='));
-    for (const ParameterInfo& p : d.parameters())
-      if (p.name == key) mine.push_back(kv);
+    if (d.parameters().find(key)) mine.push_back(kv);
   }
   return Config::from_key_values(mine);
 }

@@ -46,7 +46,7 @@ RegisterCommand reg(45, "backends", [](CLI::App& app) {
     }
     print(linear, "linear solvers (config key \"solver\")");
     print(eigen, "eigen solvers");
-    std::cout << "Options are given as key=value arguments or a JSON file (--config), e.g.\n"
+    std::cout << "Options are given with --solver-option key=value or a JSON file (--solver-config), e.g.\n"
                  "  {\"solver\": \"cholmod\", \"ordering\": \"metis\", \"supernodal\": \"auto\"}\n";
   });
 });

@@ -11,16 +11,16 @@
 
 #include "command.hpp"
 #include "operator_options.hpp"
+#include "solver_options.hpp"
 
 namespace corrlap::cli {
 namespace {
 
 struct EigsArgs {
   OperatorOptions options;
+  SolverOptions solver;
   int k = 49;
-  std::string out, solver, solver_config_file;
-  std::vector<std::string> solver_options;
-  bool vectors = false;
+  std::string out;
 };
 
 void run(const EigsArgs& a) {
@@ -30,10 +30,7 @@ void run(const EigsArgs& a) {
   if (const BoundaryCondition boundary = boundary_condition(in.mesh); !boundary.closed())
     std::cerr << "eigs: " << boundary.note() << "\n";
   const Eigen::Index n = ops.L.rows();
-  Config config;
-  if (!a.solver_config_file.empty()) config.merge(Config::from_json_file(a.solver_config_file));
-  config.merge(Config::from_key_values(a.solver_options));
-  if (!a.solver.empty()) config.set("solver", a.solver);
+  Config config = a.solver.config();
   if (!config.has("solver")) config.set("solver", kDefaultLinearSolver);
   auto eig = make_eigen_solver(kDefaultEigenSolver, config);
   // The unknowns' positions order the factorization (LinearSolver::set_positions).
@@ -73,11 +70,9 @@ RegisterCommand reg(31, "eigs", [](CLI::App& app) {
   args->options.add_options(*cmd);
   cmd->add_option("-k", args->k, "number of eigenvalues (default 49)");
   cmd->add_option("--out", args->out, "write one value per line (ascending, %.17g) instead of printing");
-  cmd->add_option("--solver", args->solver,
-                  std::string("linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, eigen-llt, cg; default ") +
-                      kDefaultLinearSolver + "); small problems take the dense path when it is cheaper");
-  cmd->add_option("--solver-config", args->solver_config_file, "JSON file of eigen/linear solver options");
-  cmd->add_option("--solver-option", args->solver_options, "eigen/linear solver option key=value (repeatable)");
+  args->solver.add_options(*cmd, std::string("linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, "
+                                             "eigen-llt, cg; default ") +
+                                     kDefaultLinearSolver + "); small problems take the dense path when it is cheaper");
   cmd->callback([args] { run(*args); });
 });
 

@@ -20,6 +20,8 @@
 #include <sstream>
 
 #include "command.hpp"
+#include "method_options.hpp"
+#include "solver_options.hpp"
 #include "surface_source.hpp"
 #include "validators.hpp"
 
@@ -27,7 +29,9 @@ namespace corrlap::cli {
 namespace {
 
 struct ReconstructArgs {
-  std::string mesh_file, out, solver;
+  std::string mesh_file, out;
+  SolverOptions solver;
+  MethodOptions method_params;  // applied to each method of --methods that declares them
   int resolution = 64, subdivide = 3;
   std::string methods = "fem,polydec";
   std::optional<double> curvature_radius, h_clamp;
@@ -46,8 +50,7 @@ void run(const ReconstructArgs& a) {
   const std::vector<std::string> methods = split_list(a.methods);
   if (methods.empty()) throw InputError("reconstruct: no method (--methods)");
   for (const std::string& m : methods) (void)make_discretization(m);  // a bad name fails first
-  Config solver_config;
-  if (!a.solver.empty()) solver_config.set("solver", a.solver);
+  const Config solver_config = a.solver.config();
   (void)make_linear_solver(solver_config, kDefaultLinearSolver);
 
   nlohmann::json stages, m;
@@ -113,6 +116,7 @@ void run(const ReconstructArgs& a) {
   stages["curvature_s"] = seconds_since(t);
   for (const std::string& method : methods) {
     o.method = method;
+    o.method_params = a.method_params.config(method, /*only_declared=*/true);
     const RegularizedSurface r = regularize_surface(mesh, normals, o, &curvature);
     for (const auto& w : r.warnings) std::cerr << "warning: " << method << ": " << w << "\n";
     const double seconds = seconds_since(t);
@@ -161,8 +165,8 @@ RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
   cmd->add_option("--alpha0", args->alpha0, "attachment weight alpha = alpha0 / (h s)^2, h the coarse voxel")
       ->check(positive_number())
       ->capture_default_str();
-  cmd->add_option("--solver", args->solver,
-                  std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
+  args->method_params.add_options(*cmd, /*method_flag=*/false);
+  args->solver.add_options(*cmd, std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
   cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
                 "reconstruct from a coarse voxelization with non-manifold edges or vertices (refused by default)");
   cmd->add_flag("--no-render", args->no_render, "do not draw the pictures");

@@ -18,8 +18,10 @@
 #include <optional>
 
 #include "command.hpp"
+#include "method_options.hpp"
 #include "normal_options.hpp"
 #include "render_output.hpp"
+#include "solver_options.hpp"
 #include "surface_source.hpp"
 #include "validators.hpp"
 
@@ -28,17 +30,15 @@ namespace {
 
 struct RegularizeArgs {
   SurfaceSource source;
-  std::string method = "fem";
+  MethodOptions method;
   NormalOptions normals;
-  std::vector<std::string> params;
   std::optional<double> size, curvature_radius;
   double alpha0 = 10.0;
   double h_scale = 1.0;
   std::optional<double> h_clamp;
   std::string k1_edit, k2_edit;  // principal-curvature edits (paper §4.3), parsed by PrincipalCurvatureEdit
   double normal_attachment = 1.0;
-  std::string solver;
-  std::vector<std::string> options;
+  SolverOptions solver;
   std::string out;
   std::string output_units = "world";
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
@@ -111,8 +111,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   const bool direct = a.baseline == "alignment-direct";
   if (direct && a.clamp)
     throw InputError("--clamp applies to --baseline alignment (the descent), not alignment-direct");
-  Config solver_config = Config::from_key_values(a.options);
-  if (!a.solver.empty()) solver_config.set("solver", a.solver);
+  const Config solver_config = a.solver.config();
   auto solver = make_linear_solver(solver_config, kDefaultLinearSolver);
   const AlignmentResult r = direct ? alignment_minimizer(mesh, normals.face, *solver, params)
                                    : alignment_regularization(mesh, normals.face, params);
@@ -154,10 +153,13 @@ void run(const RegularizeArgs& a) {
     for (const CLI::Option* opt : a.laplacian_only)
       if (opt->count() > 0)
         throw InputError(opt->get_name() + " applies to the paper's regularization, not to --baseline " + a.baseline);
+  if (!a.baseline.empty() && a.method.any_given())
+    throw InputError("--method and its parameters apply to the paper's regularization, not to --baseline " +
+                     a.baseline);
   if (a.baseline.empty() && a.clamp_option->count() > 0) throw InputError("--clamp applies to --baseline alignment");
   RegularizationOptions o;
-  o.method = a.method;
-  o.method_params = Config::from_key_values(a.params);
+  o.method = a.method.method;
+  o.method_params = a.method.config();
   o.size = a.size;
   o.curvature_radius = a.curvature_radius;
   o.alpha0 = a.alpha0;
@@ -166,8 +168,7 @@ void run(const RegularizeArgs& a) {
   if (!a.k1_edit.empty()) o.k1_edit = PrincipalCurvatureEdit::parse(a.k1_edit);
   if (!a.k2_edit.empty()) o.k2_edit = PrincipalCurvatureEdit::parse(a.k2_edit);
   o.normal_attachment = a.normal_attachment;
-  o.solver = Config::from_key_values(a.options);
-  if (!a.solver.empty()) o.solver.set("solver", a.solver);
+  o.solver = a.solver.config();
   // The backend and the method first: a bad name fails before the (possibly long) normals.
   (void)make_linear_solver(o.solver, kDefaultLinearSolver);
   (void)make_discretization(o.method);
@@ -207,7 +208,7 @@ void run(const RegularizeArgs& a) {
   m["vertices"] = mesh.num_vertices();
   m["faces"] = mesh.num_faces();
   m["h"] = r.h;
-  m["method"] = a.method;
+  m["method"] = a.method.method;
   m["normals"] = a.normals.describe(surface);
   m["size"] = r.size;
   m["curvature_radius"] = r.curvature_radius;
@@ -230,7 +231,7 @@ void run(const RegularizeArgs& a) {
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
   add_geometry_metrics(m, surface, r.mesh, r.curvature_radius);
   write_metrics(a.out, m);
-  std::cerr << "regularize: " << a.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
+  std::cerr << "regularize: " << a.method.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
             << r.solver << ": max displacement " << m["displacement_max"].get<double>();
   if (surface.shape)
     std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
@@ -244,13 +245,10 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "regularize", "smooth a digital surface: (L M^-1 L + alpha M) p' = alpha M p - 2 L (H n) (docs/math.md §9.2)");
   args->source.add_options(*cmd);
-  std::string names;
-  for (const auto& n : discretization_registry().names()) names += (names.empty() ? "" : ", ") + n;
   auto& only = args->laplacian_only;
-  only.push_back(cmd->add_option("--method", args->method, "discretization: " + names)->capture_default_str());
+  args->method.add_options(*cmd, /*method_flag=*/true, "fem");
   args->normals.source = "ii";  // the paper's normals (alpha = 1/3), for shapes as for volumes
   args->normals.add_options(*cmd);
-  only.push_back(cmd->add_option("--param", args->params, "method parameter key=value (repeatable)"));
   only.push_back(
       cmd->add_option("--size", args->size,
                       "object size s: the paper's defaults are for unit-sized shapes and apply to the shape scaled by "
@@ -277,9 +275,9 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                                  "the object size")
                      ->check(positive_number())
                      ->capture_default_str());
-  cmd->add_option("--solver", args->solver,
-                  std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
-  cmd->add_option("options", args->options, "backend options key=value");
+  args->solver.add_options(
+      *cmd, std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")",
+      /*positional_alias=*/true);
   cmd->add_option("--baseline", args->baseline,
                   "alignment: the paper's baseline [17] (the reference's DigitalSurfaceRegularization, docs/math.md "
                   "§9.1) with the face normals of --normals (its test: --normals convolved); alignment-direct: the "

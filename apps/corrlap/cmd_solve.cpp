@@ -16,8 +16,11 @@
 #include <optional>
 
 #include "command.hpp"
+#include "deprecated.hpp"
+#include "method_options.hpp"
 #include "normal_options.hpp"
 #include "operator_options.hpp"
+#include "solver_options.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
@@ -25,14 +28,10 @@ namespace {
 
 struct SolveArgs {
   SurfaceSource source;
-  std::string method = "fem";
+  MethodOptions method;
   NormalOptions normals;
-  std::vector<std::string> params;
-  std::string orientation;
   std::string rhs = "x2";
-  std::string solver;
-  std::string config_file;
-  std::vector<std::string> options;
+  SolverOptions solver;
   std::string out;
   std::string system = "poisson";
   double dt_factor = 0.035;
@@ -45,30 +44,26 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 void run(const SolveArgs& a) {
   // Backend configuration first: a bad key fails before the (possibly long) assembly.
-  Config config;
-  if (!a.config_file.empty()) config = Config::from_json_file(a.config_file);
-  config.merge(Config::from_key_values(a.options));
-  if (!a.solver.empty()) config.set("solver", a.solver);
+  const Config config = a.solver.config();
   const std::string solver_name = config.get_string("solver", kDefaultLinearSolver);
   auto solver = make_linear_solver(config, kDefaultLinearSolver);
 
-  auto method = make_discretization(a.method);
-  Config params = Config::from_key_values(a.params);
-  if (!a.orientation.empty()) params.set("orientation", a.orientation);
+  auto method = make_discretization(a.method.method);
+  const Config params = a.method.config();
   const TestFunction* analytic = has_test_function(a.rhs) ? &test_function(a.rhs) : nullptr;
 
   const auto t0 = std::chrono::steady_clock::now();
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
   // The normals of `corrlap operators` for the same options (docs/math.md §1.5, resolve_normals).
-  const NormalFields normals = a.normals.resolve(surface, method->required_normals(), a.method);
+  const NormalFields normals = a.normals.resolve(surface, method->required_normals(), a.method.method);
   const std::string kind = method->required_normals() == NormalKind::None ? "none" : a.normals.describe(surface);
   const Operators ops = method->assemble(mesh, normals, params);
   for (const auto& w : ops.warnings) std::cerr << "warning: " << w << "\n";
   const BoundaryCondition boundary = boundary_condition(mesh);
   if (!boundary.closed()) std::cerr << "solve: " << boundary.note() << "\n";
   if (ops.domain != Operators::Domain::Vertices)
-    throw InputError("corrlap solve: method '" + a.method +
+    throw InputError("corrlap solve: method '" + a.method.method +
                      "' defines operators on faces; the Poisson problem is set on vertices");
   const double assemble_s = seconds_since(t0);
   const Eigen::Index n = ops.L.rows();
@@ -124,7 +119,7 @@ void run(const SolveArgs& a) {
     j["solver"] = solver_name;
     j["system"] = a.system;
     if (a.system == "heat") j["dt"] = dt;
-    j["method"] = a.method;
+    j["method"] = a.method.method;
     j["surface"] = a.source.describe();
     j["normals"] = kind;
     j["rhs"] = a.rhs;
@@ -149,7 +144,7 @@ void run(const SolveArgs& a) {
               << (a.system == "heat" ? "heat: (M - dt L) X = L u, dt = " + std::to_string(dt)
                                      : std::string("poisson: L g = M b, vertex 0 pinned"))
               << "\n"
-              << "method      " << a.method << " (normals " << kind << ")\n"
+              << "method      " << a.method.method << " (normals " << kind << ")\n"
               << "solver      " << solver_name << "\n"
               << "assemble    " << assemble_s << " s\n"
               << "analyze     " << report.analyze_seconds << " s"
@@ -179,12 +174,8 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
       "solve the Poisson problem L g = M b (docs/math.md §10.4) or the diffusion step (M - dt L) X = L u (§10.3) "
       "with any method and backend");
   args->source.add_options(*cmd);
-  cmd->add_option("--method", args->method, "discretization (registry name)")->capture_default_str();
+  args->method.add_options(*cmd, /*method_flag=*/true, "fem");
   args->normals.add_options(*cmd);
-  cmd->add_option("--param", args->params, "method parameter key=value (repeatable)");
-  cmd->add_option("--orientation", args->orientation,
-                  "normals with u.n <= 0: clamp (default: raise u.n to 0.05) | warn (use as given) | error")
-      ->check(CLI::IsMember({"error", "warn", "clamp"}));
   std::string names;
   for (const auto& t : test_functions()) names += (names.empty() ? "" : ", ") + t.name;
   cmd->add_option(
@@ -193,11 +184,10 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
              " (docs/math.md §10.2, sampled at the projected vertices; poisson: b = Laplacian of f, heat: u = f) or a "
              "file of one value per vertex (b or u)")
       ->capture_default_str();
-  cmd->add_option("--solver", args->solver,
-                  std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")");
-  cmd->add_option("--config", args->config_file,
-                  "JSON file of backend options, e.g. {\"solver\": \"cg\", \"tolerance\": 1e-10}");
-  cmd->add_option("options", args->options, "backend options key=value (override --config)");
+  args->solver.add_options(
+      *cmd, std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")",
+      /*positional_alias=*/true);
+  add_deprecated_alias(*cmd, "--config", "--solver-config", args->solver.config_file);
   cmd->add_option("--system", args->system,
                   "poisson: L g = M b with -L pinned (docs/math.md §10.4); heat: (M - dt L) X = L u, the paper's "
                   "diffusion matrix (§10.3), rhs = u")

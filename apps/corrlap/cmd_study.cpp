@@ -22,6 +22,7 @@
 #include <tuple>
 
 #include "command.hpp"
+#include "method_options.hpp"
 #include "study_output.hpp"
 #include "validators.hpp"
 
@@ -36,6 +37,7 @@ struct StudyArgs {
   std::string resolutions = "128,256,512";
   bool normals_given = false;
   StudyOptions options;
+  MethodOptions method_params;  // --param and the parameter flags, for the methods that declare them
   std::vector<double> bbox = {-2.0, 2.0};
   std::string out;
   bool resume = false, overwrite = false, no_plots = false;
@@ -105,6 +107,8 @@ std::string shell_quote(const std::string& s) {
 // `corrlap study regularization` (paper §4.1, Fig. 15): its own options and table
 // (studies/regularization_study.hpp).
 void run_regularization(const StudyArgs& a) {
+  if (a.method_params.any_given())
+    throw InputError("study regularization: method parameters (--param, parameter flags) are not supported");
   RegularizationStudyOptions o;
   o.shapes = split_list(a.shapes);
   o.methods = split_list(a.methods);
@@ -162,6 +166,7 @@ void run(StudyArgs& a) {
   if (a.kind == "regularization") return run_regularization(a);
   StudyOptions& o = a.options;
   o.kind = parse_study_kind(a.kind);
+  o.method_params = a.method_params.key_values();
   o.methods = split_list(a.methods);
   if (o.kind == StudyKind::Cotan) {
     // The cotan study's truth is the mesh: its normals unless told otherwise; h = 2 / resolution.
@@ -369,8 +374,7 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
          "linear solver backend, or auto (forward and cotan: Jacobi cg; backward and eigen: cholmod, cg for operators "
          "with > 64 nonzeros per row: the heat kernel)")
       ->capture_default_str();
-  cmd->add_option("--param", args->options.method_params,
-                  "method parameter key=value for the methods that have the key (repeatable)");
+  args->method_params.add_options(*cmd, /*method_flag=*/false);
   cmd->add_option("--reference-values", args->options.reference_values,
                   "cotan: interpolated (the paper: the mesh's vertex values, interpolated) | at-foot (the "
                   "function evaluated at the projected point; the Laplacian stays interpolated)")

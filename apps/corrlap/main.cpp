@@ -1,5 +1,6 @@
 // corrlap: command-line front end. Each subcommand lives in its own cmd_*.cpp file.
 #include <algorithm>
+#include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/memory_budget.hpp>
 #include <corrlap/core/threads.hpp>
@@ -7,6 +8,7 @@
 #include <new>
 
 #include "command.hpp"
+#include "deprecated.hpp"
 #include "validators.hpp"
 
 namespace corrlap::cli {
@@ -14,6 +16,41 @@ std::vector<Command>& commands() {
   static std::vector<Command> list;
   return list;
 }
+
+namespace {
+
+bool is_backend_option(const std::string& name) {
+  for (const std::string& n : linear_solver_registry().names())
+    for (const ParameterInfo& o : linear_solver_registry().create(n)->options())
+      if (o.name == name) return true;
+  for (const std::string& n : eigen_solver_registry().names())
+    for (const ParameterInfo& o : eigen_solver_registry().create(n)->options())
+      if (o.name == name) return true;
+  return false;
+}
+
+// How the user gives the library parameter `parameter` to the command that ran: its flag when the
+// command (or corrlap itself) has one, else a backend option through --solver-option.
+std::string cli_spelling(const CLI::App& app, const std::string& parameter) {
+  const std::string flag = flag_of(parameter);
+  if (app.get_option_no_throw(flag)) return flag;
+  for (const CLI::App* sub : app.get_subcommands()) {
+    if (sub->get_option_no_throw(flag)) return flag;
+    if (sub->get_option_no_throw("--solver-option") && is_backend_option(parameter)) return "--solver-option " + parameter + "=...";
+  }
+  return {};
+}
+
+// The library speaks in parameter names; the CLI adds its own spelling of the one at fault.
+void report(const CLI::App& app, const corrlap::Error& e) {
+  std::cerr << "corrlap: error: " << e.what();
+  if (const auto* input = dynamic_cast<const corrlap::InputError*>(&e); input && !input->parameter().empty())
+    if (const std::string spelling = cli_spelling(app, input->parameter()); !spelling.empty())
+      std::cerr << " (" << spelling << ")";
+  std::cerr << "\n";
+}
+
+}  // namespace
 }  // namespace corrlap::cli
 
 int main(int argc, char** argv) {
@@ -43,7 +80,7 @@ int main(int argc, char** argv) {
       else
         apply_memory_budget_from_environment();
     } catch (const corrlap::Error& e) {
-      std::cerr << "corrlap: error: " << e.what() << "\n";
+      cli::report(app, e);
       std::exit(1);
     }
   });
@@ -62,7 +99,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const corrlap::Error& e) {
-    std::cerr << "corrlap: error: " << e.what() << "\n";
+    cli::report(app, e);
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "corrlap: error: out of memory\n";

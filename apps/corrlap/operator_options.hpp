@@ -1,6 +1,6 @@
 #pragma once
-// Options shared by `corrlap operators` and `corrlap eigs`: surface source, method, normals and
-// method parameters; builds the operators and reports warnings on stderr.
+// Options shared by `corrlap operators` and `corrlap eigs`: surface source, method and its
+// parameters (method_options.hpp), normals; builds the operators and reports warnings on stderr.
 #include <CLI/CLI.hpp>
 #include <corrlap/core/discretization.hpp>
 #include <corrlap/core/error.hpp>
@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "method_options.hpp"
 #include "normal_options.hpp"
 #include "surface_source.hpp"
 
@@ -15,12 +16,9 @@ namespace corrlap::cli {
 
 struct OperatorOptions {
   SurfaceSource source;
-  std::string method;
+  MethodOptions method;
   NormalOptions normals;
-  std::optional<double> lambda, kappa, heat_t, cutoff;
-  std::string assembly, mass, orientation, config_file;
-  std::vector<std::string> params;  ///< key=value
-  int threads = 0;
+  int threads = 0;  ///< the deprecated per-command --threads (the global one is `corrlap --threads N`)
 
   void add_options(CLI::App& cmd);
 

@@ -10,12 +10,16 @@
 
 namespace corrlap {
 
-std::vector<ParameterInfo> normal_policy_parameters() {
-  return {{"orientation", "clamp",
-           "normals with u.n <= 0 on a surfel: clamp (raise u.n to clamp_min) | warn (compute as given: L, M may "
-           "break their contract) | error"},
-          {"clamp_min", "0.05", "with orientation=clamp: smallest allowed u.n before renormalization"},
-          {"normalize", "false", "rescale non-unit normals instead of rejecting them"}};
+const ParameterList& normal_policy_parameters() {
+  static const ParameterList list = {
+      Parameter::choice("orientation", {"clamp", "warn", "error"},
+                        "normals with u.n <= 0 on a surfel: clamp (raise u.n to clamp_min) | warn (compute as "
+                        "given: L, M may break their contract) | error"),
+      Parameter::real("clamp_min", 0.05, "with orientation=clamp: smallest allowed u.n before renormalization")
+          .above(0.0)
+          .below(1.0),
+      Parameter::boolean("normalize", false, "rescale non-unit normals instead of rejecting them")};
+  return list;
 }
 
 OrientationPolicy parse_orientation_policy(const std::string& text) {
@@ -44,7 +48,7 @@ Eigen::MatrixX3d trivial_face_normals(const SurfelMesh& mesh) {
 }
 
 PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                const Config& params, const std::string& method, Operators& ops,
+                                const ParameterValues& params, const std::string& method, Operators& ops,
                                 OrientationReport* out_report) {
   std::vector<std::string>& warnings = ops.warnings;
   if (kind == NormalKind::None) return PreparedNormals(Eigen::MatrixX3d());
@@ -56,7 +60,7 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
   const Eigen::Index expected = face ? mesh.num_faces() : mesh.num_vertices();
   // Copy only when the normals change (normalize here, clamp below).
   PreparedNormals result(given);
-  if (params.get_bool("normalize", false)) {
+  if (params.boolean("normalize")) {
     Eigen::MatrixX3d u = given;
     validate_normals(u, expected, what, true);
     result = PreparedNormals(std::move(u));
@@ -64,9 +68,8 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
     check_normals(given, expected, what);
   }
   const Eigen::MatrixX3d& u = result.matrix();
-  const OrientationPolicy policy = parse_orientation_policy(params.get_string("orientation", kDefaultOrientation));
-  const double clamp_min = params.get_double("clamp_min", 0.05);
-  if (!(clamp_min > 0.0 && clamp_min < 1.0)) throw InputError(method + ": clamp_min must be in (0, 1)");
+  const OrientationPolicy policy = parse_orientation_policy(params.choice("orientation"));
+  const double clamp_min = params.real("clamp_min");
 
   // Trivial normals on the fly from the surfels (no F x 3 matrix); from positions otherwise.
   const Eigen::MatrixX3d from_positions = mesh.has_surfels() ? Eigen::MatrixX3d() : mesh.face_normals_from_positions();

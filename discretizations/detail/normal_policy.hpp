@@ -4,18 +4,18 @@
 #include <Eigen/Core>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/discretization.hpp>
+#include <corrlap/core/parameters.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <string>
 #include <vector>
 
 namespace corrlap {
 
-/// Parameter keys shared by every corrected method (documented in parameters()).
-std::vector<ParameterInfo> normal_policy_parameters();
-/// The default policy: clamp. "warn" computes exactly what the reference computes, but one corner
-/// with u.n slightly below 0 can give L a positive eigenvalue of 1e5 (torus, h = 0.25, true
-/// normals: 16 of 42496 corners, docs/discretizations.md), which no user asking for an operator wants.
-inline constexpr const char* kDefaultOrientation = "clamp";
+/// The parameters shared by every corrected method: orientation, clamp_min, normalize. The default
+/// orientation policy is clamp: "warn" computes exactly what the reference computes, but one corner
+/// with u.n slightly below 0 can give L a large positive eigenvalue (docs/discretizations.md), which
+/// no user asking for an operator wants.
+const ParameterList& normal_policy_parameters();
 /// "error" | "warn" | "clamp"; InputError otherwise.
 OrientationPolicy parse_orientation_policy(const std::string& text);
 
@@ -53,7 +53,7 @@ class PreparedNormals {
 ///  - normals pointing inward on more than half of the elements are rejected under every policy
 ///    (flipped orientation: the mass matrix would be negative).
 PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& normals, NormalKind kind,
-                                const Config& params, const std::string& method, Operators& ops,
+                                const ParameterValues& params, const std::string& method, Operators& ops,
                                 OrientationReport* report = nullptr);
 
 /// Trivial (outward) unit normal of every face: from the surfel data when present, else from

@@ -154,8 +154,7 @@ def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vert
     return _core.curvature(V, F, face_normals, vertex_normals, float(radius), at, bool(constant))
 
 
-def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, lam=None, kappa=None, t=None,
-              cutoff=None, assembly=None, mass=None, orientation=None, h=None, positive=False, **params):
+def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, h=None, positive=False, **params):
     """Stiffness L and mass M of a discretization of the registry (docs/discretizations.md).
 
     V (#V, 3) positions, F (#F, 4) quads (a digital surface, e.g. from digitize).
@@ -164,25 +163,22 @@ def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, lam=No
     face_normals    (#F, 3) unit normals, for methods on face normals
     vertex_normals  (#V, 3), for methods on vertex normals; default: the normalized sum of the face
                     normals (as every CLI command makes them)
-    lam, kappa, t, cutoff, assembly, mass, orientation
-                    the method parameters of `corrlap operators` (--lambda, --kappa, ...); any other
-                    parameter of the method as a keyword (e.g. normalize=True, variant="primal");
-                    an unknown key raises ValueError listing the valid ones
     h               grid step of the surface (heat-kernel's default t and lattice); None: unknown,
                     the mean edge length is used, as for a mesh read from a file. Give the h of
                     digitize to get what `corrlap operators --shape ... --h` gives.
     positive        positive=True returns -L (positive semi-definite), the convention of
                     robust_laplacian and gpytoolbox
-
+    **params        the method's parameters as keywords, the same names as `corrlap operators`'
+                    flags (`lam` for lambda, a Python keyword); an unknown key or a value out of
+                    range raises ValueError naming it. The parameters of every method:
+{parameters}
     Returns L, M as scipy.sparse.csc_matrix, #V by #V (the heat-kernel's default variant: #F by #F,
     on surfel centres). L is negative semi-definite: L 1 = 0, u^T L u <= 0, M^-1 L approximates
     the Laplace-Beltrami operator, eigenvalues of L u = lambda M u are <= 0. M is symmetric
     positive definite for consistent normals. Bitwise what `corrlap operators` writes for the same
     surface, normals and parameters.
     """
-    named = {"lambda": lam, "kappa": kappa, "t": t, "cutoff": cutoff, "assembly": assembly, "mass": mass,
-             "orientation": orientation}
-    params.update({k: v for k, v in named.items() if v is not None})
+    params = {_PARAMETER_OF_KEYWORD.get(k, k): v for k, v in params.items()}
     Lp, Mp, _domain, warnings = _core.laplacian(V, F, str(method), face_normals, vertex_normals,
                                                 0.0 if h is None else float(h), params)
     _warn(warnings)
@@ -190,6 +186,38 @@ def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, lam=No
     if positive:
         L.data *= -1.0  # exact, in place: L's arrays are fresh
     return L, _csc(Mp)
+
+
+# The method parameters as keywords, derived from the C++ declarations (one place): a parameter
+# whose name is a Python keyword (lambda) is spelt with the short form below.
+_PARAMETER_OF_KEYWORD = {"lam": "lambda"}
+
+
+def _method_keyword(name):
+    import keyword
+    for k, v in _PARAMETER_OF_KEYWORD.items():
+        if v == name:
+            return k
+    return name if not keyword.iskeyword(name) else name + "_"
+
+
+def _document_laplacian():
+    import inspect
+    uses = {}  # keyword -> [(method, default, description)]
+    for method, (_normals, params) in _core.methods().items():
+        for name, default, description in params:
+            uses.setdefault(_method_keyword(name), []).append((method, default, description))
+    lines = []
+    for kw, items in uses.items():
+        methods = ", ".join(m for m, _d, _t in items)
+        lines.append(f"                    {kw}: {items[0][2]}")
+        defaults = sorted({f"{m}={d}" for m, d, _t in items})
+        lines.append(f"                        ({methods}; defaults: {', '.join(defaults)})")
+    laplacian.__doc__ = laplacian.__doc__.replace("{parameters}", "\n".join(lines))
+    signature = inspect.signature(laplacian)
+    fixed = [p for p in signature.parameters.values() if p.kind != inspect.Parameter.VAR_KEYWORD]
+    keywords = [inspect.Parameter(kw, inspect.Parameter.KEYWORD_ONLY, default=None) for kw in uses]
+    laplacian.__signature__ = signature.replace(parameters=fixed + keywords)
 
 
 def solve(A, b, solver="cholmod", positions=None, **options):
@@ -276,3 +304,6 @@ def backends():
     """({linear solver: [(option, default, description)]}, {eigen solver: [...]}): the names and
     keyword options of solve and eigs."""
     return _core.backends()
+
+
+_document_laplacian()

@@ -12,6 +12,11 @@
 
 using namespace corrlap;
 
+namespace {
+// The normal-policy parameters of `config`, read as a method reads them (config must outlive the call).
+ParameterValues policy(const Config& config) { return normal_policy_parameters().read(config, "test"); }
+}  // namespace
+
 TEST_CASE("prepare_normals borrows valid normals and copies only when it changes them") {
   const SurfelMesh mesh = test::sphere1_surface(0.25);
   NormalFields nf;
@@ -20,7 +25,7 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   const std::vector<std::string>& warnings = ops.warnings;
   OrientationReport report;
 
-  const PreparedNormals plain = prepare_normals(mesh, nf, NormalKind::Face, Config(), "test", ops, &report);
+  const PreparedNormals plain = prepare_normals(mesh, nf, NormalKind::Face, policy(Config()), "test", ops, &report);
   CHECK_FALSE(plain.is_copy());
   CHECK(&plain.matrix() == &nf.face);
   CHECK(report.inconsistent == 0);
@@ -30,11 +35,11 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   NormalFields scaled = nf;
   scaled.face *= 2.0;
   const PreparedNormals normalized =
-      prepare_normals(mesh, scaled, NormalKind::Face, Config::from_key_values({"normalize=true"}), "test", ops);
+      prepare_normals(mesh, scaled, NormalKind::Face, policy(Config::from_key_values({"normalize=true"})), "test", ops);
   CHECK(normalized.is_copy());
   CHECK((normalized.matrix() - nf.face).cwiseAbs().maxCoeff() < 1e-15);
   CHECK(scaled.face.row(0).norm() == doctest::Approx(2.0));
-  CHECK_THROWS_WITH_AS(prepare_normals(mesh, scaled, NormalKind::Face, Config(), "test", ops),
+  CHECK_THROWS_WITH_AS(prepare_normals(mesh, scaled, NormalKind::Face, policy(Config()), "test", ops),
                        doctest::Contains("length"), InputError);
 
   CHECK(ops.contract_risk.empty());
@@ -46,7 +51,7 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   tangent.face.row(0) = n0.unitOrthogonal().transpose();
   ops.warnings.clear();
   const PreparedNormals warned = prepare_normals(mesh, tangent, NormalKind::Face,
-                                                 Config::from_key_values({"orientation=warn"}), "test", ops, &report);
+                                                 policy(Config::from_key_values({"orientation=warn"})), "test", ops, &report);
   CHECK_FALSE(warned.is_copy());
   CHECK(report.inconsistent == 1);
   CHECK(report.worst_face == 0);
@@ -55,7 +60,7 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   CHECK(warnings[0].find("orientation=clamp") != std::string::npos);
   CHECK(ops.contract_risk.find("1 of") != std::string::npos);
   Operators clamped_ops;
-  const PreparedNormals clamped = prepare_normals(mesh, tangent, NormalKind::Face, Config(), "test", clamped_ops);
+  const PreparedNormals clamped = prepare_normals(mesh, tangent, NormalKind::Face, policy(Config()), "test", clamped_ops);
   CHECK(clamped_ops.contract_risk.empty());
   REQUIRE(clamped_ops.warnings.size() == 1);
   CHECK(clamped_ops.warnings[0].find("raised to u.n >= 0.05") != std::string::npos);

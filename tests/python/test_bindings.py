@@ -81,6 +81,39 @@ def test_laplacian_equals_cli_operators_bitwise(sphere, tmp_path, method, cli_ar
     assert_same_csc(M, scipy.io.mmread(str(tmp_path / "M.mtx")))
 
 
+def test_every_method_parameter_is_a_keyword_of_laplacian(sphere):
+    # The keywords are derived from the C++ declarations (corrlap.methods()): each one reaches the
+    # signature and the docstring, and its declared default gives the operators of no keyword.
+    import inspect
+    V, F, fn = sphere
+    signature = inspect.signature(corrlap.laplacian).parameters
+    for method, (_normals, params) in corrlap.methods().items():
+        plain_L, plain_M = corrlap.laplacian(V, F, method=method, face_normals=fn, h=H)
+        for name, default, _description in params:
+            keyword = "lam" if name == "lambda" else name
+            assert keyword in signature, (method, name)
+            assert signature[keyword].kind == inspect.Parameter.KEYWORD_ONLY
+            assert f"{keyword}:" in corrlap.laplacian.__doc__
+            if default in ("true", "false"):
+                value = default == "true"
+            else:
+                try:
+                    value = float(default)
+                except ValueError:
+                    value = default
+            if name == "t":
+                continue  # computed from h: "k h^alpha"
+            L, M = corrlap.laplacian(V, F, method=method, face_normals=fn, h=H, **{keyword: value})
+            assert_same_csc(L, plain_L)
+            assert_same_csc(M, plain_M)
+
+
+def test_out_of_range_parameter_names_it(sphere):
+    V, F, fn = sphere
+    with pytest.raises(ValueError, match=r"polydec: lambda = -1: expected >= 0"):
+        corrlap.laplacian(V, F, method="polydec", lam=-1.0)
+
+
 def test_laplacian_sign_convention_and_positive(sphere):
     V, F, fn = sphere
     L, M = corrlap.laplacian(V, F, method="fem", face_normals=fn)
