@@ -25,11 +25,17 @@ std::vector<MethodFlag> method_flags() {
   std::vector<MethodFlag> flags;
   for (const std::string& name : order) {
     const std::vector<Use>& u = uses[name];
-    // Methods that agree on allowed values and default share one clause of the help.
-    std::vector<std::pair<std::string, std::string>> clauses;  // (methods, "allowed, default d")
+    bool one_doc = true;
+    for (const Use& use : u) one_doc = one_doc && use.parameter.doc == u.front().parameter.doc;
+    // Methods that agree (on the doc when it differs, the allowed values and the default) share
+    // one clause of the help.
+    std::vector<std::pair<std::string, std::string>> clauses;  // (methods, clause)
     for (const Use& use : u) {
-      const std::string allowed = use.parameter.allowed_text();
-      const std::string clause = (allowed.empty() ? "" : allowed + ", ") + "default " + use.parameter.default_text();
+      const Parameter& p = use.parameter;
+      const std::string allowed = p.type == ParameterType::Boolean ? "" : p.allowed_text();
+      std::string clause = (one_doc ? "" : p.doc + "; ") + (allowed.empty() ? "" : allowed + ", ") + "default " +
+                           p.default_text();
+      if (!one_doc && !p.math.empty()) clause += " (docs/math.md " + p.math + ")";
       bool merged = false;
       for (auto& [methods, text] : clauses)
         if (text == clause) {
@@ -38,10 +44,20 @@ std::vector<MethodFlag> method_flags() {
         }
       if (!merged) clauses.emplace_back(use.method, clause);
     }
-    std::string help = u.front().parameter.doc;
-    if (!u.front().parameter.math.empty()) help += " (docs/math.md " + u.front().parameter.math + ")";
-    for (const auto& [methods, text] : clauses) help += "; " + methods + ": " + text;
-    flags.push_back({name, flag_of(name), help, u.front().parameter.type == ParameterType::Boolean});
+    const Parameter& first = u.front().parameter;
+    std::string help;
+    if (one_doc) help = first.doc + (first.math.empty() ? "" : " (docs/math.md " + first.math + ")");
+    for (const auto& [methods, text] : clauses) help += (help.empty() ? "" : "; ") + methods + ": " + text;
+    std::string type_name = "X";
+    if (first.type == ParameterType::Integer) type_name = "N";
+    if (first.type == ParameterType::Choice) {
+      type_name.clear();
+      for (const Use& use : u)
+        for (const std::string& c : use.parameter.choices)
+          if (("|" + type_name + "|").find("|" + c + "|") == std::string::npos)
+            type_name += (type_name.empty() ? "" : "|") + c;
+    }
+    flags.push_back({name, flag_of(name), help, type_name, first.type == ParameterType::Boolean});
   }
   return flags;
 }
@@ -61,7 +77,7 @@ void MethodOptions::add_options(CLI::App& cmd, bool method_flag, const std::stri
     if (f.boolean)
       cmd.add_flag(f.flag, flag_booleans[f.parameter], f.help)->group("method parameters");
     else
-      cmd.add_option(f.flag, flag_values[f.parameter], f.help)->group("method parameters");
+      cmd.add_option(f.flag, flag_values[f.parameter], f.help)->type_name(f.type_name)->group("method parameters");
   }
   cmd.add_option("--param", params, "method parameter key=value (repeatable; the flags above win)")
       ->group("method parameters");

@@ -19,6 +19,7 @@ struct MethodFlag {
   std::string parameter;  ///< library name ("clamp_min")
   std::string flag;       ///< CLI spelling ("--clamp-min")
   std::string help;
+  std::string type_name;  ///< what --help shows for the value: X (real), N (integer), a|b (choices)
   bool boolean = false;  ///< a flag without a value (sets true)
 };
 std::vector<MethodFlag> method_flags();
