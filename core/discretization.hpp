@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "config.hpp"
-#include "parameters.hpp"
 #include "normal_fields.hpp"
+#include "parameters.hpp"
 #include "surfel_mesh.hpp"
 
 namespace corrlap {

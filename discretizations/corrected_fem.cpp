@@ -84,9 +84,9 @@ class CorrectedFem final : public Discretization {
   NormalKind required_normals() const override { return NormalKind::Face; }
   const ParameterList& parameters() const override {
     static const ParameterList list =
-        ParameterList{Parameter::choice("mass", {"full", "lumped"}, "mass matrix: full (consistent) | lumped (diagonal)",
-                                        "§4.4"),
-                      extras_parameter()}
+        ParameterList{
+            Parameter::choice("mass", {"full", "lumped"}, "mass matrix: full (consistent) | lumped (diagonal)", "§4.4"),
+            extras_parameter()}
             .append(normal_policy_parameters());
     return list;
   }

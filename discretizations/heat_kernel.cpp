@@ -294,8 +294,8 @@ class HeatKernel final : public Discretization {
                               "euclidean | tangent: distances in the plane of the mean normal (corrlap extension; "
                               "removes the O(h^2/t) error of off-surface surfel centres; dual variant only)",
                               "§6"),
-            Parameter::choice("variant", {"dual", "primal"}, "dual: surfel values (domain Faces) | primal: vertex values",
-                              "§6"),
+            Parameter::choice("variant", {"dual", "primal"},
+                              "dual: surfel values (domain Faces) | primal: vertex values", "§6"),
             Parameter::choice("mass", {"measure", "identity"},
                               "measure: L = diag(mu) A symmetric, M = diag(mu) | identity: L = A pointwise, M = I",
                               "§6")}

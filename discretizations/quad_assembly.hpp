@@ -5,8 +5,8 @@
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <corrlap/core/config.hpp>
-#include <corrlap/core/parameters.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/parameters.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/discretizations/assembly/parallel_assembly.hpp>
 #include <string>

@@ -1,13 +1,13 @@
 #include "registry.hpp"
 
+#include <sstream>
+
 #include "corrected_fem.hpp"
 #include "cotan.hpp"
 #include "heat_kernel.hpp"
 #include "interpolated_corrected.hpp"
 #include "polydec.hpp"
 #include "virtual_refinement.hpp"
-
-#include <sstream>
 
 namespace corrlap {
 

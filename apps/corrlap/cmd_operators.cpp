@@ -32,8 +32,9 @@ void run(const OperatorsArgs& a) {
   extra(ops.flat, "flat.mtx");
   extra(ops.M1, "M1.mtx");
   extra(ops.M_lumped, "M_lumped.mtx");
-  std::cerr << a.options.method.method << ": " << ops.L.rows() << " x " << ops.L.cols() << ", nnz(L) = " << ops.L.nonZeros()
-            << ", nnz(M) = " << ops.M.nonZeros() << " -> " << a.out << " (" << written << ")\n";
+  std::cerr << a.options.method.method << ": " << ops.L.rows() << " x " << ops.L.cols()
+            << ", nnz(L) = " << ops.L.nonZeros() << ", nnz(M) = " << ops.M.nonZeros() << " -> " << a.out << " ("
+            << written << ")\n";
 }
 
 RegisterCommand reg(30, "operators", [](CLI::App& app) {

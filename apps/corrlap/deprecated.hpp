@@ -9,8 +9,7 @@ namespace corrlap::cli {
 
 /// `old_flag` (e.g. "--estimator") writes into `target`, like `new_flag` (e.g. "--normals") does.
 template <class T>
-CLI::Option* add_deprecated_alias(CLI::App& cmd, const std::string& old_flag, const std::string& new_flag,
-                                  T& target) {
+CLI::Option* add_deprecated_alias(CLI::App& cmd, const std::string& old_flag, const std::string& new_flag, T& target) {
   CLI::Option* o = cmd.add_option(old_flag, target)->group("");  // group "": not listed in --help
   o->each([old_flag, new_flag](const std::string&) {
     std::cerr << "corrlap: note: " << old_flag << " is deprecated; use " << new_flag << "\n";

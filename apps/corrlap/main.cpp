@@ -36,7 +36,8 @@ std::string cli_spelling(const CLI::App& app, const std::string& parameter) {
   if (app.get_option_no_throw(flag)) return flag;
   for (const CLI::App* sub : app.get_subcommands()) {
     if (sub->get_option_no_throw(flag)) return flag;
-    if (sub->get_option_no_throw("--solver-option") && is_backend_option(parameter)) return "--solver-option " + parameter + "=...";
+    if (sub->get_option_no_throw("--solver-option") && is_backend_option(parameter))
+      return "--solver-option " + parameter + "=...";
   }
   return {};
 }

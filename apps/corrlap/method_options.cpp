@@ -33,8 +33,8 @@ std::vector<MethodFlag> method_flags() {
     for (const Use& use : u) {
       const Parameter& p = use.parameter;
       const std::string allowed = p.type == ParameterType::Boolean ? "" : p.allowed_text();
-      std::string clause = (one_doc ? "" : p.doc + "; ") + (allowed.empty() ? "" : allowed + ", ") + "default " +
-                           p.default_text();
+      std::string clause =
+          (one_doc ? "" : p.doc + "; ") + (allowed.empty() ? "" : allowed + ", ") + "default " + p.default_text();
       if (!one_doc && !p.math.empty()) clause += " (docs/math.md " + p.math + ")";
       bool merged = false;
       for (auto& [methods, text] : clauses)

@@ -20,7 +20,7 @@ struct MethodFlag {
   std::string flag;       ///< CLI spelling ("--clamp-min")
   std::string help;
   std::string type_name;  ///< what --help shows for the value: X (real), N (integer), a|b (choices)
-  bool boolean = false;  ///< a flag without a value (sets true)
+  bool boolean = false;   ///< a flag without a value (sets true)
 };
 std::vector<MethodFlag> method_flags();
 

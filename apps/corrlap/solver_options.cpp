@@ -14,8 +14,8 @@ void SolverOptions::add_options(CLI::App& cmd, const std::string& solver_help, b
       ->group("solver");
   if (positional_alias)
     cmd.add_option("options", positional)->group("")->each([](const std::string& item) {
-      std::cerr << "corrlap: note: the positional backend option '" << item
-                << "' is deprecated; use --solver-option " << item << "\n";
+      std::cerr << "corrlap: note: the positional backend option '" << item << "' is deprecated; use --solver-option "
+                << item << "\n";
     });
 }
 

@@ -11,8 +11,8 @@ namespace corrlap::cli {
 
 struct SolverOptions {
   std::string solver;
-  std::vector<std::string> options;  ///< --solver-option key=value
-  std::string config_file;           ///< --solver-config
+  std::vector<std::string> options;     ///< --solver-option key=value
+  std::string config_file;              ///< --solver-config
   std::vector<std::string> positional;  ///< the deprecated positional key=value of solve and regularize
 
   /// `solver_help` describes --solver for this command. `positional_alias`: also accept the old

@@ -60,7 +60,8 @@ void bind_operators(py::module_& m) {
         for (const auto& name : discretization_registry().names()) {
           const auto disc = make_discretization(name);
           py::list params;
-          for (const auto& p : disc->parameters().info()) params.append(py::make_tuple(p.name, p.default_value, p.description));
+          for (const auto& p : disc->parameters().info())
+            params.append(py::make_tuple(p.name, p.default_value, p.description));
           out[py::str(name)] = py::make_tuple(normal_kind_name(disc->required_normals()), params);
         }
         return out;

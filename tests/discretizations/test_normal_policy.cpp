@@ -50,8 +50,8 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   const Eigen::Vector3d n0 = trivial_face_normals(mesh).row(0).transpose();
   tangent.face.row(0) = n0.unitOrthogonal().transpose();
   ops.warnings.clear();
-  const PreparedNormals warned = prepare_normals(mesh, tangent, NormalKind::Face,
-                                                 policy(Config::from_key_values({"orientation=warn"})), "test", ops, &report);
+  const PreparedNormals warned = prepare_normals(
+      mesh, tangent, NormalKind::Face, policy(Config::from_key_values({"orientation=warn"})), "test", ops, &report);
   CHECK_FALSE(warned.is_copy());
   CHECK(report.inconsistent == 1);
   CHECK(report.worst_face == 0);
@@ -60,7 +60,8 @@ TEST_CASE("prepare_normals borrows valid normals and copies only when it changes
   CHECK(warnings[0].find("orientation=clamp") != std::string::npos);
   CHECK(ops.contract_risk.find("1 of") != std::string::npos);
   Operators clamped_ops;
-  const PreparedNormals clamped = prepare_normals(mesh, tangent, NormalKind::Face, policy(Config()), "test", clamped_ops);
+  const PreparedNormals clamped =
+      prepare_normals(mesh, tangent, NormalKind::Face, policy(Config()), "test", clamped_ops);
   CHECK(clamped_ops.contract_risk.empty());
   REQUIRE(clamped_ops.warnings.size() == 1);
   CHECK(clamped_ops.warnings[0].find("raised to u.n >= 0.05") != std::string::npos);
