@@ -114,7 +114,7 @@ TEST_CASE("regularize: bad options and surfaces are named") {
   CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --baseline alignment --method interpolated --out " +
                     dir,
                 nullptr, &err) == 1);
-  CHECK(err.find("--method applies to the paper's regularization") != std::string::npos);
+  CHECK(err.find("--method and its parameters apply to the paper's regularization") != std::string::npos);
   CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --clamp --out " + dir, nullptr, &err) == 1);
   CHECK(err.find("--clamp applies to --baseline alignment") != std::string::npos);
   // The empty volume.
