@@ -157,7 +157,8 @@ LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messag
   if (const auto* shape = std::get_if<ImplicitShapeInput>(&input))
     s.shape = make_implicit_shape(shape->shape, shape->center);
   s.grid = load_voxels(input, messages);
-  if (s.grid->count() == 0) throw InputError("the volume is empty: no voxel is inside (" + s.description + ")");
+  if (s.grid->count() == 0)
+    throw InputError("the volume is empty: no voxel is inside, so the surface has no surfel (" + s.description + ")");
   // A volume's box is its voxels [0, size - 1] - shift, padded by one voxel (read_volume_as_voxels).
   Eigen::Vector3i shift = Eigen::Vector3i::Zero();
   if (std::holds_alternative<VolumeFileInput>(input) || std::holds_alternative<VolumeArrayInput>(input))

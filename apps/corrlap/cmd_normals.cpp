@@ -40,8 +40,7 @@ RegisterCommand reg(30, "normals", [](CLI::App& app) {
   args->normals.source = "ii";  // what this command is for: the estimate of the voxels
   args->normals.add_options(*cmd);
   // The spellings of this command before --normals/--ii-radius/--ii-alpha were shared by all.
-  add_deprecated_alias(*cmd, "--estimator", "--normals", args->normals.source)
-      ->check(CLI::IsMember({"auto", "true", "ii", "trivial", "convolved"}));
+  add_deprecated_alias(*cmd, "--estimator", "--normals", args->normals.source);
   add_deprecated_alias(*cmd, "--radius", "--ii-radius", args->normals.ii.k)->check(positive_number());
   add_deprecated_alias(*cmd, "--alpha", "--ii-alpha", args->normals.ii.alpha);
   cmd->add_option("--at", args->at, "faces (default) or vertices (normalized sum of incident face normals)")

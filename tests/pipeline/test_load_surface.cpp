@@ -59,7 +59,7 @@ TEST_CASE("load_surface of an implicit shape: the digitization's surface, its sh
   CHECK_THROWS_WITH_AS(load_surface(in), doctest::Contains("no voxel is inside"), InputError);
 }
 
-TEST_CASE("load_surface of a volume array equals the volume file; the frame maps world to file voxels") {
+TEST_CASE("load_surface of a volume array equals the volume file, and its frame maps world to file voxels") {
   const std::vector<double> values = edge_touching_blocks();
   Volume volume;
   volume.size = {6, 6, 4};
@@ -124,7 +124,7 @@ TEST_CASE("load_surface of a mesh to voxelize reports its warnings and note thro
   CHECK_THROWS_AS(load_voxels(quad), InputError);
 }
 
-TEST_CASE("surface checks: one policy for open and non-manifold surfaces; boundary from MeshInfo") {
+TEST_CASE("surface checks: one policy for open and non-manifold surfaces, the boundary from MeshInfo") {
   const std::vector<double> values = edge_touching_blocks();
   VolumeArrayInput array;
   array.size = {6, 6, 4};

@@ -336,16 +336,18 @@ def test_regularize_equals_cli_regularize(sphere, tmp_path):
 
 
 def test_regularize_refuses_a_non_manifold_surface_unless_allowed():
-    # Two 2^3 blocks that touch along one edge only: `corrlap regularize` refuses it too.
-    volume = np.zeros((6, 6, 4), bool)
-    volume[0:2, 0:2, 1:3] = True
-    volume[2:4, 2:4, 1:3] = True
+    # Two one-voxel-thin 2 x 2 blocks that touch along one edge only: `corrlap regularize` refuses it too.
+    volume = np.zeros((6, 6, 3), bool)
+    volume[0:2, 0:2, 1] = True
+    volume[2:4, 2:4, 1] = True
     V, F = corrlap.digitize_volume(volume)
-    fn = corrlap.ii_normals(volume, V, F)
-    with pytest.raises(ValueError, match=r"not manifold \(2 non-manifold edges.*allow_nonmanifold"):
+    # Surfel normals (quads counter-clockwise seen from outside).
+    fn = np.cross(V[F[:, 2]] - V[F[:, 0]], V[F[:, 3]] - V[F[:, 1]])
+    fn /= np.linalg.norm(fn, axis=1)[:, None]
+    with pytest.raises(ValueError, match=r"not manifold \(1 non-manifold edges.*allow_nonmanifold"):
         corrlap.regularize(V, F, face_normals=fn)
     P = corrlap.regularize(V, F, face_normals=fn, allow_nonmanifold=True)
-    assert P.shape == V.shape and np.isfinite(P).all()
+    assert P.shape == V.shape and np.isfinite(P).all() and not np.array_equal(P, V)
     with pytest.raises(ValueError, match="the surface is open"):
         corrlap.regularize(V, F[: len(F) // 2], face_normals=fn[: len(F) // 2], allow_nonmanifold=True)
 
