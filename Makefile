@@ -36,7 +36,7 @@ test-stress: build
 test-static: deps
 	cmake -S . -B $(BUILD)-static -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DBUILD_SHARED_LIBS=OFF \
 	  -DCORRLAP_BUILD_APPS=OFF -DCORRLAP_BUILD_BENCH=OFF -DCORRLAP_BUILD_PYTHON=OFF $(CMAKE_FLAGS)
-	cmake --build $(BUILD)-static -j $(JOBS) --target corrlap_core corrlap_surface corrlap_io corrlap_estimators \
+	cmake --build $(BUILD)-static -j $(JOBS) --target corrlap_core corrlap_surface corrlap_io corrlap_estimators corrlap_pipeline \
 	  corrlap_discretizations corrlap_backends corrlap_problems corrlap_regularization corrlap_render corrlap_studies
 	cd $(BUILD)-static && ctest -R install_and_consume --no-tests=error --output-on-failure
 

@@ -42,6 +42,10 @@
 #include <corrlap/estimators/normal_estimation.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 
+// The pipeline's first steps, one way for every front end: a surface input loaded, checked, its normals.
+#include <corrlap/pipeline/load_surface.hpp>
+#include <corrlap/pipeline/surface_checks.hpp>
+
 // Operators: one free function per method, the registry, and the triangle-mesh cotan / heat time.
 #include <corrlap/discretizations/cotan.hpp>
 #include <corrlap/discretizations/heat_kernel.hpp>

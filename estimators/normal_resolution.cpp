@@ -1,36 +1,11 @@
 #include "normal_resolution.hpp"
 
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
-#include <corrlap/estimators/normal_estimation.hpp>
 #include <corrlap/io/text_io.hpp>
 
 namespace corrlap {
-
-NormalSource parse_normal_source(const std::string& name) {
-  if (name == "auto") return NormalSource::Auto;
-  if (name == "true") return NormalSource::True;
-  if (name == "ii") return NormalSource::II;
-  if (name == "trivial") return NormalSource::Trivial;
-  if (name == "convolved") return NormalSource::ConvolvedTrivial;
-  throw InputError("unknown normal source '" + name + "' (valid: auto, true, ii, trivial, convolved)");
-}
-
-const char* to_string(NormalSource source) {
-  switch (source) {
-    case NormalSource::Auto:
-      return "auto";
-    case NormalSource::True:
-      return "true";
-    case NormalSource::II:
-      return "ii";
-    case NormalSource::Trivial:
-      return "trivial";
-    case NormalSource::ConvolvedTrivial:
-      return "convolved";
-  }
-  return "?";
-}
 
 NormalSource effective_normal_source(NormalSource source, const ImplicitShape* shape, const VoxelGrid* grid) {
   if (source != NormalSource::Auto) return source;
@@ -40,46 +15,62 @@ NormalSource effective_normal_source(NormalSource source, const ImplicitShape* s
 }
 
 namespace {
-Eigen::MatrixX3d read_normals_file(const std::string& path, Eigen::Index expected, const char* per) {
-  Eigen::MatrixX3d n = read_normals(path);
-  if (n.rows() != expected)
-    throw InputError(std::string(per) + " normals file '" + path + "': " + std::to_string(n.rows()) +
-                     " rows, expected " + std::to_string(expected) + " (one per " + per + ")");
+
+// A file or a matrix (not both) with one row per face or vertex; 0 rows when neither is given.
+Eigen::MatrixX3d given_normals(const std::string& path, const Eigen::MatrixX3d& matrix, Eigen::Index expected,
+                               const std::string& per) {
+  const std::string parameter = per + "_normals";
+  if (!path.empty() && matrix.rows() > 0)
+    throw InputError(parameter + ": given both as a file ('" + path + "') and as a matrix; give one", parameter);
+  Eigen::MatrixX3d n = path.empty() ? matrix : read_normals(path);
+  const std::string name = path.empty() ? parameter : per + " normals file '" + path + "'";
+  if ((!path.empty() || matrix.rows() > 0) && n.rows() != expected)
+    throw InputError(name + ": " + std::to_string(n.rows()) + " rows, expected " + std::to_string(expected) +
+                         " (one per " + per + ")",
+                     parameter);
   return n;
 }
+
 }  // namespace
 
 NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const NormalRequest& request,
                              const ImplicitShape* shape, const VoxelGrid* grid, const std::string& what) {
   NormalFields n;
   if (need == NormalKind::None) return n;
-  if (!request.face_normals_file.empty())
-    n.face = read_normals_file(request.face_normals_file, mesh.num_faces(), "face");
-  if (!request.vertex_normals_file.empty())
-    n.vertex = read_normals_file(request.vertex_normals_file, mesh.num_vertices(), "vertex");
+  n.face = given_normals(request.face_normals_file, request.face_normals, mesh.num_faces(), "face");
+  n.vertex = given_normals(request.vertex_normals_file, request.vertex_normals, mesh.num_vertices(), "vertex");
   const bool need_vertex = need == NormalKind::Vertex;
   const bool have_all = need_vertex ? n.has_vertex() : n.has_face();
-  const bool have_files = n.has_face() || n.has_vertex();
-  // Auto with a file: the file decides. Without one, true for shapes, II for voxels.
-  const NormalSource source = request.source == NormalSource::Auto && have_files
-                                  ? NormalSource::Auto
+  const bool have_given = n.has_face() || n.has_vertex();
+  // Auto with given normals: they decide. Without them, true for shapes, II for voxels.
+  const NormalSource source = request.source == NormalSource::Auto && have_given
+                                  ? NormalSource::Given
                                   : effective_normal_source(request.source, shape, grid);
-  if (!have_all && !n.has_face() && source != NormalSource::Auto) {
-    NormalEstimator estimator = NormalEstimator::Trivial;
-    if (source == NormalSource::True) estimator = NormalEstimator::True;
-    if (source == NormalSource::II) estimator = NormalEstimator::II;
-    if (source == NormalSource::ConvolvedTrivial) estimator = NormalEstimator::ConvolvedTrivial;
-    n.face = estimate_face_normals(estimator, mesh, grid, shape, request.ii, request.progress);
+  const bool estimates = source != NormalSource::Auto && source != NormalSource::Given;
+  if (!have_all && !n.has_face() && estimates) {
+    if (source == NormalSource::II && !(request.ii.k > 0.0 && std::isfinite(request.ii.k)))
+      throw InputError(
+          "II normals: the radius factor k = " + std::to_string(request.ii.k) + " must be positive and finite",
+          "ii_radius");
+    if (source == NormalSource::II && !std::isfinite(request.ii.alpha))
+      throw InputError("II normals: the radius exponent alpha must be finite", "ii_alpha");
+    n.face = estimate_face_normals(source, mesh, grid, shape, request.ii, request.progress);
+  }
+  if (need_vertex && !n.has_vertex() && source == NormalSource::Exact) {
+    if (!shape) throw InputError("exact normals need an implicit shape", "normals");
+    n.vertex = exact_vertex_normals(*shape, mesh);
   }
   // docs/math.md §1.5: vertex normals = normalized sum of the incident face normals (one definition).
   if (need_vertex && !n.has_vertex() && n.has_face())
     n.vertex = vertex_normals_from_face_normals(n.face, mesh.faces, mesh.num_vertices());
   if (need == NormalKind::Face && !n.has_face())
-    throw InputError(what + " needs face normals: give --face-normals FILE or --normals true|ii|trivial" +
-                     (n.has_vertex() ? " (vertex normals do not give face normals)" : ""));
+    throw InputError(what + " needs face normals: give face_normals or a normals source (true, ii, trivial)" +
+                         (n.has_vertex() ? " (vertex normals do not give face normals)" : ""),
+                     "face_normals");
   if (need_vertex && !n.has_vertex())
     throw InputError(
-        what + " needs vertex normals: give --vertex-normals FILE, --face-normals FILE or --normals true|ii|trivial");
+        what + " needs vertex normals: give vertex_normals, face_normals or a normals source (true, ii, trivial)",
+        "vertex_normals");
   return n;
 }
 

@@ -4,6 +4,8 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/pipeline/load_surface.hpp>
+#include <corrlap/pipeline/surface_checks.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
@@ -60,8 +62,8 @@ void RegularizationStudyOptions::validate() const {
       throw InputError("study regularization: resolution " + std::to_string(n) + " is outside [8, 2048]");
   for (double x : h)
     if (!(x > 0.0) || !std::isfinite(x)) throw InputError("study regularization: h must be positive");
-  if (normals != "ii" && normals != "true")
-    throw InputError("study regularization: normals '" + normals + "': expected ii or true");
+  if (normals != to_string(NormalSource::II) && normals != to_string(NormalSource::True))
+    throw InputError("study regularization: normals '" + normals + "': expected ii or true", "normals");
   if (!(alpha0 > 0.0)) throw InputError("study regularization: alpha0 must be positive");
   if (!(max_aabb > min_aabb)) throw InputError("study regularization: the box must have max > min");
 }
@@ -82,13 +84,22 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       for (int n : o.resolutions) steps.emplace_back(side / n, n);
     }
     for (const auto& [h, resolution] : steps) {
-      const VoxelGrid grid = digitize(shape, box(o, h));
-      if (grid.count() == 0)
-        throw InputError("study regularization: shape '" + name + "' has no voxel at h = " + std::to_string(h));
-      const SurfelMesh mesh = extract_surface(grid);
+      ImplicitShapeInput input;
+      input.shape = name;
+      input.digitization = box(o, h);
+      LoadedSurface surface;
+      try {
+        surface = load_surface(input);
+        check_regularizable(surface.mesh, o.allow_nonmanifold);
+      } catch (const InputError& e) {
+        std::ostringstream os;
+        os << "study regularization: " << name << " at h = " << h << ": " << e.what();
+        throw InputError(os.str(), e.parameter());
+      }
+      const SurfelMesh& mesh = surface.mesh;
       NormalRequest request;
-      request.source = o.normals == "ii" ? NormalSource::II : NormalSource::True;
-      const NormalFields normals = resolve_normals(mesh, NormalKind::Vertex, request, &shape, &grid, "study");
+      request.source = parse_normal_source(o.normals);
+      const NormalFields normals = resolve_normals(surface, NormalKind::Vertex, request, "study");
       // The quality of both surfaces with the curvature radius of the regularization (0.1 size).
       const double radius = 0.1 * regularization_size(mesh);
       const SurfaceQuality before = measure_against_shape(mesh, shape, radius);

@@ -17,11 +17,16 @@ struct RegularizationStudyOptions {
   /// Vertex discretizations of the registry (docs/math.md §9.2), or "alignment": the paper's
   /// baseline [17] (docs/math.md §9.1, the reference's descent with its defaults).
   std::vector<std::string> methods = {"fem", "polydec", "alignment"};
-  std::string normals = "ii";  ///< "ii" (the paper's, alpha = 1/3) or "true"; the baseline gets the face normals
-  double alpha0 = 10.0;        ///< as RegularizationOptions
+  /// A normal source (parse_normal_source): "ii" (the paper's, alpha = 1/3) or "true"; the baseline
+  /// gets the face normals
+  std::string normals = "ii";
+  double alpha0 = 10.0;                      ///< as RegularizationOptions
   double min_aabb = -10.0, max_aabb = 10.0;  ///< digitization box of every shape
   int offset = 5;
   std::string linear_solver = "cholmod";
+  /// Go on with surfaces that are not manifold (check_regularizable): refused by default, as by
+  /// `corrlap regularize` and Python's regularize.
+  bool allow_nonmanifold = false;
 
   /// InputError naming the first invalid option (unknown shape or method, no resolution...).
   void validate() const;

@@ -73,8 +73,7 @@ void StudyOptions::validate() const {
       throw InputError("study cotan: reference values '" + reference_values + "': expected interpolated or at-foot");
     if (reference_laplacian != "plain" && reference_laplacian != "diffused")
       throw InputError("study cotan: reference Laplacian '" + reference_laplacian + "': expected plain or diffused");
-    if (normals != "mesh" && normals != "ii")
-      throw InputError("study cotan: normals '" + normals + "': expected mesh (the reference's) or ii");
+    (void)study_normal_source(*this);
   } else {
     if (h.empty()) throw InputError("study: the list of grid steps is empty (--h 0.1,0.05 or A:B:N)");
     for (double step : h)
@@ -83,9 +82,7 @@ void StudyOptions::validate() const {
         os << "study: grid step h = " << step << " must be positive and finite";
         throw InputError(os.str());
       }
-    if (normals != "true" && normals != "ii" && normals != "exact")
-      throw InputError("study: normals '" + normals + "': expected true, ii or exact" +
-                       (normals == "mesh" ? " (mesh normals belong to the cotan study)" : ""));
+    (void)study_normal_source(*this);
   }
   if (kind != StudyKind::Eigen) {
     if (functions.empty()) throw InputError("study: no test function given (--functions x2,expx,p6)");
@@ -100,6 +97,45 @@ void StudyOptions::validate() const {
   if (!(min_aabb < max_aabb)) throw InputError("study: the box needs MIN < MAX");
   if (offset < 0) throw InputError("study: --offset must be >= 0");
   if (!(ii_k > 0) || !std::isfinite(ii_alpha)) throw InputError("study: II radius parameters must be positive");
+}
+
+NormalSource study_normal_source(const StudyOptions& o) {
+  std::optional<NormalSource> source;
+  if (o.normals == "mesh") {
+    source = NormalSource::Given;  // the reference mesh's normals, handed to resolve_normals
+  } else {
+    try {
+      source = parse_normal_source(o.normals);
+    } catch (const InputError&) {
+    }
+  }
+  if (o.kind == StudyKind::Cotan) {
+    if (source != NormalSource::Given && source != NormalSource::II)
+      throw InputError("study cotan: normals '" + o.normals + "': expected mesh (the reference's) or ii", "normals");
+  } else if (source != NormalSource::True && source != NormalSource::II && source != NormalSource::Exact) {
+    throw InputError("study: normals '" + o.normals + "': expected true, ii or exact" +
+                         (o.normals == "mesh" ? " (mesh normals belong to the cotan study)" : ""),
+                     "normals");
+  }
+  return *source;
+}
+
+StudySurface study_surface(const StudyOptions& o, double h, const Eigen::Vector3d& c) {
+  ImplicitShapeInput input;
+  input.shape = o.shape;
+  input.center = c;
+  input.digitization.h = h;
+  input.digitization.min_aabb = o.min_aabb;
+  input.digitization.max_aabb = o.max_aabb;
+  input.digitization.offset = o.offset;
+  StudySurface s;
+  s.surface = load_surface(input);
+  NormalRequest request;
+  request.source = study_normal_source(o);
+  request.ii.k = o.ii_k;
+  request.ii.alpha = o.ii_alpha;
+  s.normals = resolve_normals(s.surface, NormalKind::Vertex, request, "study");
+  return s;
 }
 
 std::vector<double> parse_grid_steps(const std::string& text) {
@@ -179,8 +215,6 @@ Config params_for(const Discretization& d, const std::vector<std::string>& key_v
 // functions where the operators live (vertices, or surfel centres for the heat kernel, §6).
 struct SharedSurface {
   SurfelMesh mesh;
-  VoxelGrid grid;
-  ImplicitShape shape;
   NormalFields normals;  // face and vertex
   std::optional<QuadPattern> pattern;
   Eigen::MatrixX3d face_centres;
@@ -202,22 +236,9 @@ void sample_sphere(const std::vector<const TestFunction*>& functions, const Eige
 SharedSurface build_surface(const StudyOptions& o, double h, const Eigen::Vector3d& c,
                             const std::vector<const TestFunction*>& functions) {
   SharedSurface s;
-  s.shape = make_implicit_shape(o.shape, c);
-  DigitizationParams p;
-  p.h = h;
-  p.min_aabb = o.min_aabb;
-  p.max_aabb = o.max_aabb;
-  p.offset = o.offset;
-  s.grid = digitize(s.shape, p);
-  s.mesh = extract_surface(s.grid);
-  NormalRequest request;
-  request.source = o.normals == "ii" ? NormalSource::II : NormalSource::True;
-  request.ii.k = o.ii_k;
-  request.ii.alpha = o.ii_alpha;
-  s.normals = resolve_normals(s.mesh, NormalKind::Vertex, request, &s.shape, &s.grid, "study");
-  // "exact": the shape's normal at every vertex (radial on spheres), the field of spec §12.5's
-  // vertex-normal rows; face normals stay the true ones.
-  if (o.normals == "exact") s.normals.vertex = exact_vertex_normals(s.shape, s.mesh);
+  StudySurface base = study_surface(o, h, c);
+  s.mesh = std::move(base.surface.mesh);
+  s.normals = std::move(base.normals);
   s.pattern = QuadPattern::build(s.mesh);
   s.face_centres = s.mesh.face_centroids();
   if (o.kind != StudyKind::Eigen) {
@@ -239,8 +260,8 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
     moved.faces.push_back({reference.triangles(t, 0), reference.triangles(t, 1), reference.triangles(t, 2)});
   MeshVoxelizationParams p;
   p.h = h;
-  s.grid = voxelize_mesh(moved, p);
-  s.mesh = extract_surface(s.grid);
+  const VoxelGrid grid = voxelize_mesh(moved, p);
+  s.mesh = extract_surface(grid);
   s.face_centres = s.mesh.face_centroids();
   const ReferenceValues values =
       o.reference_values == "at-foot" ? ReferenceValues::AtFoot : ReferenceValues::Interpolated;
@@ -248,16 +269,16 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
   const Eigen::MatrixXd truth = diffused_reference_laplacian(reference, dt);
   ReferenceSamples at_vertices = sample_reference(reference, truth, s.mesh.positions, c, values);
   ReferenceSamples at_faces = sample_reference(reference, truth, s.face_centres, c, values);
-  if (o.normals == "mesh") {
-    s.normals.vertex = std::move(at_vertices.normals);
-    s.normals.face = std::move(at_faces.normals);
-  } else {
-    NormalRequest request;
-    request.source = NormalSource::II;
-    request.ii.k = o.ii_k;
-    request.ii.alpha = o.ii_alpha;
-    s.normals = resolve_normals(s.mesh, NormalKind::Vertex, request, nullptr, &s.grid, "study");
+  // "mesh": the reference's normals as given normals; "ii": estimated from the voxels.
+  NormalRequest request;
+  request.source = study_normal_source(o);
+  if (request.source == NormalSource::Given) {
+    request.vertex_normals = std::move(at_vertices.normals);
+    request.face_normals = std::move(at_faces.normals);
   }
+  request.ii.k = o.ii_k;
+  request.ii.alpha = o.ii_alpha;
+  s.normals = resolve_normals(s.mesh, NormalKind::Vertex, request, nullptr, &grid, "study");
   s.pattern = QuadPattern::build(s.mesh);
   s.vertex_f = std::move(at_vertices.f);
   s.vertex_laplacian = std::move(at_vertices.laplacian);

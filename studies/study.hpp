@@ -5,6 +5,9 @@
 // (docs/math.md §10; docs/studies.md). One study = options -> rows; the tables (summary, orders)
 // are computed from the rows (study_tables.hpp), and the CLI (`corrlap study`) writes them as CSV.
 #include <Eigen/Core>
+#include <corrlap/core/normal_fields.hpp>
+#include <corrlap/estimators/normal_estimation.hpp>
+#include <corrlap/pipeline/load_surface.hpp>
 #include <functional>
 #include <string>
 #include <vector>
@@ -23,8 +26,9 @@ struct StudyOptions {
   std::vector<std::string> methods = {"fem"};   ///< registry names
   std::vector<double> h = {0.1, 0.05};          ///< grid steps (any order); cotan: 2 / resolutions
   std::vector<std::string> functions = {"x2"};  ///< docs/math.md §10.2 names (forward, backward)
-  /// "true", "ii" (docs/math.md §1.5, §7) or "exact" (radial vertex normals); cotan: "mesh" (the
-  /// reference's vertex normals, projected and interpolated, at vertices and surfel centres) or "ii"
+  /// A normal source of the library's vocabulary (study_normal_source): "true", "ii" (docs/math.md
+  /// §1.5, §7) or "exact" (the shape's normal at each vertex); cotan: "mesh" (the reference's
+  /// normals, projected and interpolated, at vertices and surfel centres: given normals) or "ii"
   std::string normals = "true";
   double ii_k = 3.0, ii_alpha = 1.0 / 3.0;  ///< II radius k h^alpha (the paper's 1/3)
   int centers = 1;                          ///< N: centre 0 when 1, else uniform draws (§10.1)
@@ -51,6 +55,20 @@ struct StudyOptions {
   /// InputError naming the first invalid option (unknown method or function, h <= 0, empty lists...).
   void validate() const;
 };
+
+/// The study's normals in the library's vocabulary (parse_normal_source): "true", "ii", "exact" for
+/// the forward, backward and eigen studies; for the cotan study "mesh", its name for the given
+/// normals of the reference mesh (NormalSource::Given), or "ii". InputError naming the valid ones.
+NormalSource study_normal_source(const StudyOptions& options);
+
+/// The surface and normals of one (h, centre) of a forward, backward or eigen study: the shape
+/// centred at `center`, digitized in the study's box at step h (load_surface), its face and vertex
+/// normals from resolve_normals with the study's source and II parameters. What run_study uses.
+struct StudySurface {
+  LoadedSurface surface;
+  NormalFields normals;
+};
+StudySurface study_surface(const StudyOptions& options, double h, const Eigen::Vector3d& center);
 
 /// Grid steps from "0.1,0.05,0.025" (a comma list) or "A:B:N" (N steps from A to B, equally spaced
 /// in log h, both ends included). InputError naming the text for anything else, h <= 0 or N < 1.

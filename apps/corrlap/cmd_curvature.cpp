@@ -18,8 +18,9 @@ namespace {
 
 struct CurvatureArgs {
   SurfaceSource source;
-  std::string face_normals, vertex_normals, normals, out;
-  double radius = 0.1, ii_radius = 3.0, ii_alpha = 0.33;
+  NormalOptions normals;
+  std::string out;
+  double radius = 0.1;
   bool constant = false;
 };
 
@@ -35,26 +36,22 @@ void write_set(const std::string& dir, const std::string& suffix, const Curvatur
 void run(const CurvatureArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const bool from_mesh = !a.source.mesh.empty();
-  NormalOptions opt;
-  opt.ii.k = a.ii_radius;
-  opt.ii.alpha = a.ii_alpha;
+  const NormalOptions& opt = a.normals;
   NormalKind need = a.constant ? NormalKind::Face : NormalKind::Vertex;
   if (from_mesh) {
-    if (a.face_normals.empty() == a.vertex_normals.empty())
+    if (opt.face_file.empty() == opt.vertex_file.empty())
       throw InputError("--mesh needs exactly one of --face-normals F or --vertex-normals F");
-    if (!a.normals.empty()) throw InputError("--normals applies to --shape/--volume; with --mesh give a normals file");
+    if (opt.source_option->count() > 0)
+      throw InputError("--normals applies to --shape/--volume; with --mesh give a normals file");
     // A face file: constant normals per face; a vertex file: interpolated normals.
-    need = a.face_normals.empty() ? NormalKind::Vertex : NormalKind::Face;
-    opt.face_file = a.face_normals;
-    opt.vertex_file = a.vertex_normals;
-  } else {
-    if (!a.face_normals.empty() || !a.vertex_normals.empty())
-      throw InputError("--face-normals/--vertex-normals go with --mesh; with a shape or volume use --normals true|ii");
-    opt.source = a.normals.empty() ? "auto" : a.normals;  // auto: true for shapes, ii for volumes
+    need = opt.face_file.empty() ? NormalKind::Vertex : NormalKind::Face;
+  } else if (!opt.face_file.empty() || !opt.vertex_file.empty()) {
+    throw InputError("--face-normals/--vertex-normals go with --mesh; with a shape or volume use --normals true|ii");
   }
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
-  // The normals of `corrlap operators` for the same source (docs/math.md §1.5, resolve_normals).
+  // The normals of `corrlap operators` for the same source (docs/math.md §1.5, resolve_normals);
+  // auto: true for shapes, ii for volumes.
   const NormalFields n = opt.resolve(surface, need, "curvature");
   const CorrectedCurvature cc = need == NormalKind::Vertex ? CorrectedCurvature::interpolated(mesh, n.vertex)
                                                            : CorrectedCurvature::constant(mesh, n.face);
@@ -84,15 +81,11 @@ RegisterCommand reg(31, "curvature", [](CLI::App& app) {
   auto* cmd =
       app.add_subcommand("curvature", "corrected curvature measures: H, G, k1, k2 and directions (docs/math.md §8)");
   args->source.add_options(*cmd, /*with_mesh=*/true);
-  cmd->add_option("--face-normals", args->face_normals, "with --mesh: one unit normal per face (constant per face)");
-  cmd->add_option("--vertex-normals", args->vertex_normals, "with --mesh: one unit normal per vertex (interpolated)");
-  cmd->add_option("--normals", args->normals,
-                  "with --shape/--volume: true or ii (default: true for shapes, ii for volumes)")
-      ->check(CLI::IsMember({"true", "ii", "trivial"}));
+  // --face-normals/--vertex-normals with --mesh (a face file: constant normals per face; a vertex
+  // file: interpolated); --normals with a shape or volume.
+  args->normals.add_options(*cmd);
   cmd->add_flag("--constant", args->constant, "with --normals: use the face normals as constant per face");
   cmd->add_option("--radius", args->radius, "ball radius in world units (default 0.1)")->check(non_negative_number());
-  cmd->add_option("--ii-radius", args->ii_radius, "II r-radius k (default 3)")->check(positive_number());
-  cmd->add_option("--ii-alpha", args->ii_alpha, "II alpha (default 0.33)");
   cmd->add_option("--out", args->out,
                   "output directory (H_faces.txt, G_, k1_, k2_, d1_, d2_ per faces/vertices, curvature.ply)")
       ->required();

@@ -65,7 +65,7 @@ void normals_and_curvature(const ImplicitShape& sphere) {
     const auto t0 = Clock::now();
     const VoxelGrid grid = digitize(sphere, sphere_params(h));
     const SurfelMesh mesh = extract_surface(grid);
-    const Eigen::MatrixX3d ii = estimate_face_normals(NormalEstimator::II, mesh, &grid, &sphere);
+    const Eigen::MatrixX3d ii = estimate_face_normals(NormalSource::II, mesh, &grid, &sphere);
     const Eigen::MatrixX3d exact = true_face_normals(sphere, mesh);
     double mean = 0, worst = 0;
     for (int f = 0; f < mesh.num_faces(); ++f) {

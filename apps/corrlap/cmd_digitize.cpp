@@ -1,15 +1,13 @@
 // corrlap digitize: implicit shape or volume -> digital surface mesh (+ optional normals).
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <iostream>
-#include <optional>
 
 #include "command.hpp"
+#include "library_errors.hpp"
 #include "surface_source.hpp"
 
 namespace corrlap::cli {
@@ -23,39 +21,34 @@ struct DigitizeArgs {
 };
 
 void run(const DigitizeArgs& a) {
-  // Voxel units need the volume's centring shift, which load() records.
-  std::optional<LoadedSurface> loaded;
-  if (a.output_units != "world" || !a.volume_out.empty()) loaded = a.source.load();
+  const LoadedSurface loaded = a.source.load();
   if (!a.volume_out.empty()) {
-    if (!loaded->grid) throw InputError("--volume-out needs voxels (--shape, --polynomial, --volume or --mesh-file)");
     VolumeWriteOptions options;
     const std::string ext = file_extension(a.volume_out);
     options.compressed = (ext == "vol" || ext == "longvol") && nrrd_gzip_supported();  // Version 3, as DGtal
-    write_volume(a.volume_out, voxels_to_volume(*loaded->grid), options);
-    std::cerr << "wrote " << a.volume_out << " (" << loaded->grid->size().x() << "x" << loaded->grid->size().y() << "x"
-              << loaded->grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", Version 3" : "")
-              << ")\n";
+    write_volume(a.volume_out, voxels_to_volume(*loaded.grid), options);
+    std::cerr << "wrote " << a.volume_out << " (" << loaded.grid->size().x() << "x" << loaded.grid->size().y() << "x"
+              << loaded.grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", Version 3" : "") << ")\n";
   }
-  SurfelMesh mesh = loaded ? loaded->mesh : a.source.surface();
+  const SurfelMesh& mesh = loaded.mesh;
   const bool ply = file_extension(a.out) == "ply";
   const bool want_normals = !a.face_normals_out.empty() || !a.vertex_normals_out.empty() || ply;
   MeshAttributes attributes;
   if (want_normals) {
-    std::string kind = a.normals;
-    auto shape = a.source.implicit_shape();
-    if (kind == "auto") kind = shape ? "true" : "trivial";
-    if (kind == "true" && !shape) throw InputError("--normals true needs an implicit shape (--shape or --polynomial)");
-    const Eigen::MatrixX3d fn = kind == "true" ? true_face_normals(*shape, mesh) : mesh.face_normals_from_positions();
+    // auto: true normals of a shape, else the surfel normals (no estimation while digitizing).
+    NormalRequest request;
+    request.source = a.normals == "auto" ? (loaded.shape ? NormalSource::True : NormalSource::Trivial)
+                                         : parse_normal_source(a.normals);
     // docs/math.md §1.5: vertex normals = normalized sum of incident face normals (the reference's choice)
-    const Eigen::MatrixX3d vn = vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices());
-    if (!a.face_normals_out.empty()) write_normals(a.face_normals_out, fn);
-    if (!a.vertex_normals_out.empty()) write_normals(a.vertex_normals_out, vn);
-    attributes.face_normals = fn;  // PLY output carries them too
-    attributes.vertex_normals = vn;
+    const NormalFields n =
+        in_cli_terms([&] { return resolve_normals(loaded, NormalKind::Vertex, request, "digitize"); });
+    if (!a.face_normals_out.empty()) write_normals(a.face_normals_out, n.face);
+    if (!a.vertex_normals_out.empty()) write_normals(a.vertex_normals_out, n.vertex);
+    attributes.face_normals = n.face;  // PLY output carries them too
+    attributes.vertex_normals = n.vertex;
   }
-  if (!a.out.empty())
-    write_mesh(a.out, loaded ? OutputUnits::parse(a.output_units, *loaded).mesh(mesh) : mesh, attributes);
-  std::cerr << "digitized " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
+  if (!a.out.empty()) write_mesh(a.out, OutputUnits::parse(a.output_units, loaded).mesh(mesh), attributes);
+  std::cerr << "digitized " << loaded.description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces" << (a.out.empty() ? "" : " -> " + a.out) << "\n";
 }
 

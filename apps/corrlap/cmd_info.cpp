@@ -1,12 +1,12 @@
 // corrlap info: counts and topology of a mesh file.
 #include <cmath>
 #include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/polygon_mesh.hpp>
-#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/pipeline/load_surface.hpp>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "command.hpp"
+#include "library_errors.hpp"
 
 namespace corrlap::cli {
 namespace {
@@ -17,7 +17,9 @@ struct InfoArgs {
 };
 
 void run(const InfoArgs& a) {
-  const SurfelMesh mesh = to_surfel_mesh(read_mesh(a.file), "mesh file '" + a.file + "'");
+  QuadMeshInput input;
+  input.path = a.file;
+  const SurfelMesh mesh = in_cli_terms([&] { return load_surface(input).mesh; });
   const MeshInfo info = compute_mesh_info(mesh);
   if (a.json) {
     nlohmann::json j;

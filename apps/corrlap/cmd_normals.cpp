@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "command.hpp"
+#include "deprecated.hpp"
 #include "normal_options.hpp"
 #include "surface_source.hpp"
 #include "validators.hpp"
@@ -14,38 +15,34 @@ namespace {
 
 struct NormalsArgs {
   SurfaceSource source;
-  std::string estimator = "ii", at = "faces", out;
-  double radius = 3.0, alpha = 0.33;
+  NormalOptions normals;
+  std::string at = "faces", out;
 };
 
 void run(const NormalsArgs& a) {
-  NormalOptions opt;
-  opt.source = a.estimator;
-  opt.ii.k = a.radius;
-  opt.ii.alpha = a.alpha;
   const auto t0 = std::chrono::steady_clock::now();
   const LoadedSurface surface = a.source.load();
   // Vertices: the normalized sum of the incident face normals (docs/math.md §1.5), as every command uses.
   const bool at_vertices = a.at == "vertices";
   const NormalFields fields =
-      opt.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
+      a.normals.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
   const Eigen::MatrixX3d& n = at_vertices ? fields.vertex : fields.face;
   write_normals(a.out, n);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::cerr << a.estimator << " normals of " << a.source.describe() << ": " << n.rows() << " " << a.at << " -> "
-            << a.out << " (" << secs << " s)\n";
+  std::cerr << a.normals.describe(surface) << " normals of " << surface.description << ": " << n.rows() << " " << a.at
+            << " -> " << a.out << " (" << secs << " s)\n";
 }
 
 RegisterCommand reg(30, "normals", [](CLI::App& app) {
   auto args = std::make_shared<NormalsArgs>();
   auto* cmd = app.add_subcommand("normals", "estimate normals: one 'nx ny nz' per face (digitize order) or per vertex");
   args->source.add_options(*cmd, /*with_mesh=*/true);
-  cmd->add_option("--estimator", args->estimator,
-                  "ii (integral invariant, docs/math.md §7), true (implicit shapes), trivial")
-      ->check(CLI::IsMember({"ii", "true", "trivial", "convolved"}));
-  cmd->add_option("--radius", args->radius, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
-      ->check(positive_number());
-  cmd->add_option("--alpha", args->alpha, "II: exponent alpha (default 0.33 as the reference; the paper uses 1/3)");
+  args->normals.source = "ii";  // what this command is for: the estimate of the voxels
+  args->normals.add_options(*cmd);
+  // The spellings of this command before --normals/--ii-radius/--ii-alpha were shared by all.
+  add_deprecated_alias(*cmd, "--estimator", "--normals", args->normals.source);
+  add_deprecated_alias(*cmd, "--radius", "--ii-radius", args->normals.ii.k)->check(positive_number());
+  add_deprecated_alias(*cmd, "--alpha", "--ii-alpha", args->normals.ii.alpha);
   cmd->add_option("--at", args->at, "faces (default) or vertices (normalized sum of incident face normals)")
       ->check(CLI::IsMember({"faces", "vertices"}));
   cmd->add_option("--out", args->out, "output text file")->required();

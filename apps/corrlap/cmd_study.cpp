@@ -45,6 +45,7 @@ struct StudyArgs {
   std::string shapes = "sphere1,torus,goursat";
   double alpha0 = 10.0;
   bool bbox_given = false;
+  bool allow_nonmanifold = false;
   CLI::Option *h_option = nullptr, *resolutions_option = nullptr;
 };
 
@@ -127,6 +128,7 @@ void run_regularization(const StudyArgs& a) {
   }
   o.normals = a.normals_given ? a.options.normals : "ii";
   o.alpha0 = a.alpha0;
+  o.allow_nonmanifold = a.allow_nonmanifold;
   if (a.bbox_given) {
     o.min_aabb = a.bbox[0];
     o.max_aabb = a.bbox[1];
@@ -335,8 +337,9 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
   cmd->add_option("--functions", args->functions, "forward/backward: test functions x2, expx, p6")
       ->capture_default_str();
   cmd->add_option("--normals", args->options.normals,
-                  "true | ii (II with k = 3, alpha = 1/3) | exact (the shape's normal at each vertex, spec §12.5); "
-                  "cotan: mesh (default: the mesh's normals, projected) | ii")
+                  "normal source: true | ii (II with k = 3, alpha = 1/3) | exact (the shape's normal at each vertex); "
+                  "cotan: mesh (default: the mesh's normals, projected, as given normals) | ii; regularization: ii "
+                  "(default) | true")
       ->check(CLI::IsMember({"true", "ii", "exact", "mesh"}))
       ->each([args](const std::string&) { args->normals_given = true; })
       ->capture_default_str();
@@ -347,6 +350,9 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
                       "longest side (default 32,64,128)")
           ->capture_default_str();
   cmd->add_option("--shapes", args->shapes, "regularization: implicit shapes")->capture_default_str();
+  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
+                "regularization: go on with shapes whose digitization is not manifold (refused by default, as by "
+                "corrlap regularize)");
   cmd->add_option("--alpha0", args->alpha0, "regularization: attachment weight alpha = alpha0 / (h size)^2")
       ->check(positive_number())
       ->capture_default_str();

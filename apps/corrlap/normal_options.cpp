@@ -5,6 +5,7 @@
 #include <memory>
 #include <mutex>
 
+#include "library_errors.hpp"
 #include "validators.hpp"
 
 namespace corrlap::cli {
@@ -29,13 +30,15 @@ ProgressFn stderr_progress(const std::string& what) {
 void NormalOptions::add_options(CLI::App& cmd) {
   cmd.add_option("--face-normals", face_file, "one unit normal per face (text, nx ny nz, file order)");
   cmd.add_option("--vertex-normals", vertex_file, "one unit normal per vertex (text, nx ny nz, file order)");
-  cmd.add_option("--normals", source,
-                 "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
-                 "docs/math.md §7), trivial (surfel normals), convolved (surfel normals averaged over a 3-voxel "
-                 "neighbourhood), auto (true for shapes, ii for volumes); vertex normals are the normalized sum of the "
-                 "face normals (docs/math.md §1.5)")
-      ->check(CLI::IsMember({"auto", "true", "ii", "trivial", "convolved"}))
-      ->capture_default_str();
+  source_option =
+      cmd.add_option(
+             "--normals", source,
+             "normals when no file gives them: true (implicit shapes), ii (integral invariant of the voxels, "
+             "docs/math.md §7), trivial (surfel normals), convolved (surfel normals averaged over a 3-voxel "
+             "neighbourhood), auto (true for shapes, ii for volumes); vertex normals are the normalized sum of the "
+             "face normals (docs/math.md §1.5)")
+          ->check(CLI::IsMember({"auto", "true", "ii", "trivial", "convolved"}))
+          ->capture_default_str();
   cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
       ->check(positive_number());
   cmd.add_option("--ii-alpha", ii.alpha, "II: exponent alpha (default 0.33)");
@@ -52,13 +55,12 @@ NormalRequest NormalOptions::request() const {
 }
 
 NormalFields NormalOptions::resolve(const LoadedSurface& s, NormalKind need, const std::string& what) const {
-  return resolve_normals(s.mesh, need, request(), s.shape ? &*s.shape : nullptr, s.grid ? &*s.grid : nullptr, what);
+  return in_cli_terms([&] { return resolve_normals(s, need, request(), what); });
 }
 
 std::string NormalOptions::describe(const LoadedSurface& s) const {
   if (!face_file.empty() || !vertex_file.empty()) return "file";
-  return to_string(
-      effective_normal_source(parse_normal_source(source), s.shape ? &*s.shape : nullptr, s.grid ? &*s.grid : nullptr));
+  return to_string(effective_normal_source(parse_normal_source(source), s.shape_ptr(), s.grid_ptr()));
 }
 
 }  // namespace corrlap::cli

@@ -1,7 +1,8 @@
 #pragma once
-// Options that choose normal fields, shared by operators, eigs, solve (and, through the same
-// library function resolve_normals, curvature, normals and demo): --normals auto|true|ii|trivial,
-// --face-normals FILE, --vertex-normals FILE, --ii-radius, --ii-alpha.
+// Options that choose normal fields, shared by every command that needs normals (operators, eigs,
+// solve, regularize, curvature, normals): --normals auto|true|ii|trivial|convolved,
+// --face-normals FILE, --vertex-normals FILE, --ii-radius, --ii-alpha. They build the library's
+// NormalRequest, resolved by resolve_normals (estimators/normal_resolution.hpp).
 #include <CLI/CLI.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
@@ -18,12 +19,14 @@ struct NormalOptions {
   std::string source = "auto";
   std::string face_file, vertex_file;
   IIParams ii;
+  CLI::Option* source_option = nullptr;  ///< to know whether --normals was given explicitly
 
   void add_options(CLI::App& cmd);
   NormalRequest request() const;
-  /// resolve_normals for the surface (its shape and voxels); `what` names the consumer in errors.
+  /// resolve_normals for the surface (its shape and voxels); `what` names the consumer in errors,
+  /// which name the CLI flags.
   NormalFields resolve(const LoadedSurface& surface, NormalKind need, const std::string& what) const;
-  /// The source actually used ("true", "ii", "trivial", "file").
+  /// The source actually used ("true", "ii", "trivial", "convolved", "file").
   std::string describe(const LoadedSurface& surface) const;
 };
 

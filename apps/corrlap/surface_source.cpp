@@ -1,15 +1,9 @@
 #include "surface_source.hpp"
 
 #include <corrlap/core/error.hpp>
-#include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/core/polygon_mesh.hpp>
-#include <corrlap/io/mesh_io.hpp>
-#include <corrlap/io/volume_io.hpp>
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/mesh_voxelization.hpp>
 #include <iostream>
-#include <sstream>
 
+#include "library_errors.hpp"
 #include "validators.hpp"
 
 namespace corrlap::cli {
@@ -43,76 +37,52 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   cmd.add_option("--raw-dimensions", raw_dimensions, "raw volumes: NX NY NZ")->expected(3);
 }
 
-std::optional<ImplicitShape> SurfaceSource::implicit_shape() const {
-  const Eigen::Vector3d c(center[0], center[1], center[2]);
-  if (!shape.empty()) return make_implicit_shape(shape, c);
-  if (!polynomial.empty()) {
-    ImplicitShape s = make_implicit_shape(polynomial, c);
-    return s;
-  }
-  return std::nullopt;
-}
-
-DigitizationParams SurfaceSource::digitization() const {
-  DigitizationParams p;
-  p.h = h;
-  p.min_aabb = bbox[0];
-  p.max_aabb = bbox[1];
-  p.offset = offset;
-  return p;
-}
-
-VoxelGrid SurfaceSource::voxels() const {
+SurfaceInput SurfaceSource::input() const {
+  const bool h_given = h_option && h_option->count() > 0;
   if (resolution > 0 && mesh_file.empty()) throw InputError("--resolution applies to --mesh-file only");
-  if (auto s = implicit_shape()) return digitize(*s, digitization());
+  if (!shape.empty() || !polynomial.empty()) {
+    ImplicitShapeInput in;
+    in.shape = !shape.empty() ? shape : polynomial;
+    in.center = Eigen::Vector3d(center[0], center[1], center[2]);
+    in.digitization.h = h;
+    in.digitization.min_aabb = bbox[0];
+    in.digitization.max_aabb = bbox[1];
+    in.digitization.offset = offset;
+    return in;
+  }
   if (!volume.empty()) {
-    VolumeReadOptions opt;
-    opt.threshold = threshold;
-    // World units by default (docs/io.md): the longest side spans 2, h = 2 / N; --h overrides.
-    const bool h_given = h_option && h_option->count() > 0;
-    opt.h = h_given ? h : 0.0;
-    opt.centered = true;  // the volume's centre at the origin (docs/io.md)
+    VolumeFileInput in;
+    in.path = volume;
+    in.threshold = threshold;
+    if (h_given) in.h = h;  // else world units (docs/io.md): the longest side spans 2
     if (raw_dimensions.size() == 3)
-      opt.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
-    return read_volume_as_voxels(volume, opt);
+      in.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
+    return in;
   }
   if (!mesh_file.empty()) {
-    const bool h_given = h_option && h_option->count() > 0;
     if (resolution > 0 && h_given) throw InputError("--mesh-file: give either --resolution or --h, not both");
     if (resolution <= 0 && !h_given)
       throw InputError("--mesh-file needs --resolution N (voxels along the longest side) or --h STEP");
-    MeshVoxelizationParams params;
-    params.resolution = resolution;
-    params.h = h;
-    MeshVoxelizationReport report;
-    VoxelGrid grid = voxelize_mesh(read_mesh(mesh_file), params, &report);
-    for (const std::string& w : report.warnings()) std::cerr << "warning: " << mesh_file << ": " << w << "\n";
-    std::cerr << "voxelized " << mesh_file << ": " << report.triangles << " triangles, h = " << report.h << ", grid "
-              << report.grid_size.x() << "x" << report.grid_size.y() << "x" << report.grid_size.z() << ", "
-              << report.inside_voxels << " voxels inside\n";
-    return grid;
+    MeshFileInput in;
+    in.path = mesh_file;
+    in.resolution = resolution;
+    if (h_given) in.h = h;
+    return in;
   }
-  throw InputError("no voxel source: give --shape, --polynomial, --volume or --mesh-file");
-}
-
-SurfelMesh SurfaceSource::surface() const {
-  if (!mesh.empty()) return to_surfel_mesh(read_mesh(mesh), "mesh file '" + mesh + "'");
-  return extract_surface(voxels());
+  if (!mesh.empty()) {
+    QuadMeshInput in;
+    in.path = mesh;
+    return in;
+  }
+  throw InputError("no surface source: give --shape, --polynomial, --volume, --mesh-file or --mesh");
 }
 
 LoadedSurface SurfaceSource::load() const {
-  LoadedSurface s;
-  s.shape = implicit_shape();
-  if (!mesh.empty()) {
-    s.mesh = surface();
-    return s;
-  }
-  s.grid = voxels();
-  if (s.grid->count() == 0) throw InputError("the volume is empty: no voxel is inside (" + describe() + ")");
-  // A volume's box is the file's [0, size - 1] - shift, padded by one voxel (read_volume_as_voxels).
-  if (!volume.empty()) s.voxel_shift = -s.grid->lower() - Eigen::Vector3i::Ones();
-  s.mesh = extract_surface(*s.grid);
-  return s;
+  const SurfaceInput in = input();
+  LoadMessages messages;
+  messages.warning = [](const std::string& w) { std::cerr << "warning: " << w << "\n"; };
+  messages.note = [](const std::string& n) { std::cerr << n << "\n"; };
+  return in_cli_terms([&] { return load_surface(in, messages); });
 }
 
 OutputUnits OutputUnits::parse(const std::string& name, const LoadedSurface& surface) {
@@ -120,64 +90,23 @@ OutputUnits OutputUnits::parse(const std::string& name, const LoadedSurface& sur
   if (name == "world") return u;
   if (name != "voxels") throw InputError("--output-units '" + name + "': expected world or voxels");
   u.voxels = true;
-  u.h = surface.mesh.grid_step();
-  u.shift = surface.voxel_shift.cast<double>();
-  if (!(u.h > 0.0)) throw InputError("--output-units voxels: the surface has no grid step");
+  u.frame = surface.frame;
+  if (!(u.frame.h() > 0.0)) throw InputError("--output-units voxels: the surface has no grid step");
   return u;
 }
 
 SurfelMesh OutputUnits::mesh(const SurfelMesh& m) const {
   if (!voxels) return m;
   SurfelMesh out = m;
-  out.positions = (m.positions / h).rowwise() + shift.transpose();
-  if (out.h > 0) out.h = m.h / h;
+  out.positions = frame.to_index(m.positions);
+  if (out.h > 0) out.h = frame.length_to_index(m.h);
   return out;
 }
 
-std::string SurfaceSource::describe() const {
-  std::ostringstream os;
-  if (!shape.empty())
-    os << shape << ", h=" << h;
-  else if (!polynomial.empty())
-    os << "\"" << polynomial << "\", h=" << h;
-  else if (!volume.empty())
-    os << volume << ", threshold " << threshold;
-  else if (!mesh_file.empty())
-    os << mesh_file << (resolution > 0 ? ", resolution " + std::to_string(resolution) : ", h=" + std::to_string(h));
-  else
-    os << mesh;
-  return os.str();
-}
-
-BoundaryCondition boundary_condition(const SurfelMesh& mesh) {
-  BoundaryCondition bc;
-  for (const int n : build_edges(mesh).faces_per_edge) bc.boundary_edges += n == 1;
-  return bc;
-}
-
-std::string BoundaryCondition::note() const {
-  if (closed()) return {};
-  return "the surface is open (" + std::to_string(boundary_edges) +
-         " boundary edges): natural (zero Neumann) boundary conditions are used";
-}
-
-std::string BoundaryCondition::label() const {
-  if (closed()) return "closed";
-  return "natural (zero Neumann) on " + std::to_string(boundary_edges) + " boundary edges";
-}
+std::string SurfaceSource::describe() const { return corrlap::describe(input()); }
 
 void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold, const std::string& command) {
-  const MeshInfo info = compute_mesh_info(mesh);
-  if (!info.closed())
-    throw InputError(command + ": the surface is open (" + std::to_string(info.boundary_edges) +
-                     " boundary edges); the regularization is defined for closed surfaces");
-  if (!info.manifold() && !allow_nonmanifold)
-    throw InputError(
-        command + ": the surface is not manifold (" + std::to_string(info.nonmanifold_edges) + " non-manifold edges, " +
-        std::to_string(info.nonmanifold_vertices) +
-        " non-manifold vertices: voxels touching along an edge or a corner); clean the volume "
-        "(e.g. a morphological opening; for a voxelized mesh, another --resolution) or give --allow-nonmanifold "
-        "to go on anyway");
+  in_cli_terms([&] { corrlap::check_regularizable(mesh, allow_nonmanifold); }, command);
 }
 
 }  // namespace corrlap::cli

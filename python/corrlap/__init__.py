@@ -261,7 +261,7 @@ def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, p
 
 def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0=10.0,
                curvature_radius=None, size=None, solver="cholmod", solver_options=None, return_curvature=False,
-               **params):
+               allow_nonmanifold=False, **params):
     """Regularized positions of a closed digital surface (paper 4.1, docs/regularization.md): the
     positions P minimizing the distance to V plus the corrected Dirichlet energy, with
     Delta p = -2 H n from the corrected mean curvature H.
@@ -271,12 +271,17 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
     curvature_radius, size: as `corrlap regularize` (defaults 0.1 size and half the bounding box).
     solver, solver_options: the linear solver and its options.
+    allow_nonmanifold: the surface must be closed (ValueError otherwise) and, unless
+    allow_nonmanifold=True, manifold: voxels touching along an edge or at a corner only pinch the
+    surface, its normals and curvature are unreliable there and the result moves by several voxels,
+    so such a surface raises ValueError naming the counts, as `corrlap regularize` refuses it
+    (--allow-nonmanifold).
 
     Returns P (#V, 3), and H (#V,) too when return_curvature.
     """
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), 0.0 if h is None else float(h),
                                       params, float(alpha0), curvature_radius, size, str(solver),
-                                      dict(solver_options or {}))
+                                      dict(solver_options or {}), bool(allow_nonmanifold))
     _warn(warnings)
     return (P, H) if return_curvature else P
 

@@ -140,6 +140,15 @@ SurfelMesh mesh_arg(py::handle V, py::handle F, double h) {
   return mesh;
 }
 
+NormalRequest given_normals_arg(py::handle face_normals, py::handle vertex_normals, const SurfelMesh& mesh) {
+  NormalRequest request;
+  request.source = NormalSource::Given;
+  if (!face_normals.is_none()) request.face_normals = points_arg(face_normals, "face_normals", mesh.num_faces());
+  if (!vertex_normals.is_none())
+    request.vertex_normals = points_arg(vertex_normals, "vertex_normals", mesh.num_vertices());
+  return request;
+}
+
 Config config_arg(const py::dict& options, const std::string& what) {
   Config config;
   for (const auto& [key, value] : options) {

@@ -9,6 +9,7 @@
 #include <Eigen/Sparse>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
 #include <string>
 
 namespace corrlap::python {
@@ -29,6 +30,10 @@ py::array numeric_array(py::handle obj, const std::string& name, bool allow_bool
 
 /// V, F and the grid step (0: unknown, as for a mesh read from a file) as a SurfelMesh without surfels.
 SurfelMesh mesh_arg(py::handle V, py::handle F, double h);
+
+/// face_normals (#F, 3) and vertex_normals (#V, 3), each None or an array, as the library's request
+/// of given normals (NormalSource::Given) for resolve_normals.
+NormalRequest given_normals_arg(py::handle face_normals, py::handle vertex_normals, const SurfelMesh& mesh);
 
 /// Keyword options as a Config: bool, int, float and str values (the types of the CLI's key=value).
 Config config_arg(const py::dict& options, const std::string& what);

@@ -1,9 +1,8 @@
-// Normal fields and curvature: true_normals, ii_normals (from a shape or a volume), curvature.
+// Normal fields and curvature: true_normals, ii_normals (from a shape or a volume), curvature; the
+// normals through the library's resolve_normals, as every front end.
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
-#include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 
@@ -33,8 +32,12 @@ py::array_t<double> ii_normals(const VoxelGrid& grid, py::handle V, py::handle F
                        " vertices and " + std::to_string(mesh.num_faces()) + " faces expected, " +
                        std::to_string(given.num_vertices()) + " and " + std::to_string(given.num_faces()) +
                        " given): pass the V, F that digitize returned for the same shape or volume and parameters");
-    n = ii_face_normals(grid, mesh, {.k = k, .alpha = alpha});
-    if (vertices) n = vertex_normals_from_face_normals(n, mesh.faces, mesh.num_vertices());
+    NormalRequest request;
+    request.source = NormalSource::II;
+    request.ii = {.k = k, .alpha = alpha};
+    const NormalFields fields =
+        resolve_normals(mesh, vertices ? NormalKind::Vertex : NormalKind::Face, request, nullptr, &grid, "ii_normals");
+    n = vertices ? fields.vertex : fields.face;
   }
   return to_numpy(n);
 }
@@ -49,13 +52,16 @@ void bind_normals(py::module_& m) {
         const Eigen::MatrixX3d c = points_arg(center, "center", 1);
         const ImplicitShape s = make_implicit_shape(shape, c.row(0).transpose());
         const SurfelMesh mesh = mesh_arg(V, F, 0.0);
-        Eigen::MatrixX3d n;
+        NormalFields n;
         {
           py::gil_scoped_release release;
           // Vertex normals as --normals true gives them: the normalized sum of the face normals.
-          n = vertices ? true_vertex_normals_from_faces(s, mesh) : true_face_normals(s, mesh);
+          NormalRequest request;
+          request.source = NormalSource::True;
+          n = resolve_normals(mesh, vertices ? NormalKind::Vertex : NormalKind::Face, request, &s, nullptr,
+                              "true_normals");
         }
-        return to_numpy(n);
+        return to_numpy(vertices ? n.vertex : n.face);
       },
       py::arg("shape"), py::arg("V"), py::arg("F"), py::arg("at"), py::arg("center"));
   m.def(
@@ -79,20 +85,20 @@ void bind_normals(py::module_& m) {
         const bool vertices = at_vertices(at);
         if (!(radius >= 0.0)) throw py::value_error("radius: must be >= 0");
         const SurfelMesh mesh = mesh_arg(V, F, 0.0);
-        Eigen::MatrixX3d fn, vn;
-        if (!face_normals.is_none()) fn = points_arg(face_normals, "face_normals", mesh.num_faces());
-        if (!vertex_normals.is_none()) vn = points_arg(vertex_normals, "vertex_normals", mesh.num_vertices());
-        if (constant && fn.rows() == 0) throw py::value_error("face_normals: constant=True needs face normals");
-        if (!constant && fn.rows() == 0 && vn.rows() == 0)
+        const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
+        const bool have_face = request.face_normals.rows() > 0;
+        if (constant && !have_face) throw py::value_error("face_normals: constant=True needs face normals");
+        if (!constant && !have_face && request.vertex_normals.rows() == 0)
           throw py::value_error("face_normals, vertex_normals: give one of them");
         CurvatureEstimates e;
         {
           py::gil_scoped_release release;
           // As `corrlap curvature --normals`: interpolated vertex normals, the normalized sum of the
           // face normals unless given; constant face normals on request.
-          if (!constant && vn.rows() == 0) vn = vertex_normals_from_face_normals(fn, mesh.faces, mesh.num_vertices());
+          const NormalFields n = resolve_normals(mesh, constant ? NormalKind::Face : NormalKind::Vertex, request,
+                                                 nullptr, nullptr, "curvature");
           const CorrectedCurvature cc =
-              constant ? CorrectedCurvature::constant(mesh, fn) : CorrectedCurvature::interpolated(mesh, vn);
+              constant ? CorrectedCurvature::constant(mesh, n.face) : CorrectedCurvature::interpolated(mesh, n.vertex);
           e = vertices ? cc.at_vertices(radius) : cc.at_faces(radius);
         }
         return py::make_tuple(to_numpy(e.H), to_numpy(e.G), to_numpy(e.k1), to_numpy(e.k2), to_numpy(e.d1),

@@ -10,16 +10,15 @@
 namespace corrlap::python {
 namespace {
 
-// The normals a method needs, as resolve_normals gives them to the CLI (docs/math.md §1.5): face
-// normals as given; vertex normals as given, else the normalized sum of the face normals.
+// The normals a method needs, from the library's resolve_normals as the CLI gets them (docs/math.md
+// §1.5): face normals as given; vertex normals as given, else the normalized sum of the face normals.
 NormalFields method_normals(const SurfelMesh& mesh, NormalKind need, py::handle face_normals,
                             py::handle vertex_normals) {
-  NormalFields n;
-  if (need == NormalKind::None) return n;
-  if (!face_normals.is_none()) n.face = points_arg(face_normals, "face_normals", mesh.num_faces());
-  if (need == NormalKind::Vertex && !vertex_normals.is_none())
-    n.vertex = points_arg(vertex_normals, "vertex_normals", mesh.num_vertices());
-  return n;
+  if (need == NormalKind::None) return {};
+  const NormalRequest request =
+      given_normals_arg(face_normals, need == NormalKind::Vertex ? vertex_normals : py::handle(Py_None), mesh);
+  py::gil_scoped_release release;
+  return resolve_normals(mesh, need, request, nullptr, nullptr, "laplacian");
 }
 
 const char* normal_kind_name(NormalKind kind) {

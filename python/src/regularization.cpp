@@ -1,5 +1,7 @@
 // Surface regularization of paper §4.1 (docs/regularization.md): regularize(V, F, normals, ...) -> P.
 #include <corrlap/core/error.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/pipeline/surface_checks.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 
 #include "bindings.hpp"
@@ -12,13 +14,10 @@ void bind_regularization(py::module_& m) {
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
          double h, const py::dict& params, double alpha0, py::object curvature_radius, py::object size,
-         const std::string& solver, const py::dict& solver_options) {
+         const std::string& solver, const py::dict& solver_options, bool allow_nonmanifold) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
-        NormalFields normals;
-        if (!face_normals.is_none()) normals.face = points_arg(face_normals, "face_normals", mesh.num_faces());
-        if (!vertex_normals.is_none())
-          normals.vertex = points_arg(vertex_normals, "vertex_normals", mesh.num_vertices());
-        if (!normals.has_face() && !normals.has_vertex())
+        const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
+        if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)
           throw py::value_error("face_normals, vertex_normals: give one of them");
         RegularizationOptions o;
         o.method = method;
@@ -30,9 +29,11 @@ void bind_regularization(py::module_& m) {
         o.solver.set("solver", solver);
         const RegularizedSurface r = [&] {
           py::gil_scoped_release release;
-          // As `corrlap regularize`: vertex normals are the normalized sum of the face normals unless given.
-          if (!normals.has_vertex())
-            normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
+          // As `corrlap regularize`: the same surface policy, and vertex normals the normalized sum of
+          // the face normals unless given.
+          check_regularizable(mesh, allow_nonmanifold);
+          const NormalFields normals =
+              resolve_normals(mesh, NormalKind::Vertex, request, nullptr, nullptr, "regularize");
           return regularize_surface(mesh, normals, o);
         }();
         py::list warnings;
@@ -41,7 +42,7 @@ void bind_regularization(py::module_& m) {
       },
       py::arg("V"), py::arg("F"), py::arg("face_normals"), py::arg("vertex_normals"), py::arg("method"), py::arg("h"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("size"), py::arg("solver"),
-      py::arg("solver_options"));
+      py::arg("solver_options"), py::arg("allow_nonmanifold"));
 }
 
 }  // namespace corrlap::python

@@ -1,10 +1,11 @@
-// Voxels -> digital surface, and mesh files: digitize, digitize_volume, read_mesh, write_mesh.
+// Voxels -> digital surface (the library's load_surface), and mesh files: digitize, digitize_volume,
+// read_mesh, write_mesh.
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
-#include <corrlap/io/volume_io.hpp>
-#include <corrlap/surface/extract_surface.hpp>
-#include <corrlap/surface/implicit_shape.hpp>
+#include <corrlap/pipeline/load_surface.hpp>
+#include <span>
 
 #include "bindings.hpp"
 #include "convert.hpp"
@@ -12,65 +13,70 @@
 namespace corrlap::python {
 namespace {
 
-py::tuple surface_of(const VoxelGrid& grid) {
-  SurfelMesh mesh;
+py::tuple surface_of(const SurfaceInput& input) {
+  LoadedSurface surface;
   {
     py::gil_scoped_release release;
-    mesh = extract_surface(grid);
+    surface = load_surface(input);
   }
-  return py::make_tuple(to_numpy(mesh.positions), faces_to_numpy(mesh.faces));
+  return py::make_tuple(to_numpy(surface.mesh.positions), faces_to_numpy(surface.mesh.faces));
+}
+
+ImplicitShapeInput shape_input(const std::string& shape, double h, double bbox_min, double bbox_max, int offset,
+                               py::handle center) {
+  const Eigen::MatrixX3d c = points_arg(center, "center", 1);
+  if (!(h > 0.0) || !std::isfinite(h)) throw py::value_error("h: must be positive");
+  ImplicitShapeInput in;
+  in.shape = shape;
+  in.center = c.row(0).transpose();
+  in.digitization = {.h = h, .min_aabb = bbox_min, .max_aabb = bbox_max, .offset = offset};
+  return in;
+}
+
+// The array as the library's in-memory volume; `values` keeps the (converted) data alive.
+VolumeArrayInput array_input(py::handle volume, double h, double threshold,
+                             py::array_t<double, py::array::c_style | py::array::forcecast>& values) {
+  const py::array a = numeric_array(volume, "volume", /*allow_bool=*/true);
+  if (a.ndim() != 3)
+    throw py::value_error("volume: expected a 3D array, got " + std::to_string(a.ndim()) + " dimensions");
+  values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  VolumeArrayInput in;
+  in.size = Eigen::Vector3i(int(a.shape(0)), int(a.shape(1)), int(a.shape(2)));
+  in.values = std::span<const double>(values.data(), std::size_t(values.size()));
+  in.threshold = threshold;
+  if (h > 0.0) in.h = h;
+  return in;
 }
 
 }  // namespace
 
 VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, double bbox_max, int offset,
                        py::handle center) {
-  const Eigen::MatrixX3d c = points_arg(center, "center", 1);
-  const ImplicitShape s = make_implicit_shape(shape, c.row(0).transpose());
-  if (!(h > 0.0) || !std::isfinite(h)) throw py::value_error("h: must be positive");
+  const ImplicitShapeInput in = shape_input(shape, h, bbox_min, bbox_max, offset, center);
   py::gil_scoped_release release;
-  return digitize(s, {.h = h, .min_aabb = bbox_min, .max_aabb = bbox_max, .offset = offset});
+  return load_voxels(in);
 }
 
 VoxelGrid array_voxels(py::handle volume, double h, double threshold) {
-  const py::array a = numeric_array(volume, "volume", /*allow_bool=*/true);
-  if (a.ndim() != 3)
-    throw py::value_error("volume: expected a 3D array, got " + std::to_string(a.ndim()) + " dimensions");
-  const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
-  const Eigen::Vector3i size(int(a.shape(0)), int(a.shape(1)), int(a.shape(2)));
-  if (size.minCoeff() == 0) throw py::value_error("volume: empty array");
+  py::array_t<double, py::array::c_style | py::array::forcecast> values;
+  const VolumeArrayInput in = array_input(volume, h, threshold, values);
   py::gil_scoped_release release;
-  // The box of read_volume_as_voxels(centered): one voxel of padding, the centre at the origin.
-  const Eigen::Vector3i shift = volume_centering_shift(size);
-  VoxelGrid grid(Eigen::Vector3i::Constant(-1) - shift, size - shift, h > 0.0 ? h : unit_size_grid_step(size));
-  const double* p = values.data();
-  std::int64_t inside = 0;
-  for (int x = 0; x < size.x(); ++x)
-    for (int y = 0; y < size.y(); ++y)
-      for (int z = 0; z < size.z(); ++z) {
-        const double v = p[(std::int64_t(x) * size.y() + y) * size.z() + z];
-        if (std::isnan(v))
-          throw InputError("volume: value at [" + std::to_string(x) + ", " + std::to_string(y) + ", " +
-                           std::to_string(z) + "] is NaN");
-        if (v > threshold) {
-          grid.set(x - shift.x(), y - shift.y(), z - shift.z(), true);
-          ++inside;
-        }
-      }
-  if (inside == 0) throw InputError("volume: no voxel above the threshold (empty volume)");
-  return grid;
+  return load_voxels(in);
 }
 
 void bind_surface(py::module_& m) {
   m.def(
       "digitize",
       [](const std::string& shape, double h, double bbox_min, double bbox_max, int offset, py::handle center) {
-        return surface_of(shape_voxels(shape, h, bbox_min, bbox_max, offset, center));
+        return surface_of(shape_input(shape, h, bbox_min, bbox_max, offset, center));
       },
       py::arg("shape"), py::arg("h"), py::arg("bbox_min"), py::arg("bbox_max"), py::arg("offset"), py::arg("center"));
   m.def(
       "digitize_volume",
-      [](py::handle volume, double h, double threshold) { return surface_of(array_voxels(volume, h, threshold)); },
+      [](py::handle volume, double h, double threshold) {
+        py::array_t<double, py::array::c_style | py::array::forcecast> values;
+        return surface_of(array_input(volume, h, threshold, values));
+      },
       py::arg("volume"), py::arg("h"), py::arg("threshold"));
   m.def(
       "read_mesh",

@@ -126,9 +126,13 @@ const std::vector<BadCall>& catalogue() {
       {"info {D}/oob.obj", "face index 2 out of range"},
       {"info {D}/model.stl", "unsupported extension 'stl'"},
       // normals.
-      {"normals --shape sphere1 --h 0.2 --estimator nosuch --out {D}/n.txt", "--estimator: nosuch not in"},
+      // The old spelling (a hidden alias) is checked by the library, whose message names the new flag.
+      {"normals --shape sphere1 --h 0.2 --estimator nosuch --out {D}/n.txt", "unknown normal source 'nosuch'"},
       {"normals --shape sphere1 --h 0.2 --estimator ii --at nowhere --out {D}/n.txt", "--at: nowhere not in"},
       {"normals --mesh {D}/s.obj --estimator true --out {D}/n.txt", "true normals need an implicit shape"},
+      {"normals --shape sphere1 --h 0.2 --normals nosuch --out {D}/n.txt", "--normals: nosuch not in"},
+      {"normals --shape sphere1 --h 0.2 --ii-radius -1 --out {D}/n.txt", "--ii-radius: must be a positive number"},
+      {"normals --mesh {D}/s.obj --normals true --out {D}/n.txt", "true normals need an implicit shape (--normals)"},
       // curvature.
       {"curvature --shape sphere1 --h 0.2 --normals true --radius -1 --out {D}/c", "--radius: must be a number >= 0"},
       {"curvature --mesh {D}/s.obj --normals true --out {D}/c", "--mesh needs exactly one of --face-normals"},

@@ -1,5 +1,5 @@
 // A program that embeds corrlap through its CMake package (installed, or the build tree). It
-// includes only the umbrella header and touches every library (core, surface, estimators,
+// includes only the umbrella header and touches every library (core, surface, estimators, pipeline,
 // discretizations, backends with CHOLMOD, io, problems) so that a static build's link dependencies
 // are all exercised.
 #include <cmath>
@@ -17,6 +17,13 @@ int main() {
   std::printf("V=%d F=%d E=%d\n", info.vertices, info.faces, info.edges);
   // docs/math.md §12.1: sphere1 at h = 0.25 has V = 296, F = 294, E = 588
   if (!(info.vertices == 296 && info.faces == 294 && info.edges == 588)) return 1;
+
+  // pipeline: the same surface through load_surface, and its checks.
+  corrlap::ImplicitShapeInput input;
+  input.shape = "sphere1";
+  input.digitization = p;
+  const corrlap::LoadedSurface loaded = corrlap::load_surface(input);
+  if (!(loaded.mesh.faces == mesh.faces && corrlap::boundary_condition(loaded.mesh).closed())) return 5;
 
   // Corrected FEM with true normals, then (M - L) x = M 1 with CHOLMOD: L 1 = 0, so x = 1.
   corrlap::NormalFields normals;

@@ -11,11 +11,11 @@
 using namespace corrlap;
 using test::run_cli;
 
-TEST_CASE("cli normals --estimator ii reproduces the reference II normals (alpha 1/3)") {
+TEST_CASE("cli normals --normals ii reproduces the reference II normals (alpha 1/3)") {
   const std::string out = test::tmp_path("est_ii_h02.txt");
   std::string err;
   REQUIRE(
-      run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --estimator ii --alpha 0.3333333333333333 --out " + out,
+      run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --normals ii --ii-alpha 0.3333333333333333 --out " + out,
               nullptr, &err) == 0);
   const Eigen::MatrixX3d n = read_normals(out);
   const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");
@@ -23,11 +23,11 @@ TEST_CASE("cli normals --estimator ii reproduces the reference II normals (alpha
   CHECK((n - ref).cwiseAbs().maxCoeff() < 1e-12);
 }
 
-TEST_CASE("cli normals --estimator true and --at vertices match the reference true normals") {
+TEST_CASE("cli normals --normals true and --at vertices match the reference true normals") {
   const std::string dir = test::reference_dir() + "/sphere1_h0.2/";
   const std::string f = test::tmp_path("est_true_f.txt"), v = test::tmp_path("est_true_v.txt");
-  REQUIRE(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --estimator true --out " + f) == 0);
-  REQUIRE(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --estimator true --at vertices --out " + v) == 0);
+  REQUIRE(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --normals true --out " + f) == 0);
+  REQUIRE(run_cli("normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 --normals true --at vertices --out " + v) == 0);
   CHECK((read_normals(f) - read_normals(dir + "face_normals_true.txt")).cwiseAbs().maxCoeff() < 1e-14);
   CHECK((read_normals(v) - read_normals(dir + "vertex_normals_true.txt")).cwiseAbs().maxCoeff() < 1e-14);
 }
@@ -78,9 +78,10 @@ TEST_CASE("cli estimators reject bad input with clear errors") {
                     "vertex_normals_true.txt --radius 1000 --out " + test::tmp_path("c"),
                 nullptr, &err) == 1);
   CHECK(err.find("larger than the mesh") != std::string::npos);
-  CHECK(run_cli("normals --mesh " + dir + "mesh.obj --estimator ii --out " + test::tmp_path("x.txt"), nullptr, &err) ==
+  CHECK(run_cli("normals --mesh " + dir + "mesh.obj --normals ii --out " + test::tmp_path("x.txt"), nullptr, &err) ==
         1);
   CHECK(err.find("need voxels") != std::string::npos);
+  CHECK(err.find("(--normals)") != std::string::npos);  // the library's parameter, in CLI terms
 }
 
 TEST_CASE("cli normals on a volume file gives the reference II normals; empty volumes are rejected") {
@@ -92,7 +93,7 @@ TEST_CASE("cli normals on a volume file gives the reference II normals; empty vo
   write_volume(vol, voxels_to_volume(digitize(make_implicit_shape("sphere1"), p)));
   const std::string out = test::tmp_path("est_ii_vol.txt");
   std::string err;
-  REQUIRE(run_cli("normals --volume " + vol + " --h 0.2 --estimator ii --alpha 0.3333333333333333 --out " + out,
+  REQUIRE(run_cli("normals --volume " + vol + " --h 0.2 --normals ii --ii-alpha 0.3333333333333333 --out " + out,
                   nullptr, &err) == 0);
   const Eigen::MatrixX3d n = read_normals(out);
   const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");
@@ -107,4 +108,41 @@ TEST_CASE("cli normals on a volume file gives the reference II normals; empty vo
   CHECK(err.find("empty") != std::string::npos);
   CHECK(run_cli("curvature --volume " + evol + " --out " + test::tmp_path("c_empty"), nullptr, &err) == 1);
   CHECK(err.find("empty") != std::string::npos);
+}
+
+TEST_CASE("cli normals: the old --estimator/--radius/--alpha still work, with a deprecation note") {
+  const std::string shape = "normals --shape sphere1 --h 0.2 --bbox -1.5 1.5 ";
+  const std::string now = test::tmp_path("est_spelling_new.txt"), old = test::tmp_path("est_spelling_old.txt");
+  std::string err_new, err_old;
+  REQUIRE(run_cli(shape + "--normals ii --ii-radius 2.5 --ii-alpha 0.3 --at vertices --out " + now, nullptr,
+                  &err_new) == 0);
+  REQUIRE(run_cli(shape + "--estimator ii --radius 2.5 --alpha 0.3 --at vertices --out " + old, nullptr, &err_old) ==
+          0);
+  CHECK(test::read_text(now) == test::read_text(old));  // the same normals, bit for bit
+  // ... and not those of the default radius: the aliases reach the II parameters.
+  const std::string plain = test::tmp_path("est_spelling_default.txt");
+  REQUIRE(run_cli(shape + "--normals ii --at vertices --out " + plain) == 0);
+  CHECK(test::read_text(now) != test::read_text(plain));
+  CHECK(err_new.find("deprecated") == std::string::npos);
+  CHECK(err_old.find("--estimator is deprecated; use --normals") != std::string::npos);
+  CHECK(err_old.find("--radius is deprecated; use --ii-radius") != std::string::npos);
+  CHECK(err_old.find("--alpha is deprecated; use --ii-alpha") != std::string::npos);
+  // The old spellings are hidden from the help, the new ones listed.
+  std::string help;
+  REQUIRE(run_cli("normals --help", &help) == 0);
+  CHECK(help.find("--ii-radius") != std::string::npos);
+  CHECK(help.find("--estimator") == std::string::npos);
+}
+
+TEST_CASE("cli curvature takes the shared normal options (--ii-radius, --ii-alpha reach the II normals)") {
+  const std::string shape = "curvature --shape sphere1 --h 0.2 --bbox -1.5 1.5 --normals ii --radius 0.5 ";
+  const std::string a = test::tmp_path("est_curv_ii_a"), b = test::tmp_path("est_curv_ii_b");
+  REQUIRE(run_cli(shape + "--out " + a) == 0);
+  REQUIRE(run_cli(shape + "--ii-radius 2 --ii-alpha 0.3 --out " + b) == 0);
+  CHECK(test::read_text(a + "/H_vertices.txt") != test::read_text(b + "/H_vertices.txt"));
+  std::string err;
+  CHECK(run_cli("curvature --mesh " + test::reference_dir() + "/sphere1_h0.2/mesh.obj --vertex-normals " +
+                    test::reference_dir() + "/sphere1_h0.2/vertex_normals_true.txt --normals ii --out " + a,
+                nullptr, &err) == 1);
+  CHECK(err.find("--normals applies to --shape/--volume") != std::string::npos);
 }

@@ -225,7 +225,9 @@ def test_bad_faces_and_normals_raise_value_error(sphere):
     fn2[5, 0] = np.nan
     with pytest.raises(ValueError, match="face_normals: row 5 is not finite"):
         corrlap.laplacian(V, F, method="fem", face_normals=fn2)
-    with pytest.raises(ValueError, match="fem needs one normal per face"):
+    # The library's resolve_normals reports it (before: the discretization's own "fem needs one
+    # normal per face"), in library terms, as for every front end.
+    with pytest.raises(ValueError, match="laplacian needs face normals: give face_normals"):
         corrlap.laplacian(V, F, method="fem")
 
 
@@ -315,7 +317,7 @@ def test_digitize_volume_equals_cli_on_the_same_raw_volume(tmp_path):
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
     V3, F3 = corrlap.digitize_volume(volume.astype(np.float32) * 10, threshold=5)
     assert np.array_equal(V, V3) and np.array_equal(F, F3)
-    run_cli("normals", "--volume", tmp_path / "v.raw", "--raw-dimensions", 20, 16, 12, "--estimator", "ii",
+    run_cli("normals", "--volume", tmp_path / "v.raw", "--raw-dimensions", 20, 16, 12, "--normals", "ii",
             "--out", tmp_path / "n.txt")
     assert np.array_equal(corrlap.ii_normals(volume, V, F), np.loadtxt(tmp_path / "n.txt"))
     with pytest.raises(ValueError, match="volume: expected a 3D array"):
@@ -329,7 +331,7 @@ def test_digitize_volume_equals_cli_on_the_same_raw_volume(tmp_path):
                                           ("ii", "vertices")])
 def test_normals_equal_cli_normals(sphere, tmp_path, estimator, at):
     V, F, _ = sphere
-    run_cli("normals", *SHAPE, "--estimator", estimator, "--at", at, "--out", tmp_path / "n.txt")
+    run_cli("normals", *SHAPE, "--normals", estimator, "--at", at, "--out", tmp_path / "n.txt")
     if estimator == "true":
         n = corrlap.true_normals("sphere1", V, F, at=at)
     else:
@@ -364,6 +366,47 @@ def test_regularize_equals_cli_regularize(sphere, tmp_path):
     assert np.array_equal(P, P2)
     # closer to the sphere than the staircase
     assert np.abs(np.linalg.norm(P, axis=1) - 1).mean() < 0.5 * np.abs(np.linalg.norm(V, axis=1) - 1).mean()
+
+
+def test_regularize_refuses_a_non_manifold_surface_unless_allowed():
+    # Two one-voxel-thin 2 x 2 blocks that touch along one edge only: `corrlap regularize` refuses it too.
+    volume = np.zeros((6, 6, 3), bool)
+    volume[0:2, 0:2, 1] = True
+    volume[2:4, 2:4, 1] = True
+    V, F = corrlap.digitize_volume(volume)
+    # Surfel normals (quads counter-clockwise seen from outside).
+    fn = np.cross(V[F[:, 2]] - V[F[:, 0]], V[F[:, 3]] - V[F[:, 1]])
+    fn /= np.linalg.norm(fn, axis=1)[:, None]
+    with pytest.raises(ValueError, match=r"not manifold \(1 non-manifold edges.*allow_nonmanifold"):
+        corrlap.regularize(V, F, face_normals=fn)
+    P = corrlap.regularize(V, F, face_normals=fn, allow_nonmanifold=True)
+    assert P.shape == V.shape and np.isfinite(P).all() and not np.array_equal(P, V)
+    with pytest.raises(ValueError, match="the surface is open"):
+        corrlap.regularize(V, F[: len(F) // 2], face_normals=fn[: len(F) // 2], allow_nonmanifold=True)
+
+
+@needs_cli
+def test_python_equals_cli_on_the_front_end_input(tmp_path):
+    """The input of tests/pipeline/test_front_ends_agree.cpp (sphere1, h = 0.1, box -1.5 1.5, II
+    normals with alpha = 1/3, fem), where the study's surface, normals and operators equal the
+    CLI's: Python's equal them too, bit for bit."""
+    h, alpha = 0.1, 1.0 / 3.0
+    cli_input = ["--shape", "sphere1", "--h", h, "--bbox", -1.5, 1.5]
+    ii = ["--normals", "ii", "--ii-radius", 3, "--ii-alpha", repr(alpha)]
+    run_cli("digitize", *cli_input, "--out", tmp_path / "mesh.obj")
+    run_cli("normals", *cli_input, *ii, "--out", tmp_path / "fn.txt")
+    run_cli("normals", *cli_input, *ii, "--at", "vertices", "--out", tmp_path / "vn.txt")
+    run_cli("operators", "--method", "fem", *cli_input, *ii, "--out", tmp_path / "ops")
+    V, F = corrlap.digitize("sphere1", h=h, bbox=(-1.5, 1.5))
+    V2, F2 = corrlap.read_mesh(tmp_path / "mesh.obj")
+    assert np.array_equal(V, V2) and np.array_equal(F, F2)
+    fn = corrlap.ii_normals("sphere1", V, F, h=h, alpha=alpha, k=3.0, bbox=(-1.5, 1.5))
+    vn = corrlap.ii_normals("sphere1", V, F, h=h, alpha=alpha, k=3.0, bbox=(-1.5, 1.5), at="vertices")
+    assert np.array_equal(fn, np.loadtxt(tmp_path / "fn.txt"))
+    assert np.array_equal(vn, np.loadtxt(tmp_path / "vn.txt"))
+    L, M = corrlap.laplacian(V, F, method="fem", face_normals=fn, h=h)
+    assert_same_csc(L, scipy.io.mmread(str(tmp_path / "ops" / "L.mtx")))
+    assert_same_csc(M, scipy.io.mmread(str(tmp_path / "ops" / "M.mtx")))
 
 
 # ---- threads and the GIL ----

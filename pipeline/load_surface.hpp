@@ -1,0 +1,124 @@
+#pragma once
+// Where a digital surface comes from, loaded one way for every front end: an implicit shape, a
+// volume file, a volume in memory, a triangle mesh to voxelize, or a quad mesh of surfels
+// (docs/architecture.md, "The data flow").
+#include <Eigen/Core>
+#include <corrlap/core/normal_fields.hpp>
+#include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/core/voxel_grid.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/surface/implicit_shape.hpp>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <variant>
+
+namespace corrlap {
+
+/// An implicit shape digitized on the grid h Z^3 (docs/math.md §1.2).
+struct ImplicitShapeInput {
+  std::string shape;  ///< a built-in name (named_shapes) or a polynomial in x, y, z ("x^2+y^2+z^2-1")
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  DigitizationParams digitization;
+};
+
+/// A volume file (.vol, .longvol, .raw, .nrrd), inside = value > threshold, centred at the origin
+/// (docs/io.md).
+struct VolumeFileInput {
+  std::string path;
+  double threshold = 0.0;
+  std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
+  std::optional<double> h;                        ///< default: 2 / the longest side in voxels
+};
+
+/// A volume in memory, as the file reader would see it: value (x, y, z) at
+/// values[(x * size.y() + y) * size.z() + z] (a C-ordered array indexed [x][y][z]); inside = value
+/// > threshold; centred like a volume file. The values are read during load_surface only.
+struct VolumeArrayInput {
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+  std::span<const double> values;
+  double threshold = 0.0;
+  std::optional<double> h;  ///< default: 2 / the longest side in voxels
+};
+
+/// A closed triangle (or polygon) mesh voxelized: the voxels whose centres are inside.
+struct MeshFileInput {
+  std::string path;         ///< .obj, .ply, .off
+  int resolution = 0;       ///< longest bounding-box side = resolution voxels; or
+  std::optional<double> h;  ///< the grid step in mesh units (exactly one of the two)
+};
+
+/// A quad mesh of surfels taken as it is (vertex and face order kept): no voxels, no shape.
+struct QuadMeshInput {
+  std::string path;  ///< a mesh file (.obj, .ply, .off) of quads; or, when empty,
+  SurfelMesh mesh;   ///< the mesh itself (e.g. numpy V, F)
+};
+
+using SurfaceInput = std::variant<ImplicitShapeInput, VolumeFileInput, VolumeArrayInput, MeshFileInput, QuadMeshInput>;
+
+/// The map from the input's voxel indices to the world coordinates of the mesh: world = h (index -
+/// shift). Index: a volume file's voxel (i, j, k) (pointels at half-integers), or the digital
+/// point for the other inputs (shift 0). Callers convert through it only, so that anisotropic
+/// spacing, a direction matrix or an origin (NIfTI, NRRD headers) can join it without changing them.
+class VoxelFrame {
+ public:
+  VoxelFrame() = default;
+  VoxelFrame(double h, const Eigen::Vector3d& shift) : h_(h), shift_(shift) {}
+  /// World length of a voxel side (the grid step).
+  double h() const { return h_; }
+  /// The index of the world origin.
+  const Eigen::Vector3d& shift() const { return shift_; }
+  /// Positions (rows) in world units -> in voxel indices.
+  Eigen::MatrixX3d to_index(const Eigen::MatrixX3d& world) const {
+    return Eigen::MatrixX3d((world / h_).rowwise() + shift_.transpose());
+  }
+  Eigen::Vector3d to_world(const Eigen::Vector3d& index) const { return h_ * (index - shift_); }
+  /// Lengths scale by 1 / h into index units, curvatures by h.
+  double length_to_index(double length) const { return length / h_; }
+
+ private:
+  double h_ = 1.0;
+  Eigen::Vector3d shift_ = Eigen::Vector3d::Zero();
+};
+
+/// A digital surface with what it came from.
+struct LoadedSurface {
+  SurfelMesh mesh;
+  std::optional<VoxelGrid> grid;       ///< the voxels (all inputs but quad meshes)
+  std::optional<ImplicitShape> shape;  ///< implicit shapes only (true and exact normals)
+  double h = 0.0;                      ///< grid step (a quad mesh: its mean edge length, SurfelMesh::grid_step)
+  VoxelFrame frame;                    ///< voxel indices -> world coordinates
+  std::string description;             ///< provenance for logs and metrics ("sphere1, h=0.1")
+
+  const ImplicitShape* shape_ptr() const { return shape ? &*shape : nullptr; }
+  const VoxelGrid* grid_ptr() const { return grid ? &*grid : nullptr; }
+};
+
+/// What loading has to say besides the surface: warnings (a mesh to voxelize with holes,
+/// non-manifold edges, self-intersections) and notes (the voxelization's size). The library prints
+/// nothing; a front end shows them its way. Either may be empty.
+struct LoadMessages {
+  std::function<void(const std::string&)> warning;
+  std::function<void(const std::string&)> note;
+};
+
+/// Loads the surface. Throws InputError naming the bad parameter (e.g. "h", "resolution",
+/// "threshold": Error::parameter) or the file, IoError for unreadable files, and InputError when no
+/// voxel is inside.
+LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messages = {});
+
+/// Only the voxels of an input that has some (not a QuadMeshInput: InputError), without the surface.
+VoxelGrid load_voxels(const SurfaceInput& input, const LoadMessages& messages = {});
+
+/// The provenance string of an input ("sphere1, h=0.1", "\"x^2+y^2+z^2-1\", h=0.2",
+/// "head.vol, threshold 0", "bunny.obj, resolution 128", "s.obj").
+std::string describe(const SurfaceInput& input);
+
+/// resolve_normals on a loaded surface (its shape and voxels).
+inline NormalFields resolve_normals(const LoadedSurface& surface, NormalKind need, const NormalRequest& request,
+                                    const std::string& what = "the method") {
+  return resolve_normals(surface.mesh, need, request, surface.shape_ptr(), surface.grid_ptr(), what);
+}
+
+}  // namespace corrlap

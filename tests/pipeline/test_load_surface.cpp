@@ -1,0 +1,209 @@
+// load_surface: every kind of input gives the surface the older direct calls give, with its voxels,
+// shape, grid step, voxel frame and provenance; the surface checks have one policy.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <corrlap/corrlap.hpp>
+#include <vector>
+
+#include "test_support.hpp"
+
+using namespace corrlap;
+
+namespace {
+
+// Two 2^3 blocks that touch along one edge only, in a 6 x 6 x 4 array indexed [x][y][z].
+std::vector<double> edge_touching_blocks() {
+  std::vector<double> values(6 * 6 * 4, 0.0);
+  for (int z = 1; z < 3; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 2; ++x) {
+        values[std::size_t((x * 6 + y) * 4 + z)] = 1.0;
+        values[std::size_t(((x + 2) * 6 + y + 2) * 4 + z)] = 1.0;
+      }
+  return values;
+}
+
+}  // namespace
+
+TEST_CASE("load_surface of an implicit shape: the digitization's surface, its shape and provenance") {
+  ImplicitShapeInput in;
+  in.shape = "sphere1";
+  in.center = Eigen::Vector3d(0.01, 0.02, -0.03);
+  in.digitization = {.h = 0.2, .min_aabb = -1.5, .max_aabb = 1.5};
+  const LoadedSurface s = load_surface(in);
+  const ImplicitShape shape = make_implicit_shape("sphere1", in.center);
+  const VoxelGrid grid = digitize(shape, in.digitization);
+  const SurfelMesh mesh = extract_surface(grid);
+  CHECK(s.mesh.positions == mesh.positions);
+  CHECK(s.mesh.faces == mesh.faces);
+  REQUIRE(s.grid);
+  CHECK(s.grid->count() == grid.count());
+  REQUIRE(s.shape);
+  CHECK(s.shape_ptr() == &*s.shape);
+  CHECK(s.h == 0.2);
+  CHECK(s.frame.h() == 0.2);
+  CHECK(s.frame.shift() == Eigen::Vector3d::Zero());
+  CHECK(s.description == "sphere1, h=0.2");
+  in.shape = "x^2+y^2+z^2-1";
+  CHECK(describe(SurfaceInput(in)) == "\"x^2+y^2+z^2-1\", h=0.2");
+  in.digitization.h = 0.0;
+  CHECK_THROWS_WITH_AS(load_surface(in), doctest::Contains("must be positive"), InputError);
+  try {
+    (void)load_surface(in);
+  } catch (const InputError& e) {
+    CHECK(e.parameter() == "h");
+  }
+  in.digitization.h = 0.2;
+  in.center = Eigen::Vector3d(30, 0, 0);  // outside the box
+  CHECK_THROWS_WITH_AS(load_surface(in), doctest::Contains("no voxel is inside"), InputError);
+}
+
+TEST_CASE("load_surface of a volume array equals the volume file, and its frame maps world to file voxels") {
+  const std::vector<double> values = edge_touching_blocks();
+  Volume volume;
+  volume.size = {6, 6, 4};
+  volume.values.assign(values.size(), 0);
+  for (int x = 0; x < 6; ++x)
+    for (int y = 0; y < 6; ++y)
+      for (int z = 0; z < 4; ++z)
+        volume.values[std::size_t((z * 6 + y) * 6 + x)] = std::uint8_t(255 * values[std::size_t((x * 6 + y) * 4 + z)]);
+  const std::string path = test::tmp_path("pipeline_blocks.vol");
+  write_volume(path, volume);
+  VolumeFileInput file;
+  file.path = path;
+  VolumeArrayInput array;
+  array.size = {6, 6, 4};
+  array.values = values;
+  array.threshold = 0.5;
+  const LoadedSurface a = load_surface(file), b = load_surface(array);
+  CHECK(a.mesh.positions == b.mesh.positions);
+  CHECK(a.mesh.faces == b.mesh.faces);
+  CHECK(a.h == 2.0 / 6.0);  // the longest side spans 2
+  CHECK(a.frame.shift() == b.frame.shift());
+  CHECK(!a.shape);
+  CHECK(a.description == path + ", threshold 0");
+  // The lowest pointel of the first block, voxel (0, 0, 1) of the file, is at index (-0.5, -0.5, 0.5).
+  const Eigen::MatrixX3d index = a.frame.to_index(a.mesh.positions);
+  CHECK(index.colwise().minCoeff().isApprox(Eigen::RowVector3d(-0.5, -0.5, 0.5)));
+  CHECK(a.frame.to_world(Eigen::Vector3d(-0.5, -0.5, 0.5)).isApprox(a.mesh.positions.colwise().minCoeff().transpose()));
+  array.h = 0.1;
+  CHECK(load_surface(array).h == 0.1);
+  array.threshold = 2.0;
+  CHECK_THROWS_WITH_AS(load_surface(array), doctest::Contains("empty volume"), InputError);
+  array.values = std::span<const double>(values.data(), 5);
+  CHECK_THROWS_WITH_AS(load_surface(array), doctest::Contains("5 values for 6x6x4 voxels"), InputError);
+}
+
+TEST_CASE("load_surface of a mesh to voxelize reports its warnings and note through the callbacks") {
+  const std::string path = test::tmp_path("pipeline_icosphere.obj");
+  write_mesh(path, test::icosphere(2));
+  MeshFileInput in;
+  in.path = path;
+  std::vector<std::string> warnings, notes;
+  LoadMessages messages;
+  messages.warning = [&](const std::string& w) { warnings.push_back(w); };
+  messages.note = [&](const std::string& n) { notes.push_back(n); };
+  CHECK_THROWS_WITH_AS(load_surface(in, messages), doctest::Contains("needs a resolution"), InputError);
+  in.resolution = 16;
+  const LoadedSurface s = load_surface(in, messages);
+  CHECK(warnings.empty());  // a closed, consistently oriented mesh
+  REQUIRE(notes.size() == 1);
+  CHECK(notes[0].find("voxelized " + path + ": 320 triangles") == 0);
+  CHECK(s.mesh.num_faces() > 0);
+  CHECK(s.grid);
+  CHECK(s.description == path + ", resolution 16");
+  // A quad mesh: taken as it is, no voxels, h its mean edge length.
+  QuadMeshInput quad;
+  quad.mesh = s.mesh;
+  quad.mesh.h = 0.0;
+  const LoadedSurface q = load_surface(quad);
+  CHECK(q.mesh.positions == s.mesh.positions);
+  CHECK(!q.grid);
+  CHECK(q.h == doctest::Approx(s.mesh.h));
+  CHECK_THROWS_AS(load_voxels(quad), InputError);
+}
+
+TEST_CASE("surface checks: one policy for open and non-manifold surfaces, the boundary from MeshInfo") {
+  const std::vector<double> values = edge_touching_blocks();
+  VolumeArrayInput array;
+  array.size = {6, 6, 4};
+  array.values = values;
+  array.threshold = 0.5;
+  const LoadedSurface s = load_surface(array);
+  CHECK_THROWS_WITH_AS(check_regularizable(s.mesh, false), doctest::Contains("not manifold (2 non-manifold edges"),
+                       InputError);
+  try {
+    check_regularizable(s.mesh, false);
+  } catch (const InputError& e) {
+    CHECK(e.parameter() == "allow_nonmanifold");
+  }
+  CHECK_NOTHROW(check_regularizable(s.mesh, true));
+  CHECK(boundary_condition(s.mesh).closed());
+  // Half the faces: open.
+  SurfelMesh open = s.mesh;
+  open.faces.conservativeResize(open.faces.rows() / 2, 4);
+  open.surfels.clear();
+  const BoundaryCondition bc = boundary_condition(open);
+  CHECK(bc.boundary_edges == compute_mesh_info(open).boundary_edges);
+  CHECK(bc.boundary_edges > 0);
+  CHECK(bc.note().find("natural (zero Neumann)") != std::string::npos);
+  CHECK_THROWS_WITH_AS(check_regularizable(open, true), doctest::Contains("the surface is open"), InputError);
+}
+
+TEST_CASE("resolve_normals takes normals in memory like files, and names the parameter at fault") {
+  ImplicitShapeInput in;
+  in.shape = "sphere1";
+  in.digitization = {.h = 0.2, .min_aabb = -1.5, .max_aabb = 1.5};
+  const LoadedSurface s = load_surface(in);
+  NormalRequest truth;
+  truth.source = NormalSource::True;
+  const NormalFields t = resolve_normals(s, NormalKind::Vertex, truth);
+  NormalRequest given;
+  given.source = NormalSource::Given;
+  given.face_normals = t.face;
+  const NormalFields g = resolve_normals(s, NormalKind::Vertex, given);
+  CHECK(g.face == t.face);
+  CHECK(g.vertex == t.vertex);  // the same normalized sum
+  // Exact: the true face normals, the exact normal at the vertices.
+  NormalRequest exact;
+  exact.source = parse_normal_source("exact");
+  const NormalFields e = resolve_normals(s, NormalKind::Vertex, exact);
+  CHECK(e.face == t.face);
+  CHECK(e.vertex == exact_vertex_normals(*s.shape, s.mesh));
+  // Given without normals, wrong rows, both a file and a matrix.
+  const auto parameter_of = [](const auto& f) {
+    try {
+      f();
+    } catch (const InputError& error) {
+      return error.parameter();
+    }
+    return std::string("no error");
+  };
+  NormalRequest none;
+  none.source = NormalSource::Given;
+  CHECK_THROWS_WITH_AS(resolve_normals(s, NormalKind::Face, none, "fem"),
+                       doctest::Contains("fem needs face normals: give face_normals or a normals source"), InputError);
+  CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, none, "fem"); }) == "face_normals");
+  CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Vertex, none); }) == "vertex_normals");
+  NormalRequest short_rows = given;
+  short_rows.face_normals = t.face.topRows(3);
+  CHECK_THROWS_WITH_AS(resolve_normals(s, NormalKind::Face, short_rows), doctest::Contains("face_normals: 3 rows"),
+                       InputError);
+  NormalRequest both = given;
+  both.face_normals_file = test::reference_dir() + "/sphere1_h0.2/face_normals_true.txt";
+  CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, both); }) == "face_normals");
+  CHECK(parameter_of([] { (void)parse_normal_source("sideways"); }) == "normals");
+  NormalRequest ii;
+  ii.source = NormalSource::II;
+  ii.ii.k = -1.0;
+  CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, ii); }) == "ii_radius");
+  ii.ii.k = 3.0;
+  ii.ii.alpha = std::nan("");
+  CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, ii); }) == "ii_alpha");
+  ii.ii.alpha = 0.33;
+  QuadMeshInput quad;
+  quad.mesh = s.mesh;
+  quad.mesh.surfels.clear();
+  CHECK(parameter_of([&] { (void)resolve_normals(load_surface(quad), NormalKind::Face, ii); }) == "normals");
+}
