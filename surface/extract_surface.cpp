@@ -201,7 +201,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   // kExtractionBytesPerSurfel per surfel (bench/RESULTS.md, "memory budget").
   check_memory_budget(double(F) * kExtractionBytesPerSurfel + double(grid.memory_bytes()),
                       "surface extraction of " + std::to_string(F) + " surfels",
-                      "use a larger grid step (--h) or a smaller box");
+                      "use a larger grid step h or a smaller box");
   lap("transitions");
 
   // 2. Face order (docs/math.md §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the

@@ -71,7 +71,7 @@ const std::vector<BadCall>& catalogue() {
       {"--max-memory abc info {D}/s.obj", "memory size 'abc': expected a positive size"},
       {"--max-memory 0 info {D}/s.obj", "memory size '0'"},
       {"--max-memory 1M digitize --shape sphere1 --h 0.01 --out {D}/x.obj",
-       "more than the memory budget of 1.0 MiB (--max-memory); use a larger grid step or a smaller box"},
+       "more than the memory budget of 1.0 MiB (max_memory); use a larger grid step or a smaller box"},
       {"--max-memory 64M digitize --shape sphere1 --h 0.004 --bbox -1.2 1.2 --offset 1 --out {D}/x.obj",
        "surface extraction of"},
       {"--max-memory 64M digitize --volume {D}/big.vol --threshold 0 --out {D}/x.obj",
