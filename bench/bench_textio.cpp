@@ -1,9 +1,9 @@
 // Text (and binary PLY) I/O throughput: MB/s = file bytes / seconds, written and read back, for
-// the files of a digitized sphere1 (box -1.5..1.5). Goal (issue 17): >= 200 MB/s for OBJ, PLY,
+// the files of a digitized sphere1 (box -1.5..1.5). Goal: >= 200 MB/s for OBJ, PLY,
 // normals and Matrix Market, exact round trips, memory of a read <= 1.5x the data it holds.
 //
 //   ./build/bench/bench_textio                 # h = 0.005 (~750 k faces)
-//   ./build/bench/bench_textio --h 0.002       # ~4.7 M faces, the size of the issue
+//   ./build/bench/bench_textio --h 0.002       # ~4.7 M faces, the size of the goal
 //   ./build/bench/bench_textio --dir /tmp      # where the files go (default: the current folder)
 //
 // Each file is written and read once (the files are hundreds of MB: one run is long enough to time;

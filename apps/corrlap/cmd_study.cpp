@@ -330,7 +330,7 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
   cmd->add_option("--functions", args->functions, "forward/backward: test functions x2, expx, p6")
       ->capture_default_str();
   cmd->add_option("--normals", args->options.normals,
-                  "true | ii (II with k = 3, alpha = 1/3) | exact (the shape's normal at each vertex, spec §12.5); "
+                  "true | ii (II with k = 3, alpha = 1/3) | exact (the shape's vertex normals, docs/math.md §12.5); "
                   "cotan: mesh (default: the mesh's normals, projected) | ii")
       ->check(CLI::IsMember({"true", "ii", "exact", "mesh"}))
       ->each([args](const std::string&) { args->normals_given = true; })
