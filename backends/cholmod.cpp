@@ -106,9 +106,9 @@ class OpenMpScope {
 };
 
 // CHOLMOD's supernodal kernels call BLAS. A multi-threaded OpenBLAS called from several threads
-// at once contends on its internal lock and spins: the stress test (12 TBB tasks) ran 10x slower
-// in CPU time. The first time two CHOLMOD calls overlap, OpenBLAS is set to one thread for the
-// rest of the process; the parallelism then comes from the callers' tasks. OpenBLAS results
+// at once contends on its internal lock and spins (docs/backends.md, "BLAS"). The first time two
+// CHOLMOD calls overlap, OpenBLAS is set to one thread for the rest of the process; the
+// parallelism then comes from the callers' tasks. OpenBLAS results
 // depend on its thread count in the last bits, so callers who need bitwise reproducibility across
 // serial and concurrent phases set blas_threads explicitly (which disables the switch).
 std::atomic<int> active_calls{0};

@@ -144,8 +144,8 @@ class InterpolatedCorrected final : public Discretization {
   }
 
   // Refills ops.L and ops.M in their existing storage (allocate_like and gather_quad_rows resize,
-  // which keeps the allocation): on a VM the page faults of fresh output were ~130 ms of the
-  // ~350 ms per call at h = 0.005.
+  // which keeps the allocation): the page faults of fresh output are a large part of a call
+  // (bench/RESULTS.md, "bench_assembly", findings).
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& params,
                      const QuadPattern* pattern, Operators& ops) const override {
     params.check_parameters(parameters(), "interpolated parameters");
