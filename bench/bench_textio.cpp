@@ -17,8 +17,8 @@
 
 #include <Eigen/Sparse>
 #include <charconv>
-#include <chrono>
 #include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/methods.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/mesh_io.hpp>
@@ -40,9 +40,9 @@ using namespace corrlap;
 namespace {
 
 double seconds(const std::function<void()>& f) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return watch.elapsed();
 }
 
 template <class A>
