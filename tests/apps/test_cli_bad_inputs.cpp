@@ -94,7 +94,7 @@ const std::vector<BadCall>& catalogue() {
       // digitize: volumes.
       {"digitize --volume {D}/missing.vol --threshold 0 --out {D}/x.obj", "missing.vol': cannot open"},
       {"digitize --volume {D}/trunc.vol --threshold 0 --out {D}/x.obj", "trunc.vol'"},
-      {"digitize --volume {D}/short.raw --threshold 0 --out {D}/x.obj", "--raw-dimensions NX NY NZ"},
+      {"digitize --volume {D}/short.raw --threshold 0 --out {D}/x.obj", "need their dimensions (raw_dimensions"},
       {"digitize --volume {D}/short.raw --raw-dimensions 2 2 2 --threshold 0 --out {D}/x.obj", "short.raw'"},
       {"digitize --volume {D}/float.nrrd --threshold 0 --out {D}/x.obj", "unsupported type 'float'"},
       {"digitize --volume {D}/model.stl --threshold 0 --out {D}/x.obj", "unsupported extension 'stl'"},
