@@ -17,7 +17,12 @@ deps:
 $(BUILD)/build.ninja:
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_FLAGS)
 
+# CMAKE_FLAGS given (e.g. CMAKE_FLAGS=-DCORRLAP_WERROR=ON, what CI passes): configure again so that
+# they reach an existing build folder too.
 configure: deps $(BUILD)/build.ninja
+ifneq ($(strip $(CMAKE_FLAGS)),)
+	cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
+endif
 
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)

@@ -106,9 +106,9 @@ class OpenMpScope {
 };
 
 // CHOLMOD's supernodal kernels call BLAS. A multi-threaded OpenBLAS called from several threads
-// at once contends on its internal lock and spins: the stress test (12 TBB tasks) ran 10x slower
-// in CPU time. The first time two CHOLMOD calls overlap, OpenBLAS is set to one thread for the
-// rest of the process; the parallelism then comes from the callers' tasks. OpenBLAS results
+// at once contends on its internal lock and spins (docs/backends.md, "BLAS"). The first time two
+// CHOLMOD calls overlap, OpenBLAS is set to one thread for the rest of the process; the
+// parallelism then comes from the callers' tasks. OpenBLAS results
 // depend on its thread count in the last bits, so callers who need bitwise reproducibility across
 // serial and concurrent phases set blas_threads explicitly (which disables the switch).
 std::atomic<int> active_calls{0};
@@ -419,7 +419,7 @@ void CholmodSolver::analyze(const SpMat& A) {
   s.report = SolverReport{};
   s.factored = false;
   s.pattern = {};
-  detail::Stopwatch watch;
+  Stopwatch watch;
   try {
     if (s.long_index)
       s.do_analyze<SuiteSparse_long>(*a);
@@ -432,7 +432,7 @@ void CholmodSolver::analyze(const SpMat& A) {
   s.n = a->rows();
   ++s.analyses;
   s.report.status = SolverStatus::Success;
-  s.report.analyze_seconds = watch.seconds();
+  s.report.analyze_seconds = watch.elapsed();
   s.report.ordering = ordering_used();
   s.report.factor_nonzeros = s.common.lnz;
   s.report.factor_flops = s.common.fl;
@@ -455,7 +455,7 @@ void CholmodSolver::factorize(const SpMat& A) {
     a = &compressed;
   }
   s.factored = false;
-  detail::Stopwatch watch;
+  Stopwatch watch;
   try {
     if (s.long_index)
       s.do_factorize<SuiteSparse_long>(*a);
@@ -464,7 +464,7 @@ void CholmodSolver::factorize(const SpMat& A) {
   } catch (const std::bad_alloc&) {
     s.fail(SolverStatus::OutOfMemory, "out of memory in the numeric factorization");
   }
-  s.report.factorize_seconds = watch.seconds();
+  s.report.factorize_seconds = watch.elapsed();
   s.report.status = SolverStatus::Success;
   s.report.message.clear();
   s.factored = true;
@@ -475,9 +475,9 @@ Eigen::MatrixXd CholmodSolver::solve(const Eigen::MatrixXd& B) {
   if (!s.factored)
     throw SolverError(SolverStatus::NotAnalyzed, "cholmod: solve() called before a successful factorize()");
   detail::check_rhs(B, s.n, "cholmod");
-  detail::Stopwatch watch;
+  Stopwatch watch;
   Eigen::MatrixXd X = s.long_index ? s.do_solve<SuiteSparse_long>(B) : s.do_solve<int>(B);
-  s.report.solve_seconds = watch.seconds();
+  s.report.solve_seconds = watch.elapsed();
   if (!X.allFinite()) s.fail(SolverStatus::NumericalIssue, "solution contains NaN/Inf");
   s.report.status = SolverStatus::Success;
   return X;

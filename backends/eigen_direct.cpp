@@ -52,7 +52,7 @@ void EigenDirectSolver::configure(const Config& options) {
 void EigenDirectSolver::analyze(const SpMat& A) {
   auto& s = *impl_;
   detail::check_matrix(A, s.name(), false);
-  detail::Stopwatch watch;
+  Stopwatch watch;
   try {
     std::visit([&](auto& solver) { solver.analyzePattern(A); }, s.solver);
   } catch (const std::bad_alloc&) {
@@ -64,7 +64,7 @@ void EigenDirectSolver::analyze(const SpMat& A) {
   ++s.analyses;
   s.report = SolverReport{};
   s.report.status = SolverStatus::Success;
-  s.report.analyze_seconds = watch.seconds();
+  s.report.analyze_seconds = watch.elapsed();
 }
 
 void EigenDirectSolver::factorize(const SpMat& A) {
@@ -72,14 +72,14 @@ void EigenDirectSolver::factorize(const SpMat& A) {
   detail::check_same_pattern(s.pattern, A, s.name());
   detail::check_matrix(A, s.name(), s.check_symmetry);
   s.factored = false;
-  detail::Stopwatch watch;
+  Stopwatch watch;
   try {
     std::visit([&](auto& solver) { solver.factorize(A); }, s.solver);
   } catch (const std::bad_alloc&) {
     s.report.status = SolverStatus::OutOfMemory;
     throw SolverError(SolverStatus::OutOfMemory, s.name() + ": out of memory in the numeric factorization");
   }
-  s.report.factorize_seconds = watch.seconds();
+  s.report.factorize_seconds = watch.elapsed();
   // SimplicialLDLT only fails on an exactly zero pivot; negative pivots (indefinite A) must be
   // detected here. SimplicialLLT fails on any non-positive pivot without saying where: an LDLT
   // with the same ordering locates it (error path only).
@@ -113,9 +113,9 @@ Eigen::MatrixXd EigenDirectSolver::solve(const Eigen::MatrixXd& B) {
   if (!s.factored)
     throw SolverError(SolverStatus::NotAnalyzed, s.name() + ": solve() called before a successful factorize()");
   detail::check_rhs(B, s.n, s.name());
-  detail::Stopwatch watch;
+  Stopwatch watch;
   Eigen::MatrixXd X = std::visit([&](auto& solver) -> Eigen::MatrixXd { return solver.solve(B); }, s.solver);
-  s.report.solve_seconds = watch.seconds();
+  s.report.solve_seconds = watch.elapsed();
   if (!X.allFinite()) {
     s.report.status = SolverStatus::NumericalIssue;
     throw SolverError(SolverStatus::NumericalIssue, s.name() + ": solution contains NaN/Inf");

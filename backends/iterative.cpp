@@ -87,12 +87,12 @@ void ConjugateGradientSolver::configure(const Config& options) {
 void ConjugateGradientSolver::analyze(const SpMat& A) {
   auto& s = *impl_;
   detail::check_matrix(A, "cg", false);
-  detail::Stopwatch watch;
+  Stopwatch watch;
   s.pattern.assign(A);
   s.factored = false;
   s.report = SolverReport{};
   s.report.status = SolverStatus::Success;
-  s.report.analyze_seconds = watch.seconds();
+  s.report.analyze_seconds = watch.elapsed();
 }
 
 void ConjugateGradientSolver::factorize(const SpMat& A) {
@@ -120,7 +120,7 @@ void ConjugateGradientSolver::factorize_owned(SpMat&& A) {
 }
 
 void ConjugateGradientSolver::Impl::factorize_kept_matrix() {
-  detail::Stopwatch watch;
+  Stopwatch watch;
   A.makeCompressed();
   // A non-positive diagonal entry makes A indefinite (and breaks the Jacobi preconditioner).
   const Eigen::VectorXd d = A.diagonal();
@@ -149,7 +149,7 @@ void ConjugateGradientSolver::Impl::factorize_kept_matrix() {
     report.status = SolverStatus::OutOfMemory;
     throw SolverError(SolverStatus::OutOfMemory, "cg: out of memory while building the preconditioner");
   }
-  report.factorize_seconds = watch.seconds();
+  report.factorize_seconds = watch.elapsed();
   report.status = SolverStatus::Success;
   report.message.clear();
   factored = true;
@@ -209,17 +209,17 @@ Eigen::MatrixXd ConjugateGradientSolver::solve(const Eigen::MatrixXd& B) {
   auto& s = *impl_;
   if (!s.factored) throw SolverError(SolverStatus::NotAnalyzed, "cg: solve() called before a successful factorize()");
   detail::check_rhs(B, s.A.rows(), "cg");
-  detail::Stopwatch watch;
+  Stopwatch watch;
   const int maxit = s.max_iterations > 0 ? s.max_iterations : int(2 * s.A.rows());
   try {
     Eigen::MatrixXd X = run_block_cg(
         [&](const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Qt) { detail::symmetric_product_transposed(s.A, Pt, Qt); }, B,
         [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) { s.precondition(Rt, Zt); }, s.tolerance, maxit,
         s.preconditioner, s.warn, s.report);
-    s.report.solve_seconds = watch.seconds();
+    s.report.solve_seconds = watch.elapsed();
     return X;
   } catch (const SolverError&) {
-    s.report.solve_seconds = watch.seconds();
+    s.report.solve_seconds = watch.elapsed();
     throw;
   }
 }
@@ -253,7 +253,7 @@ Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::Matr
     }
   const Eigen::RowVectorXd inverse_diagonal =
       jacobi ? Eigen::RowVectorXd(A.diagonal.cwiseInverse().transpose()) : Eigen::RowVectorXd();
-  detail::Stopwatch watch;
+  Stopwatch watch;
   const int maxit = maxit_option > 0 ? maxit_option : int(2 * A.rows);
   const auto precondition = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
     if (jacobi)
@@ -263,7 +263,7 @@ Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::Matr
   };
   Eigen::MatrixXd X =
       run_block_cg(A.multiply_transposed, B, precondition, tol, maxit, jacobi ? "jacobi" : "custom", on == "warn", r);
-  r.solve_seconds = watch.seconds();
+  r.solve_seconds = watch.elapsed();
   return X;
 }
 

@@ -107,17 +107,15 @@ int basis_size(Eigen::Index n, int nev, int ncv) {
   return int(std::min<Eigen::Index>(n, ncv > 0 ? std::max(ncv, nev + 2) : std::max(2 * nev + 1, nev + 20)));
 }
 
-/// Whether the dense solver is cheaper than Lanczos with a basis of `basis` vectors. Measured on
-/// digitized spheres (docs/backends.md, 2026-12-03): the dense solve costs about 9e-10 n^3 s, a
-/// shift-invert run about 3.8e-9 n basis^2 s (orthogonalization against the basis dominates), so the
-/// dense one wins while n^2 < 4.2 basis^2. With k = 49 that is n <= 250; a fixed size cannot be right
-/// for every k (k = 5: dense is already 5x slower at n = 296).
+/// Whether the dense solver is cheaper than Lanczos with a basis of `basis` vectors. The dense solve
+/// costs O(n^3), a shift-invert run O(n basis^2) (orthogonalization against the basis dominates), so
+/// the crossing is at n proportional to basis, not at a fixed size; the constant comes from the
+/// costs measured on digitized spheres (docs/backends.md, "Dense or Lanczos").
 bool dense_is_cheaper(Eigen::Index n, int basis) { return n <= 2 * Eigen::Index(basis); }
 
 /// block_size=auto: blocks pay once the basis no longer fits in cache and streaming it per vector
-/// dominates. Measured with k = 49 on digitized spheres (2026-12-03, bench/RESULTS.md, with the
-/// carried M-image and the local first pass): equal up to 3 848 unknowns (0.27 s), the 16-block run
-/// faster from 7 496 (0.54 s against 0.89 s) and at 21 032 (1.38 s against 4.09 s).
+/// dominates; the threshold is where the two runs cross on digitized spheres (bench/RESULTS.md,
+/// "Scale on one machine", eigenpairs again).
 int block_size_for(Eigen::Index n) { return n >= 4000 ? 16 : 1; }
 
 EigenResult dense_solve(const SpMat& L, const SpMat& M, int k) {
@@ -312,8 +310,8 @@ EigenResult ShiftInvertEigenSolver::solve(const SpMat& L, const SpMat& M, int k)
   // random start estimates it by a Ritz value theta_1 <= theta_max with a residual r_1 that bounds
   // theta_max - theta_1 once theta_1 estimates the top eigenvalue. It stops as soon as that decides
   // against the k-th value: complete (theta_1 + r_1 below its theta) or a copy missed (theta_1
-  // above it). Measured at 188 K unknowns, k = 49: 2 block steps, where the full search below took
-  // 25 (60% of the solve).
+  // above it). It usually decides in a few block steps, far fewer than the full search below
+  // (docs/backends.md, "Eigen solvers").
   enum class Probe { Complete, Missed, Undecided };
   const auto probe = [&](double kth) {
     const int b = int(std::min<Eigen::Index>(std::max(block_size, 4), n - 3));

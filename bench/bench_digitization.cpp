@@ -11,8 +11,8 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <chrono>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
@@ -40,9 +40,6 @@ DigitizationParams sphere_params(double h) {
 const ImplicitShape& sphere() {
   static const ImplicitShape s = make_implicit_shape("sphere1");
   return s;
-}
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 // CPU seconds of all threads of the process: on a shared machine this shows the work done even
 // when wall-clock time is inflated by other processes.
@@ -119,24 +116,23 @@ static int print_phases(int reps) {
     int faces = 0, edges = 0;
     for (int rep = 0; rep < reps; ++rep) {
       std::size_t slot = 0;
-      auto t0 = std::chrono::steady_clock::now();
+      Stopwatch wall;
+      const Stopwatch total;
       double c0 = process_cpu_seconds();
-      const auto total0 = t0;
       const double total_c0 = c0;
       auto step = [&](const std::string& name) {
-        record(slot, name, 1e3 * seconds_since(t0), 1e3 * (process_cpu_seconds() - c0));
-        t0 = std::chrono::steady_clock::now();
+        record(slot, name, 1e3 * wall.lap(), 1e3 * (process_cpu_seconds() - c0));
         c0 = process_cpu_seconds();
       };
       const VoxelGrid g = digitize(sphere(), p);
       step("digitize");
       PhaseTimings t;
       const SurfelMesh m = extract_surface(g, &t);
-      const double wall_extract = 1e3 * seconds_since(t0);
+      const double wall_extract = 1e3 * wall.elapsed();
       for (const auto& ph : t.phases) record(slot, "  " + ph.name, 1e3 * ph.wall_seconds, 1e3 * ph.cpu_seconds);
       record(slot, "extract_surface", wall_extract, 1e3 * (process_cpu_seconds() - c0));
-      record(slot, "= digitize+extract", 1e3 * seconds_since(total0), 1e3 * (process_cpu_seconds() - total_c0));
-      t0 = std::chrono::steady_clock::now();
+      record(slot, "= digitize+extract", 1e3 * total.elapsed(), 1e3 * (process_cpu_seconds() - total_c0));
+      wall.restart();
       c0 = process_cpu_seconds();
       const EdgeTopology e = build_edges(m);
       step("build_edges");

@@ -1,4 +1,4 @@
-// End to end on one machine (issue 17): digitize sphere1, extract the surface, true normals,
+// End to end on one machine: digitize sphere1, extract the surface, true normals,
 // corrected FEM, the system the paper factorizes, CHOLMOD analyze / factorize / solve. For every
 // stage: the time, the resident memory after it (and the peak during it), and the bytes of what it
 // keeps, per surfel. Then the first-call cost of the FEM and interpolated assemblies: the first call,
@@ -12,9 +12,9 @@
 // --h H --bbox -1.5 1.5 --normals true --method fem --solver cholmod`).
 #include <sys/resource.h>
 
-#include <chrono>
 #include <corrlap/backends/cholmod.hpp>
 #include <corrlap/core/config.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/problems/problems.hpp>
@@ -31,10 +31,6 @@ using namespace corrlap;
 using SpMat = Eigen::SparseMatrix<double>;
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 long minor_faults() {
   rusage u{};
@@ -64,29 +60,29 @@ void first_call_costs(const SurfelMesh& mesh, const NormalFields& normals, const
   auto d = make_discretization(method);
   const Config params;
   long faults = minor_faults();
-  auto t0 = std::chrono::steady_clock::now();
+  Stopwatch watch;
   Operators first = d->assemble(mesh, normals, params);
-  const double first_s = seconds_since(t0);
+  const double first_s = watch.elapsed();
   const long first_faults = minor_faults() - faults;
   first = Operators();  // freed: large blocks go back to the kernel, as between CLI runs
   faults = minor_faults();
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   Operators second = d->assemble(mesh, normals, params);
-  const double second_s = seconds_since(t0);
+  const double second_s = watch.elapsed();
   const long second_faults = minor_faults() - faults;
   faults = minor_faults();
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   d->assemble_into(mesh, normals, params, second);
-  const double into_s = seconds_since(t0);
+  const double into_s = watch.elapsed();
   const long into_faults = minor_faults() - faults;
   // What clearing fresh memory of the output's size costs on its own: touch a fresh buffer.
   const std::size_t bytes = std::size_t(bench::sparse_bytes(second.L) + bench::sparse_bytes(second.M));
   double touch_s = 0.0;
   if (bytes > 0) {
     volatile char* p = static_cast<char*>(std::malloc(bytes));
-    t0 = std::chrono::steady_clock::now();
+    watch.restart();
     for (std::size_t i = 0; i < bytes; i += 4096) p[i] = 1;
-    touch_s = seconds_since(t0);
+    touch_s = watch.elapsed();
     std::free(const_cast<char*>(p));
   }
   std::printf(
@@ -125,14 +121,14 @@ int main(int argc, char** argv) {
   bench::reset_peak_rss();
   Table table;
   const ImplicitShape shape = make_implicit_shape("sphere1");
-  auto t0 = std::chrono::steady_clock::now();
+  Stopwatch watch;
   VoxelGrid grid = digitize(shape, {.h = h, .min_aabb = -1.5, .max_aabb = 1.5});
-  const double digitize_s = seconds_since(t0);
+  const double digitize_s = watch.elapsed();
   const double digitize_rss = bench::rss_mib(), digitize_peak = bench::peak_rss_mib();
   bench::reset_peak_rss();
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   const SurfelMesh mesh = extract_surface(grid);
-  const double extract_s = seconds_since(t0);
+  const double extract_s = watch.elapsed();
   table.faces = double(mesh.num_faces());
   std::printf("%d surfels, %d vertices\n", mesh.num_faces(), mesh.num_vertices());
   table.header();
@@ -143,10 +139,10 @@ int main(int argc, char** argv) {
   grid = VoxelGrid();  // true normals need the shape only
   table.row("drop the voxels", 0.0, 0.0);
 
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   NormalFields normals;
   normals.face = true_face_normals(shape, mesh);
-  table.row("true face normals", seconds_since(t0), double(normals.face.size()) * 8);
+  table.row("true face normals", watch.elapsed(), double(normals.face.size()) * 8);
 
   if (first_call_only) {
     normals.vertex = vertex_normals_from_face_normals(normals.face, mesh.faces, mesh.num_vertices());
@@ -155,13 +151,13 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   Operators ops = make_discretization("fem")->assemble(mesh, normals, Config());
-  table.row("fem L, M", seconds_since(t0), bench::sparse_bytes(ops.L) + bench::sparse_bytes(ops.M));
+  table.row("fem L, M", watch.elapsed(), bench::sparse_bytes(ops.L) + bench::sparse_bytes(ops.M));
   if (!solve) return 0;
 
   // The system: -L without vertex 0's row and column (docs/math.md §10.4), or M - dt L (§10.3).
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   const Eigen::Index n = ops.L.rows();
   SpMat A;
   Eigen::MatrixX3d unknown_positions;
@@ -174,21 +170,21 @@ int main(int argc, char** argv) {
   }
   A.makeCompressed();
   Eigen::VectorXd b = A * Eigen::VectorXd::Ones(A.rows());
-  table.row("system matrix", seconds_since(t0), bench::sparse_bytes(A));
+  table.row("system matrix", watch.elapsed(), bench::sparse_bytes(A));
 
   CholmodSolver solver;
   solver.configure(Config::from_key_values({"ordering=" + ordering}));
   solver.set_positions(unknown_positions);
-  t0 = std::chrono::steady_clock::now();
+  watch.restart();
   solver.analyze(A);
-  table.row("cholmod analyze", seconds_since(t0), 0.0);
-  t0 = std::chrono::steady_clock::now();
+  table.row("cholmod analyze", watch.elapsed(), 0.0);
+  watch.restart();
   solver.factorize(A);
   const double factor_bytes = solver.info().factor_nonzeros * 8;
-  table.row("cholmod factorize", seconds_since(t0), factor_bytes);
-  t0 = std::chrono::steady_clock::now();
+  table.row("cholmod factorize", watch.elapsed(), factor_bytes);
+  watch.restart();
   const Eigen::VectorXd x = solver.solve(b);
-  table.row("cholmod solve", seconds_since(t0), double(x.size()) * 8);
+  table.row("cholmod solve", watch.elapsed(), double(x.size()) * 8);
   std::printf("ordering %s, factor %.3g entries, %.3g flops; |x - 1|_inf = %.2e\n", solver.info().ordering.c_str(),
               solver.info().factor_nonzeros, solver.info().factor_flops, (x.array() - 1.0).abs().maxCoeff());
   return 0;

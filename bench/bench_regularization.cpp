@@ -1,5 +1,5 @@
-// The two slow stages of `corrlap regularize` on large surfaces (issue 16: a 256^3 model in under
-// 10 s, 512^3 in under 60 s), each against the readable function it equals:
+// The two slow stages of `corrlap regularize` on large surfaces (goal: a 256^3 model in under 10 s,
+// 512^3 in under 60 s), each against the readable function it equals:
 //  - curvature: CorrectedCurvature::at_vertices (every measure, principal directions) against
 //    mean_curvature_at_vertices (H alone, the faster walk), ball radius 0.1 size;
 //  - solve: regularize_positions (Cholesky of L M_l^{-1} L + alpha M_l) against

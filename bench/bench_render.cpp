@@ -1,4 +1,4 @@
-// Rendering speed of render_mesh (issue 16: a million faces in about a second) on digitized
+// Rendering speed of render_mesh (goal: a million faces in about a second) on digitized
 // sphere1 surfaces, 800 x 800 with 2 x 2 supersampling, grey and coloured by a vertex scalar.
 //
 //   ./build/bench/bench_render

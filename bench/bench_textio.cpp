@@ -1,9 +1,9 @@
 // Text (and binary PLY) I/O throughput: MB/s = file bytes / seconds, written and read back, for
-// the files of a digitized sphere1 (box -1.5..1.5). Goal (issue 17): >= 200 MB/s for OBJ, PLY,
+// the files of a digitized sphere1 (box -1.5..1.5). Goal: >= 200 MB/s for OBJ, PLY,
 // normals and Matrix Market, exact round trips, memory of a read <= 1.5x the data it holds.
 //
 //   ./build/bench/bench_textio                 # h = 0.005 (~750 k faces)
-//   ./build/bench/bench_textio --h 0.002       # ~4.7 M faces, the size of the issue
+//   ./build/bench/bench_textio --h 0.002       # ~4.7 M faces, the size of the goal
 //   ./build/bench/bench_textio --dir /tmp      # where the files go (default: the current folder)
 //
 // Each file is written and read once (the files are hundreds of MB: one run is long enough to time;
@@ -17,8 +17,8 @@
 
 #include <Eigen/Sparse>
 #include <charconv>
-#include <chrono>
 #include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/methods.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/mesh_io.hpp>
@@ -40,9 +40,9 @@ using namespace corrlap;
 namespace {
 
 double seconds(const std::function<void()>& f) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return watch.elapsed();
 }
 
 template <class A>

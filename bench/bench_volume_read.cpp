@@ -1,4 +1,4 @@
-// Reading a volume into voxels (issue 16: 512^3 and 1024^3 in seconds, bounded memory): the
+// Reading a volume into voxels (goal: 512^3 and 1024^3 in seconds, bounded memory): the
 // streamed read_volume_as_voxels against the bytes-then-threshold path it replaces,
 // threshold_volume(read_volume(...)). The volume is a ball of radius 0.45 N, written once as a
 // .vol Version 3 (zlib) file in the build's temporary directory.

@@ -9,8 +9,14 @@ function(corrlap_use_ccache)
   endif()
 endfunction()
 
+# -Wall -Wextra on every target built from corrlap's own sources; with CORRLAP_WERROR (CI) they are
+# errors. Dependencies come in through imported targets, whose headers are system includes, so
+# their warnings never reach -Werror.
 function(corrlap_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wno-deprecated-declarations)
+  if(CORRLAP_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
 endfunction()
 
 # corrlap_library(<folder-name> [PUBLIC deps...] [PRIVATE deps...])

@@ -50,9 +50,9 @@ void check_memory_budget(double bytes, const std::string& what, const std::strin
   const bool default_budget = budget_bytes.load(std::memory_order_relaxed) == 0;
   std::string message = what + " needs " + readable_bytes(bytes) + ", more than the memory budget of " +
                         readable_bytes(double(budget)) +
-                        (default_budget ? " (this machine's memory; --max-memory sets it)" : " (--max-memory)");
+                        (default_budget ? " (this machine's memory; max_memory sets it)" : " (max_memory)");
   if (!remedy.empty()) message += "; " + remedy;
-  throw InputError(message);
+  throw InputError(message, "max_memory");
 }
 
 std::uint64_t parse_memory_size(const std::string& text) {

@@ -222,8 +222,8 @@ Eigen::SparseMatrix<double> heat_kernel_matrix(const Eigen::MatrixX3d& points, c
   }
   Eigen::SparseMatrix<double> A(n, n);
   try {
-    // The arrays are first touched in pass 2; with 4 KiB pages their page faults cost as much as
-    // the whole computation on a VM (perf: ~22% at h = 0.02): storage on huge pages.
+    // The arrays are first touched in pass 2; with 4 KiB pages their page faults are a large part
+    // of the assembly (bench/RESULTS.md, "bench_heat_kernel", profile): storage on huge pages.
     detail::allocate_sparse_storage(A, Eigen::Index(nnz));
   } catch (const std::bad_alloc&) {
     std::ostringstream os;

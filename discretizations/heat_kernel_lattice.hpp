@@ -33,8 +33,9 @@ class LatticeHeatKernel {
   /// inputs (as heat_kernel_matrix) and NumericalError when the entries do not fit in memory.
   ///
   /// `recycle` (optional): a kernel no longer needed whose storage is reused where large enough.
-  /// Fresh memory costs a page fault and the zeroing of every page on first touch (a quarter of a
-  /// study unit at h = 0.0125); a study builds one kernel per centre, of about the same size.
+  /// Fresh memory costs a page fault and the zeroing of every page on first touch (a large part of a
+  /// study unit: bench/RESULTS.md, "corrlap study"); a study builds one kernel per centre, of about
+  /// the same size.
   static std::optional<LatticeHeatKernel> build(const Eigen::MatrixX3d& points, const Eigen::VectorXd& mu, double t,
                                                 double cutoff, double step, LatticeHeatKernel* recycle = nullptr);
 

@@ -141,7 +141,8 @@ class InterpolatedCorrected final : public Discretization {
   }
 
   // Refills ops.L and ops.M in their existing storage (allocate_like and gather_quad_rows resize,
-  // which keeps the allocation), so repeated calls do not fault in fresh pages.
+  // which keeps the allocation): the page faults of fresh output are a large part of a call
+  // (bench/RESULTS.md, "bench_assembly", findings).
   void assemble_into(const SurfelMesh& mesh, const NormalFields& normals, const Config& config,
                      const QuadPattern* pattern, Operators& ops) const override {
     const ParameterValues params = parameters().read(config, "interpolated");

@@ -264,8 +264,8 @@ void fill_columns(const ProjectionPattern& pp, const VertexCorners& vc, const Qu
 // Rows r_e of P D0 (docs/math.md §3.6a), one per edge, on the element slots: sum over the incidences in
 // face order of s_{f,i} / n_e (P_f D)[i, :]. `pd` holds P_f D per face (row-major 4x4).
 // The second face of an edge is often far from the first in face order (docs/math.md §1.4 sorts by
-// orientation first), so its row is a cache miss: prefetching 16 edges ahead took the pass from
-// 32 to 24 ms at h = 0.005 (one thread).
+// orientation first), so its row is a cache miss: it is prefetched 16 edges ahead (bench/RESULTS.md,
+// "Assembly: record of experiments").
 void edge_rows(const ProjectionPattern& pp, const double* pd, double* r) {
   const int k = pp.k, E = pp.num_edges;
   const int* inc_start = pp.inc_start.data();

@@ -66,7 +66,8 @@ void check_radius(const VoxelGrid& grid, double digital_radius) {
   if (grid.empty_box()) throw InputError("II normals: the voxel grid is empty");
   if (!(digital_radius >= 1.0))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
-                     " is smaller than one voxel (increase --radius k or use a finer h)");
+                         " is smaller than one voxel (increase ii_radius, the II radius factor k, or use a finer h)",
+                     "ii_radius");
   const int extent = grid.size().maxCoeff();
   if (digital_radius > double(extent))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
@@ -270,7 +271,9 @@ std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params, IIMethod method,
                                  const ProgressFn& progress) {
   if (!mesh.has_surfels())
-    throw InputError("II normals need the voxels of the surface (a mesh from --shape or --volume, not a mesh file)");
+    throw InputError(
+        "II normals need the voxels of the surface (a surface digitized from a shape or a volume, not a mesh file)",
+        "normals");
   const double h = grid.h();
   const double rd = ii_digital_radius(h, params);
   check_radius(grid, rd);

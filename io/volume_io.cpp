@@ -33,8 +33,9 @@ constexpr std::uint64_t kMaxVoxels = std::uint64_t{1} << 34;
 // least two bits); the constant covers the gzip header and a final partial block.
 constexpr std::uint64_t kMaxDeflateRatio = 1032;
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw IoError("volume file '" + path + "': " + what);
+/// `parameter`: the library name of the read option at fault, if one is (InputError::parameter()).
+[[noreturn]] void fail(const std::string& path, const std::string& what, const std::string& parameter = {}) {
+  throw IoError("volume file '" + path + "': " + what, parameter);
 }
 
 // Voxel count in 64 bits, or nullopt when it does not even fit there.
@@ -336,7 +337,8 @@ void write_vol(const std::string& path, const Volume& v, bool compressed, bool l
 }
 
 void read_raw(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink) {
-  if (!options.raw_dimensions) fail(path, "raw volumes need their dimensions (--raw-dimensions NX NY NZ)");
+  if (!options.raw_dimensions)
+    fail(path, "raw volumes need their dimensions (raw_dimensions: NX NY NZ)", "raw_dimensions");
   checked_voxels(path, *options.raw_dimensions);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
@@ -580,8 +582,10 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   VolumeSink sink;
   read_into(path, options, sink, [&path](std::uint64_t word) {
     if (word > 255)
-      fail(path, "longvol value " + std::to_string(word) +
-                     " does not fit the uint8 volume; read it thresholded (read_volume_as_voxels, --threshold)");
+      fail(path,
+           "longvol value " + std::to_string(word) +
+               " does not fit the uint8 volume; read it thresholded (read_volume_as_voxels with a threshold)",
+           "threshold");
     return std::uint8_t(word);
   });
   return std::move(sink.volume);

@@ -11,7 +11,8 @@ using SpMat = Eigen::SparseMatrix<double>;
 namespace {
 /// -L restricted to the free unknowns (free_index[v] >= 0: v's index among them), built column by
 /// column in place: a column of L is sorted by row and free_index keeps that order, so no triplet
-/// list or transposed copy is needed (at 10^7 vertices those were 2.4 GB of the peak).
+/// list or transposed copy is needed (they were a large part of the peak memory of a large solve:
+/// bench/RESULTS.md, "Scale on one machine").
 SpMat negated_free_block(const SpMat& L, const std::vector<int>& free_index, Eigen::Index nfree) {
   SpMat A(nfree, nfree);
   std::vector<Eigen::Index> counts(std::size_t(nfree), 0);

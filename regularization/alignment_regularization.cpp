@@ -79,8 +79,8 @@ Problem make_problem(const SurfelMesh& mesh, const Eigen::MatrixX3d& normals, co
                      const AlignmentParams& params) {
   check_normals(normals, mesh.num_faces(), "alignment regularization: face normals");
   const EdgeTopology topology = build_edges(mesh);
-  for (const int n : topology.faces_per_edge)
-    if (n == 1) throw InputError("alignment regularization: the surface is open (it has boundary edges)");
+  if (!compute_mesh_info(mesh, topology).closed())
+    throw InputError("alignment regularization: the surface is open (it has boundary edges)");
   Problem pr{mesh, normals, p, params, pointel_neighbours(mesh, topology), {}};
   pr.surfels_per_pointel.assign(std::size_t(mesh.num_vertices()), 0);
   for (int f = 0; f < mesh.num_faces(); ++f)

@@ -157,14 +157,16 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
         if (scale(i, j) > 0.0) worst = std::max(worst, std::abs(R(i, j)) / scale(i, j));
     return worst;
   };
-  // Not from p: L p is the staircase's Laplacian, |b - A p| was 3e6 |b| on the 256^3 bunny.
+  // Not from p: L p is the staircase's Laplacian, so |b - A p| is orders of magnitude above |b|.
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p.rows(), 3), residual = rhs;
   int iterations = 0;
   double normwise = 1.0, backward = 1.0;
   for (int pass = 0; pass < 3 && normwise > 1e-10 && backward > kBackwardTolerance; ++pass) {
     // Each pass asks only for the reduction still missing: 1e-8 of b first (near the rounding floor
     // of a badly scaled L), then a tenth of what the nearer acceptance test still lacks (a pass
-    // shrinks both errors by about its CG tolerance until the floor). 26 -> 16 iterations on the bunny.
+    // shrinks both errors by about its CG tolerance until the floor): fewer iterations than a fixed
+    // tolerance (bench/RESULTS.md, "corrlap regularize: CHOLMOD thread policy, refinement
+    // tolerances, face clusters").
     const double missing = pass == 0 ? 1e-8 : 0.1 * std::max(1e-10 / normwise, kBackwardTolerance / backward);
     cg_options.set("tolerance", std::clamp(missing, 1e-10, 0.1));
     const Eigen::MatrixXd step = conjugate_gradient(A, residual, cg_options, &cg);

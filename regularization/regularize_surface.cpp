@@ -1,11 +1,11 @@
 #include "regularize_surface.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <numbers>
@@ -17,15 +17,6 @@ double regularization_size(const SurfelMesh& mesh) {
   if (mesh.num_vertices() == 0) return 0.0;
   return 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff();
 }
-
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point& t0) {
-  const auto now = std::chrono::steady_clock::now();
-  const double s = std::chrono::duration<double>(now - t0).count();
-  t0 = now;
-  return s;
-}
-}  // namespace
 
 namespace {
 double object_size(const SurfelMesh& mesh, const RegularizationOptions& o) {
@@ -43,7 +34,7 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   c.size = object_size(mesh, o);
   c.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * c.size;
   if (!(c.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
-  auto t = std::chrono::steady_clock::now();
+  Stopwatch watch;
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
   // Principal edits need k1, k2 and their directions; H alone has a faster walk (equal results).
   const bool principal = o.k1_edit.active() || o.k2_edit.active();
@@ -72,10 +63,11 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
       }
     if (absurd > 0)
       throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / h) + " at " +
-                       std::to_string(absurd) + " of " + std::to_string(c.H.size()) + " vertices (up to " +
-                       std::to_string(worst) +
-                       "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
-                       "features; give a smaller --ii-radius, other --normals, or --h-clamp MAX to clamp H");
+                           std::to_string(absurd) + " of " + std::to_string(c.H.size()) + " vertices (up to " +
+                           std::to_string(worst) +
+                           "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
+                           "features; give a smaller ii_radius, other normals, or h_clamp to clamp H",
+                       "ii_radius");
   }
   c.normals = normals.vertex;
   if (principal) {
@@ -93,7 +85,7 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   }
   c.H *= o.h_scale;  // curvature editing (paper §4.3): scale, then clamp
   if (o.h_clamp) c.H = c.H.cwiseMax(-*o.h_clamp).cwiseMin(*o.h_clamp);
-  c.seconds = seconds_since(t);
+  c.seconds = watch.lap();
   return c;
 }
 
@@ -102,8 +94,7 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   // Options first: a bad name fails before the curvature and the assembly.
   auto solver = make_linear_solver(o.solver, kDefaultLinearSolver);
   auto method = make_discretization(o.method);
-  int boundary_edges = 0;
-  for (const int n : build_edges(mesh).faces_per_edge) boundary_edges += n == 1;
+  const int boundary_edges = compute_mesh_info(mesh).boundary_edges;
   if (boundary_edges > 0)
     throw InputError("regularization: the surface is open (" + std::to_string(boundary_edges) +
                      " boundary edges); it is defined for closed surfaces");
@@ -125,14 +116,14 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   r.normals = curvature->normals;
   r.normal_angle_change_deg = curvature->normal_angle_change_deg;
   r.curvature_seconds = computed ? curvature->seconds : 0.0;
-  auto t = std::chrono::steady_clock::now();
+  Stopwatch watch;
 
   Operators ops = method->assemble(mesh, normals, o.method_params);
   r.warnings = ops.warnings;
   if (ops.domain != Operators::Domain::Vertices)
     throw InputError("regularization: method '" + o.method +
                      "' defines operators on faces; positions live on vertices");
-  r.operators_seconds = seconds_since(t);
+  r.operators_seconds = watch.lap();
 
   r.mesh = mesh;
   // With a direct backend, CG preconditioned by a factorization with L's pattern gives the normal
@@ -155,7 +146,7 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver);
     r.solve_scheme = "direct";
   }
-  r.solve_seconds = seconds_since(t);
+  r.solve_seconds = watch.lap();
   r.energy_before = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, mesh.positions);
   r.energy_after = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, r.mesh.positions);
   return r;

@@ -2,7 +2,7 @@
 // A picture of a surface: orthographic view, flat shading by a key light, a fill light and an ambient term,
 // optional colouring by a scalar field with a colour-bar legend. Deterministic (the same image,
 // byte for byte, for the same input on any machine): a z-buffer with ties kept by the first face,
-// no threads, no GPU. About 1 s for a million faces at 800 x 800 with 2 x 2 supersampling.
+// no threads, no GPU (speed: bench/RESULTS.md, "bench_render").
 #include <Eigen/Core>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <optional>

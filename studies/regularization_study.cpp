@@ -1,7 +1,7 @@
 #include "regularization_study.hpp"
 
-#include <chrono>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
@@ -42,10 +42,6 @@ double longest_side(const ImplicitShape& shape, const RegularizationStudyOptions
                      std::to_string(o.min_aabb) + ", " + std::to_string(o.max_aabb) + "]^3 (give --bbox)");
   const SurfelMesh coarse = extract_surface(grid);
   return (coarse.positions.colwise().maxCoeff() - coarse.positions.colwise().minCoeff()).maxCoeff();
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -109,7 +105,7 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       options.solver.set("solver", o.linear_solver);
       std::optional<RegularizationCurvature> curvature;  // the same for every Laplacian method
       for (const std::string& method : o.methods) {
-        const auto t0 = std::chrono::steady_clock::now();
+        const Stopwatch watch;
         SurfelMesh result = mesh;
         try {
           if (method == "alignment") {
@@ -126,7 +122,7 @@ void run_regularization_study(const RegularizationStudyOptions& o,
           throw NumericalError(os.str());
         }
         RegularizationStudyRow r;
-        r.time_s = seconds_since(t0);
+        r.time_s = watch.elapsed();
         r.shape = name;
         r.method = method;
         r.normals = o.normals;

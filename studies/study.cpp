@@ -1,12 +1,12 @@
 #include "study.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <corrlap/backends/iterative.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/assembly/quad_pattern.hpp>
 #include <corrlap/discretizations/heat_kernel.hpp>
 #include <corrlap/discretizations/registry.hpp>
@@ -195,10 +195,6 @@ Eigen::Vector3d study_center_offset(unsigned long long seed, int index, int coun
 }
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The method parameters that this method accepts: a key=value list shared by all methods (e.g.
 // orientation=warn) applies to the methods that know the key.
@@ -414,7 +410,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
       const Eigen::Vector3d c = h * study_center_offset(o.seed, center, o.centers);
       const SharedSurface s = reference ? build_mesh_surface(o, h, c, *reference) : build_surface(o, h, c, functions);
       for (const std::string& method : to_compute) {
-        const auto t0 = std::chrono::steady_clock::now();
+        const Stopwatch watch;
         // One row per function of a forward or backward unit.
         const auto emit_rows = [&](const std::vector<ErrorNorms>& errors, double t) {
           std::vector<StudyRow> rows;
@@ -453,7 +449,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
               std::vector<ErrorNorms> errors(functions.size());
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = error_norms(M, X->col(Eigen::Index(j)) - s.face_laplacian.col(Eigen::Index(j)));
-              emit_rows(errors, seconds_since(t0));
+              emit_rows(errors, watch.elapsed());
               report(h, center, method);
               continue;
             }
@@ -467,7 +463,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
             Config config;
             config.set("solver", solver_for(o.linear_solver, ops.L, o.kind));
             const EigenResult r = make_eigen_solver(kDefaultEigenSolver, config)->solve(ops.L, ops.M, o.k);
-            const double t = seconds_since(t0);
+            const double t = watch.elapsed();
             std::vector<EigenRow> rows;
             for (Eigen::Index i = 0; i < r.values.size(); ++i) {
               EigenRow row;
@@ -510,7 +506,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
               for (std::size_t j = 0; j < functions.size(); ++j)
                 errors[j] = error_norms(ops.M, X.col(Eigen::Index(j)) - Lap.col(Eigen::Index(j)));
             }
-            emit_rows(errors, seconds_since(t0));
+            emit_rows(errors, watch.elapsed());
           }
         } catch (const Error& e) {
           rethrow_in_unit(e, method, h, center);

@@ -6,10 +6,10 @@
 
 #include <algorithm>
 #include <bit>
-#include <chrono>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/memory_budget.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <ctime>
 #include <sstream>
 
@@ -167,14 +167,13 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
   };
-  auto t0 = std::chrono::steady_clock::now();
+  Stopwatch wall;
   double c0 = timings ? cpu_now() : 0.0;
   auto lap = [&](const char* name) {
     if (!timings) return;
-    const auto t1 = std::chrono::steady_clock::now();
+    const double w = wall.lap();
     const double c1 = cpu_now();
-    timings->phases.push_back({name, std::chrono::duration<double>(t1 - t0).count(), c1 - c0});
-    t0 = t1;
+    timings->phases.push_back({name, w, c1 - c0});
     c0 = c1;
   };
   if (grid.empty_box()) throw InputError("surface extraction: the voxel grid has no voxels");
@@ -201,7 +200,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   // kExtractionBytesPerSurfel per surfel (bench/RESULTS.md, "memory budget").
   check_memory_budget(double(F) * kExtractionBytesPerSurfel + double(grid.memory_bytes()),
                       "surface extraction of " + std::to_string(F) + " surfels",
-                      "use a larger grid step (--h) or a smaller box");
+                      "use a larger grid step h or a smaller box");
   lap("transitions");
 
   // 2. Face order (docs/math.md §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the

@@ -2,9 +2,9 @@
 // triangle mesh is the normal map of a coarse voxelization of itself: the surfels are subdivided,
 // the fine normals sampled at the subdivided surface by closest-point projection, the mean
 // curvature estimated from them (clamped), and the geometry regularized (docs/regularization.md).
-#include <chrono>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/regularization/normal_map_reconstruction.hpp>
@@ -39,13 +39,6 @@ struct ReconstructArgs {
   bool no_render = false, allow_nonmanifold = false;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point& t0) {
-  const auto now = std::chrono::steady_clock::now();
-  const double s = std::chrono::duration<double>(now - t0).count();
-  t0 = now;
-  return s;
-}
-
 void run(const ReconstructArgs& a) {
   const std::vector<std::string> methods = split_list(a.methods);
   if (methods.empty()) throw InputError("reconstruct: no method (--methods)");
@@ -54,7 +47,7 @@ void run(const ReconstructArgs& a) {
   (void)make_linear_solver(solver_config, kDefaultLinearSolver);
 
   nlohmann::json stages, m;
-  auto t = std::chrono::steady_clock::now();
+  Stopwatch t;
   const PolygonMesh fine = read_mesh(a.mesh_file);
   const TriangleIndices triangles = triangulate(fine);
   const TriangleLocator locator(fine.positions, triangles);
@@ -69,10 +62,10 @@ void run(const ReconstructArgs& a) {
   if (coarse.num_faces() == 0) throw InputError("reconstruct: the voxelization of '" + a.mesh_file + "' is empty");
   check_regularizable(coarse, a.allow_nonmanifold, "reconstruct");
   const SurfelMesh mesh = subdivide_quads(coarse, a.subdivide);
-  stages["voxelize_s"] = seconds_since(t);
+  stages["voxelize_s"] = t.lap();
   // The normal map at the subdivided surface: the fine mesh's normals at the closest points.
   const NormalFields normals = sample_normal_map(mesh, locator, fine_normals);
-  stages["normal_map_s"] = seconds_since(t);
+  stages["normal_map_s"] = t.lap();
   const double size = regularization_size(mesh);
   std::cerr << "reconstruct: " << a.mesh_file << " (" << fine.positions.rows() << " vertices), voxelized at "
             << a.resolution << " (h = " << report.h << ", " << coarse.num_faces() << " surfels), subdivided "
@@ -111,15 +104,15 @@ void run(const ReconstructArgs& a) {
     write_png(a.out + "/before.png", render_mesh(to_polygon_mesh(mesh), nullptr, view));
   }
   // The curvature does not depend on the method: once for all of them.
-  t = std::chrono::steady_clock::now();
+  t.restart();
   const RegularizationCurvature curvature = regularization_curvature(mesh, normals, o);
-  stages["curvature_s"] = seconds_since(t);
+  stages["curvature_s"] = t.lap();
   for (const std::string& method : methods) {
     o.method = method;
     o.method_params = a.method_params.config(method, /*only_declared=*/true);
     const RegularizedSurface r = regularize_surface(mesh, normals, o, &curvature);
     for (const auto& w : r.warnings) std::cerr << "warning: " << method << ": " << w << "\n";
-    const double seconds = seconds_since(t);
+    const double seconds = t.lap();
     const DistanceToMesh after = distance_to_mesh(r.mesh, locator);
     MeshAttributes attr;
     attr.vertex_scalars = {{"H", r.H}};

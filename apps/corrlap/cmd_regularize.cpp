@@ -1,10 +1,10 @@
 // corrlap regularize: the paper's Laplacian regularization (paper §4.1, docs/math.md §9.2). From a
 // staircased digital surface, new vertex positions whose corrected Laplacian matches -2 H n, with
 // n the estimated (II) normals and H the corrected mean curvature.
-#include <chrono>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
@@ -49,13 +49,6 @@ struct RegularizeArgs {
   std::vector<CLI::Option*> laplacian_only;
   CLI::Option* clamp_option = nullptr;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point& t0) {
-  const auto now = std::chrono::steady_clock::now();
-  const double s = std::chrono::duration<double>(now - t0).count();
-  t0 = now;
-  return s;
-}
 
 // The geometry part of metrics.json, the same for both regularizations: the largest move, the
 // areas and, for implicit shapes, the quality before and after (docs/regularization.md).
@@ -102,10 +95,10 @@ void write_metrics(const std::string& dir, const nlohmann::json& m) {
 // docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
 // face normals of --normals (the reference's test uses --normals convolved).
 void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, nlohmann::json& stages,
-                            std::chrono::steady_clock::time_point& t) {
+                            Stopwatch& t) {
   const SurfelMesh& mesh = surface.mesh;
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Face, "regularize --baseline alignment");
-  stages["normals_s"] = seconds_since(t);
+  stages["normals_s"] = t.lap();
   AlignmentParams params;
   params.clamp = a.clamp;
   const bool direct = a.baseline == "alignment-direct";
@@ -115,15 +108,15 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   auto solver = make_linear_solver(solver_config, kDefaultLinearSolver);
   const AlignmentResult r = direct ? alignment_minimizer(mesh, normals.face, *solver, params)
                                    : alignment_regularization(mesh, normals.face, params);
-  stages["solve_s"] = seconds_since(t);
+  stages["solve_s"] = t.lap();
   SurfelMesh result = mesh;
   result.positions = r.positions;
   MeshAttributes input_attr;
   input_attr.face_normals = normals.face;
   write_surfaces(a.out, mesh, input_attr, result, {}, OutputUnits::parse(a.output_units, surface));
-  stages["write_s"] = seconds_since(t);
+  stages["write_s"] = t.lap();
   if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, result, "", {}, {});
-  t = std::chrono::steady_clock::now();
+  t.restart();
   nlohmann::json m;
   m["surface"] = a.source.describe();
   m["vertices"] = mesh.num_vertices();
@@ -174,11 +167,11 @@ void run(const RegularizeArgs& a) {
   (void)make_discretization(o.method);
 
   nlohmann::json stages;
-  auto t = std::chrono::steady_clock::now();
+  Stopwatch t;
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
   check_regularizable(mesh, a.allow_nonmanifold, "regularize");
-  stages["surface_s"] = seconds_since(t);
+  stages["surface_s"] = t.lap();
   std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces, h = " << mesh.grid_step() << "\n";
   if (!a.baseline.empty()) {
@@ -187,21 +180,21 @@ void run(const RegularizeArgs& a) {
   }
   // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Vertex, "regularize");
-  stages["normals_s"] = seconds_since(t);
+  stages["normals_s"] = t.lap();
   const RegularizedSurface r = regularize_surface(mesh, normals, o);
   for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
   stages["curvature_s"] = r.curvature_seconds;
   stages["operators_s"] = r.operators_seconds;
   stages["solve_s"] = r.solve_seconds;
-  t = std::chrono::steady_clock::now();
+  t.restart();
 
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
   input_attr.vertex_scalars = {{"H", r.H}};
   write_surfaces(a.out, mesh, input_attr, r.mesh, {{"H", r.H}}, OutputUnits::parse(a.output_units, surface));
-  stages["write_s"] = seconds_since(t);
+  stages["write_s"] = t.lap();
   if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, r.mesh, "H", r.H, r.H);
-  t = std::chrono::steady_clock::now();
+  t.restart();
 
   nlohmann::json m;
   m["surface"] = a.source.describe();

@@ -2,10 +2,10 @@
 // and any linear solver backend; prints timings, the residual and the error vs the analytic solution.
 //   --system poisson: the pure-Neumann Poisson problem L g = M b of docs/math.md §10.4 (-L pinned);
 //   --system heat:    the diffusion step (M - dt L) X = L u of docs/math.md §10.3, dt = dt-factor * h.
-#include <chrono>
 #include <cmath>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/problems/problems.hpp>
@@ -38,10 +38,6 @@ struct SolveArgs {
   bool json = false;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 void run(const SolveArgs& a) {
   // Backend configuration first: a bad key fails before the (possibly long) assembly.
   const Config config = a.solver.config();
@@ -52,7 +48,7 @@ void run(const SolveArgs& a) {
   const Config params = a.method.config();
   const TestFunction* analytic = has_test_function(a.rhs) ? &test_function(a.rhs) : nullptr;
 
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
   // The normals of `corrlap operators` for the same options (docs/math.md §1.5, resolve_normals).
@@ -65,7 +61,7 @@ void run(const SolveArgs& a) {
   if (ops.domain != Operators::Domain::Vertices)
     throw InputError("corrlap solve: method '" + a.method.method +
                      "' defines operators on faces; the Poisson problem is set on vertices");
-  const double assemble_s = seconds_since(t0);
+  const double assemble_s = watch.elapsed();
   const Eigen::Index n = ops.L.rows();
 
   const Eigen::Vector3d c(a.source.center[0], a.source.center[1], a.source.center[2]);

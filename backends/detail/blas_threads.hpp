@@ -2,10 +2,8 @@
 // OpenBLAS's thread count (internal): the one process-wide BLAS setting, changed only here.
 // Debian's pthread OpenBLAS keeps its idle workers spinning in sched_yield for a while after each
 // call. That pays off for a large factorization's dense kernels and not for the many small calls
-// of an eigen iteration: `eigs -k 49` at 1 328 unknowns took 3.05 s with 2 threads on a machine
-// busy with a build and 0.42 s with one, and at 188 K unknowns it spent 26 s of system time
-// spinning for the same wall time as with one thread (docs/scale.md "Threads"). Without OpenBLAS
-// every function here does nothing.
+// of an eigen iteration, where the spinning costs system time and, on a busy machine, wall time
+// (docs/scale.md "Threads"). Without OpenBLAS every function here does nothing.
 namespace corrlap::detail {
 
 /// Sets OpenBLAS to n >= 1 threads. Inside a SerialBlasScope the change takes effect when the last

@@ -4,8 +4,8 @@
 // With S = (K - sigma M)^{-1} M the largest theta = 1 / (mu - sigma) are the mu nearest sigma.
 //
 // Why blocks: a single-vector Lanczos (Spectra) orthogonalizes each new vector against the whole
-// basis with matrix-vector products, which stream the basis from memory once per vector; that was
-// 52% of `corrlap eigs -k 49` at 47 K unknowns. A block of b vectors does the same work as
+// basis with matrix-vector products, which stream the basis from memory once per vector, the
+// largest part of a large solve (docs/backends.md, "Why blocks"). A block of b vectors does the same work as
 // matrix-matrix products (one pass over the basis per block) and its b-column solves run as BLAS-3
 // in CHOLMOD. A block also sees up to b copies of a multiple eigenvalue at once, where one vector
 // sees the extra copies only through rounding.

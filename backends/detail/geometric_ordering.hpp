@@ -2,10 +2,8 @@
 // Fill-reducing elimination order from the positions of the unknowns (internal): nested dissection
 // by coordinate planes. The systems here are Laplacians of surfaces embedded in R^3; a plane through
 // the median of the longest side cuts such a surface along a curve of O(sqrt n) unknowns, the kind of
-// separator METIS finds by graph coarsening, in a small fraction of its time.
-// Measured (2026-12-03, digitized unit sphere, CHOLMOD's symbolic counts, bench/RESULTS.md):
-//   n = 188 456:   AMD 1.03e10 flops, METIS 4.45e9, planes 3.62e9 (0.04 s to order);
-//   n = 1 177 832: AMD 2.29e11 flops, METIS 6.9e10 (7.4 s to order), planes 5.7e10 (0.6 s).
+// separator METIS finds by graph coarsening, in a small fraction of its time. Factor flops and
+// ordering times against AMD and METIS: bench/RESULTS.md, "Scale on one machine".
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <vector>

@@ -2,9 +2,9 @@
 // Checks and helpers shared by the linear solver backends (input validation with SolverError
 // statuses, timing, config forwarding). Internal to backends/: no third-party solver header here.
 #include <Eigen/Sparse>
-#include <chrono>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/linear_solver.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -48,14 +48,5 @@ Config without_keys(const Config& config, const std::vector<std::string>& drop);
 
 /// Relative residual |A X - B|_F / |B|_F (0 when B = 0).
 double relative_residual(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& X, const Eigen::MatrixXd& B);
-
-class Stopwatch {
- public:
-  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
-  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
-
- private:
-  std::chrono::steady_clock::time_point start_;
-};
 
 }  // namespace corrlap::detail

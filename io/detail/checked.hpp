@@ -37,12 +37,13 @@ inline std::string readable_count(std::uint64_t n) {
 inline std::string readable_bytes(double bytes) { return corrlap::readable_bytes(bytes); }
 
 /// Refuses, as an IoError prefixed by `file_label` (e.g. "PLY file 'x.ply'"), a reader allocation
-/// of `bytes` for `what` (e.g. "3 000 000 vertices") above the memory budget (--max-memory).
+/// of `bytes` for `what` (e.g. "3 000 000 vertices") above the memory budget (max_memory; the
+/// parameter tag is kept).
 inline void check_budget(const std::string& file_label, double bytes, const std::string& what) {
   try {
     check_memory_budget(bytes, what, "is the header corrupt?");
   } catch (const InputError& e) {
-    throw IoError(file_label + ": " + e.what());
+    throw IoError(file_label + ": " + e.what(), e.parameter());
   }
 }
 

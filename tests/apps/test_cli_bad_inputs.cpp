@@ -71,7 +71,7 @@ const std::vector<BadCall>& catalogue() {
       {"--max-memory abc info {D}/s.obj", "memory size 'abc': expected a positive size"},
       {"--max-memory 0 info {D}/s.obj", "memory size '0'"},
       {"--max-memory 1M digitize --shape sphere1 --h 0.01 --out {D}/x.obj",
-       "more than the memory budget of 1.0 MiB (--max-memory); use a larger grid step or a smaller box"},
+       "more than the memory budget of 1.0 MiB (max_memory); use a larger grid step or a smaller box"},
       {"--max-memory 64M digitize --shape sphere1 --h 0.004 --bbox -1.2 1.2 --offset 1 --out {D}/x.obj",
        "surface extraction of"},
       {"--max-memory 64M digitize --volume {D}/big.vol --threshold 0 --out {D}/x.obj",
@@ -94,7 +94,7 @@ const std::vector<BadCall>& catalogue() {
       // digitize: volumes.
       {"digitize --volume {D}/missing.vol --threshold 0 --out {D}/x.obj", "missing.vol': cannot open"},
       {"digitize --volume {D}/trunc.vol --threshold 0 --out {D}/x.obj", "trunc.vol'"},
-      {"digitize --volume {D}/short.raw --threshold 0 --out {D}/x.obj", "--raw-dimensions NX NY NZ"},
+      {"digitize --volume {D}/short.raw --threshold 0 --out {D}/x.obj", "need their dimensions (raw_dimensions"},
       {"digitize --volume {D}/short.raw --raw-dimensions 2 2 2 --threshold 0 --out {D}/x.obj", "short.raw'"},
       {"digitize --volume {D}/float.nrrd --threshold 0 --out {D}/x.obj", "unsupported type 'float'"},
       {"digitize --volume {D}/model.stl --threshold 0 --out {D}/x.obj", "unsupported extension 'stl'"},

@@ -44,8 +44,8 @@ TEST_CASE("eigs sparse and dense paths agree") {
   REQUIRE(b.size() == 12);
   for (std::size_t i = 1; i < a.size(); ++i) CHECK(a[i] == doctest::Approx(b[i]).epsilon(1e-8));
   // By default the path is chosen by cost: dense for a tiny problem, Lanczos once n exceeds twice
-  // its basis (k = 12: basis 38, so n = 440 is Lanczos; the 2026-12-03 default took the dense path
-  // up to n = 6000, 1400 times slower at n = 5264).
+  // its basis (k = 12: basis 38, so n = 440 is Lanczos; a fixed size threshold would take the dense
+  // path far past the crossing, docs/backends.md "Dense or Lanczos").
   REQUIRE(corrlap::test::run_cli(base, &dense, &err) == 0);
   CHECK(err.find("shift-invert (cholmod,") != std::string::npos);
   REQUIRE(corrlap::test::run_cli("eigs --method fem --shape sphere1 --h 0.6 --bbox -2 2 --normals true -k 12", &dense,

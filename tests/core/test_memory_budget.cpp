@@ -54,12 +54,17 @@ TEST_CASE("the default budget is the machine's memory; check_memory_budget names
   CHECK_NOTHROW(check_memory_budget(1024.0, "a small thing"));
   const std::string m = message_of([] { check_memory_budget(1e30, "a huge thing", "ask for less"); });
   CHECK(m.find("a huge thing needs") != std::string::npos);
-  CHECK(m.find("this machine's memory; --max-memory sets it") != std::string::npos);
+  CHECK(m.find("this machine's memory; max_memory sets it") != std::string::npos);
   CHECK(m.find("; ask for less") != std::string::npos);
   const BudgetScope scope(1 << 20);
   CHECK(memory_budget() == 1u << 20);
   const std::string n = message_of([] { check_memory_budget(std::nan(""), "an unknown amount"); });
-  CHECK(n.find("more than the memory budget of 1.0 MiB (--max-memory)") != std::string::npos);
+  CHECK(n.find("more than the memory budget of 1.0 MiB (max_memory)") != std::string::npos);
+  try {
+    check_memory_budget(1e30, "a huge thing");
+  } catch (const InputError& e) {
+    CHECK(e.parameter() == "max_memory");  // the CLI adds its flag, --max-memory
+  }
 }
 
 TEST_CASE("a voxel grid and a surface extraction beyond the budget are refused before allocating") {
@@ -83,7 +88,7 @@ TEST_CASE("a voxel grid and a surface extraction beyond the budget are refused b
     const std::string m = message_of([&] { extract_surface(grid); });
     CHECK(m.find("surface extraction of") != std::string::npos);
     CHECK(m.find("more than the memory budget of 2.0 MiB") != std::string::npos);
-    CHECK(m.find("use a larger grid step (--h)") != std::string::npos);
+    CHECK(m.find("use a larger grid step h") != std::string::npos);
   }
   CHECK(extract_surface(grid).num_faces() > 40000);  // default budget: fine
 }

@@ -129,4 +129,16 @@ TEST_CASE("ii normals reject a radius below one voxel, above the volume, and mes
   SurfelMesh no_voxels = d.mesh;
   no_voxels.surfels.clear();
   CHECK_THROWS_AS(ii_face_normals(d.grid, no_voxels), InputError);
+  // The errors speak library terms and name the parameter at fault (front ends add their flag).
+  const auto parameter_of = [](const auto& f) -> std::string {
+    try {
+      f();
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()).find("--") == std::string::npos);
+      return e.parameter();
+    }
+    return "(no error)";
+  };
+  CHECK(parameter_of([&] { ii_face_normals(d.grid, d.mesh, tiny); }) == "ii_radius");
+  CHECK(parameter_of([&] { ii_face_normals(d.grid, no_voxels); }) == "normals");
 }

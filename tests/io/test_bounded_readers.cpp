@@ -4,8 +4,8 @@
 // checked helper. Small hand-made inputs live in tests/data/bad_inputs/ (see its README.md).
 #include <doctest/doctest.h>
 
-#include <chrono>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/stopwatch.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
@@ -26,7 +26,7 @@ std::string bad_input(const std::string& name) { return corrlap::test::reference
 // Runs read, expects an InputError whose message contains every fragment; returns the seconds taken.
 template <class F>
 double expect_error(F&& read, const std::vector<std::string>& fragments) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   bool threw = false;
   try {
     read();
@@ -40,7 +40,7 @@ double expect_error(F&& read, const std::vector<std::string>& fragments) {
     }
   }
   CHECK(threw);
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return watch.elapsed();
 }
 
 template <class T>
@@ -195,9 +195,9 @@ TEST_CASE("PLY: elements without properties cost nothing, counts are bounded by 
              "ply\nformat ascii 1.0\n" + junk +
                  "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch watch;
   const PolygonMesh mesh = read_ply(p);
-  CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 1.0);
+  CHECK(watch.elapsed() < 1.0);
   CHECK(mesh.positions.rows() == 3);
   CHECK(mesh.faces.size() == 1);
   // An element with one property needs at least one byte (binary) or two characters per entry.

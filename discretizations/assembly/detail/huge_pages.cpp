@@ -23,7 +23,7 @@ void advise_huge_pages(const void* p, std::size_t bytes) {
   if (tail > b) (void)madvise(reinterpret_cast<void*>(b), tail - b, MADV_HUGEPAGE);  // a hint: failure is harmless
   // The 2 MiB blocks holding the head and the tail are shared with the malloc header and
   // possibly other allocations, and malloc has already touched the header, so a fault there
-  // would map 4 KiB pages: up to 511 faults per end, ~10 us each on a VM. Collapsing such a block
+  // would map 4 KiB pages: up to 511 faults per end (bench/RESULTS.md, "bench_assembly"). Collapsing such a block
   // maps it as one huge page now (existing contents are copied by the kernel). It fails
   // harmlessly when the block is not entirely inside one mapping.
   if (head != lo) (void)madvise(reinterpret_cast<void*>(head), huge, MADV_COLLAPSE);

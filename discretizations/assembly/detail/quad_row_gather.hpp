@@ -204,18 +204,17 @@ inline constexpr int kPairColumnMax = 64;
 /// column has at most kPairColumnMax entries (surfel meshes have at most 25). Entry k of both
 /// columns is summed in one 2-lane vector, so a corner's contribution is one vector add instead of
 /// two scalar read-modify-writes; lane m adds exactly what the scalar sum of matrix m adds, in the
-/// same order, so the bits are the same. fem at h = 0.005 on one thread: gather 30 -> 26.5 ms
-/// (isolated, min of 15), whole assemble_into 68 -> 60 ms (A/B interleaved).
+/// same order, so the bits are the same. Timings: bench/RESULTS.md, "Assembly: record of
+/// experiments" (fem after the paired gather).
 template <class RowKernel>
 void gather_quad_row_pairs(const QuadVertexPattern& p, RowKernel&& kernel, Eigen::SparseMatrix<double>& A0,
                            Eigen::SparseMatrix<double>& A1) {
   const int V = p.num_vertices;
   const Eigen::Index nnz = p.outer[std::size_t(V)];
-  // Sized in two tasks. Measured effect (fem, fresh output, h = 0.005, 2 threads): 2 482 -> 457
-  // minor faults per call, min 59-72 -> 41-48 ms. Mostly glibc's doing: when a TBB worker runs the
-  // second task, that matrix's arrays (the 3 MB outer index that Eigen's resize zeroes, among
-  // others) come from the worker's arena, which keeps and reuses freed pages. On one thread both
-  // run inline, as before. Same bits either way.
+  // Sized in two tasks, so that the second matrix's arrays (the outer index that Eigen's resize
+  // zeroes, among others) come from a TBB worker's glibc arena, which keeps and reuses freed pages:
+  // far fewer page faults on fresh output (bench/RESULTS.md, "Assembly: record of experiments",
+  // "L and M sized in two tasks"). On one thread both run inline. Same bits either way.
   tbb::parallel_invoke([&] { size_for_fill(A0, V, nnz); }, [&] { size_for_fill(A1, V, nnz); });
   int* const inner0 = A0.innerIndexPtr();
   int* const inner1 = A1.innerIndexPtr();
@@ -280,7 +279,8 @@ void gather_quad_rows(const QuadVertexPattern& p, RowKernel&& kernel,
   // Columns of up to kStack entries (all of them on surfel meshes, at most 25) are summed in a
   // stack buffer and then stored once: the outputs are fresh memory, each value is written once
   // instead of zeroed and then updated 4 times in place (the summation order, hence every bit,
-  // is the in-place one). Longer columns sum in place. (Streaming stores were measured: no gain.)
+  // is the in-place one). Longer columns sum in place. Plain stores: streaming (non-temporal) ones
+  // are slower on the VMs measured (bench/RESULTS.md, "Assembly: record of experiments").
   constexpr int kStack = 64;
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 2048), [&](const tbb::blocked_range<int>& r) {
     double rows[4 * Count];

@@ -23,15 +23,14 @@ inline Eigen::Index mapping_friendly_capacity(Eigen::Index n) {
 /// write (contents left uninitialized), keeping A's storage when it is large enough (assemble_into).
 /// New storage gets at least 2 MiB of spare capacity past the last entry (a mapping-friendly
 /// capacity, above) and advise_huge_pages over all of it: one fresh 2 MiB block then costs one
-/// fault instead of up to 512. Fresh fem output at h = 0.005: 2 778 -> 1 521 faults per call on one
-/// thread (the rest is Eigen's outer index), 645 -> 52 on two.
+/// fault instead of up to 512 (fault counts: bench/RESULTS.md, "bench_assembly", findings).
 inline void size_for_fill(Eigen::SparseMatrix<double>& A, int V, Eigen::Index nnz) {
   constexpr Eigen::Index kSpare = (Eigen::Index(2) << 20) / Eigen::Index(sizeof(int));  // 2 MiB of indices
   A.resize(V, V);  // keeps the allocation of the values and indices
   if (A.data().allocatedSize() < nnz) {
     A.data().reserve(mapping_friendly_capacity(nnz + kSpare));
-    // Only new storage: reused storage (assemble_into) was advised when it was allocated, and the
-    // collapse calls cost up to ~0.3 ms each even on blocks that are already huge pages.
+    // Only new storage: reused storage (assemble_into) was advised when it was allocated, and a
+    // collapse call is not free even on a block that is already a huge page.
     const std::size_t capacity = std::size_t(A.data().allocatedSize());
     advise_huge_pages(A.valuePtr(), capacity * sizeof(double));
     advise_huge_pages(A.innerIndexPtr(), capacity * sizeof(int));
@@ -41,8 +40,9 @@ inline void size_for_fill(Eigen::SparseMatrix<double>& A, int V, Eigen::Index nn
 
 /// Gives A (already sized n x n, outer index to be written by the caller) exactly nnz stored
 /// entries in fresh storage, hinted onto huge pages before the caller's first write: for outputs
-/// filled once in a parallel pass (the heat kernel), whose 4 KiB first-touch faults would cost as
-/// much as the computation on a VM. Throws std::bad_alloc like Eigen's resizeNonZeros.
+/// filled once in a parallel pass (the heat kernel), whose 4 KiB first-touch faults can cost as
+/// much as the computation (bench/RESULTS.md, "bench_heat_kernel"). Throws std::bad_alloc like
+/// Eigen's resizeNonZeros.
 inline void allocate_sparse_storage(Eigen::SparseMatrix<double>& A, Eigen::Index nnz) {
   A.resizeNonZeros(nnz);
   advise_huge_pages(A.innerIndexPtr(), std::size_t(nnz) * sizeof(int));
