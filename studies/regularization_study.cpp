@@ -39,7 +39,8 @@ double longest_side(const ImplicitShape& shape, const RegularizationStudyOptions
   const VoxelGrid grid = digitize(shape, box(o, (o.max_aabb - o.min_aabb) / 96.0));
   if (grid.count() == 0)
     throw InputError("study regularization: shape '" + name + "' has no voxel inside the box [" +
-                     std::to_string(o.min_aabb) + ", " + std::to_string(o.max_aabb) + "]^3 (give --bbox)");
+                         std::to_string(o.min_aabb) + ", " + std::to_string(o.max_aabb) + "]^3 (give a box)",
+                     "bbox");
   const SurfelMesh coarse = extract_surface(grid);
   return (coarse.positions.colwise().maxCoeff() - coarse.positions.colwise().minCoeff()).maxCoeff();
 }
@@ -47,9 +48,9 @@ double longest_side(const ImplicitShape& shape, const RegularizationStudyOptions
 }  // namespace
 
 void RegularizationStudyOptions::validate() const {
-  if (shapes.empty()) throw InputError("study regularization: no shape (--shapes)");
+  if (shapes.empty()) throw InputError("study regularization: no shape", "shapes");
   for (const std::string& s : shapes) (void)make_implicit_shape(s);  // InputError listing the names
-  if (methods.empty()) throw InputError("study regularization: no method (--methods)");
+  if (methods.empty()) throw InputError("study regularization: no method", "methods");
   for (const std::string& m : methods)
     if (m != "alignment") (void)make_discretization(m);  // InputError listing the registry
   if (h.empty() && resolutions.empty()) throw InputError("study regularization: no resolution and no h");

@@ -50,7 +50,7 @@ const char* to_string(StudyKind kind) {
 }
 
 void StudyOptions::validate() const {
-  if (methods.empty()) throw InputError("study: no method given (--methods fem,interpolated,...)");
+  if (methods.empty()) throw InputError("study: no method given", "methods");
   const std::vector<std::string> known = discretization_registry().names();
   for (const std::string& m : methods)
     if (std::find(known.begin(), known.end(), m) == known.end()) (void)make_discretization(m);  // lists the names
@@ -62,40 +62,45 @@ void StudyOptions::validate() const {
       throw InputError("study: method parameter '" + kv + "': no method of the study has the key '" + key + "'");
   }
   if (kind == StudyKind::Cotan) {
-    if (mesh_file.empty()) throw InputError("study cotan: no mesh given (--mesh-file bunny.obj)");
-    if (resolutions.empty()) throw InputError("study cotan: the list of resolutions is empty (--resolutions 128,256)");
+    if (mesh_file.empty()) throw InputError("study cotan: no mesh given", "mesh_file");
+    if (resolutions.empty())
+      throw InputError("study cotan: the list of resolutions is empty (e.g. 128,256)", "resolutions");
     for (int n : resolutions)
       if (n < 4 || n > 4096)
-        throw InputError("study cotan: resolution " + std::to_string(n) + " must be in [4, 4096] voxels");
+        throw InputError("study cotan: resolution " + std::to_string(n) + " must be in [4, 4096] voxels",
+                         "resolutions");
     if (refine_vertices < 0 || refine_vertices > 100000000)
-      throw InputError("study cotan: --refine-vertices must be in [0, 1e8]");
+      throw InputError("study cotan: refine_vertices must be in [0, 1e8]", "refine_vertices");
     if (reference_values != "interpolated" && reference_values != "at-foot")
-      throw InputError("study cotan: reference values '" + reference_values + "': expected interpolated or at-foot");
+      throw InputError("study cotan: reference values '" + reference_values + "': expected interpolated or at-foot",
+                       "reference_values");
     if (reference_laplacian != "plain" && reference_laplacian != "diffused")
-      throw InputError("study cotan: reference Laplacian '" + reference_laplacian + "': expected plain or diffused");
+      throw InputError("study cotan: reference Laplacian '" + reference_laplacian + "': expected plain or diffused",
+                       "reference_laplacian");
     (void)study_normal_source(*this);
   } else {
-    if (h.empty()) throw InputError("study: the list of grid steps is empty (--h 0.1,0.05 or A:B:N)");
+    if (h.empty()) throw InputError("study: the list of grid steps h is empty", "h");
     for (double step : h)
       if (!(step > 0.0) || !std::isfinite(step)) {
         std::ostringstream os;
         os << "study: grid step h = " << step << " must be positive and finite";
-        throw InputError(os.str());
+        throw InputError(os.str(), "h");
       }
     (void)study_normal_source(*this);
   }
   if (kind != StudyKind::Eigen) {
-    if (functions.empty()) throw InputError("study: no test function given (--functions x2,expx,p6)");
+    if (functions.empty()) throw InputError("study: no test function given (functions: x2, expx, p6)", "functions");
     for (const std::string& f : functions) (void)test_function(f);  // InputError listing the names
   }
-  if (centers < 1 || centers > 10000) throw InputError("study: --centers must be in [1, 10000]");
+  if (centers < 1 || centers > 10000) throw InputError("study: centers must be in [1, 10000]", "centers");
   if ((kind == StudyKind::Forward || kind == StudyKind::Cotan) && !naive &&
       !(diffusion > 0.0 && std::isfinite(diffusion)))
-    throw InputError("study: --diffusion must be positive (or --naive)");
-  if (kind == StudyKind::Eigen && (k < 1 || k > 1000)) throw InputError("study: -k must be in [1, 1000]");
+    throw InputError("study: diffusion must be positive (or naive)", "diffusion");
+  if (kind == StudyKind::Eigen && (k < 1 || k > 1000))
+    throw InputError("study: k (the number of eigenvalues) must be in [1, 1000]", "k");
   if (linear_solver != "auto") (void)make_linear_solver(linear_solver);  // InputError listing the backends
-  if (!(min_aabb < max_aabb)) throw InputError("study: the box needs MIN < MAX");
-  if (offset < 0) throw InputError("study: --offset must be >= 0");
+  if (!(min_aabb < max_aabb)) throw InputError("study: the box needs MIN < MAX", "bbox");
+  if (offset < 0) throw InputError("study: offset must be >= 0", "offset");
   if (!(ii_k > 0) || !std::isfinite(ii_alpha)) throw InputError("study: II radius parameters must be positive");
 }
 
@@ -288,8 +293,8 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
 // the Cholesky factor of such a matrix fills in far beyond it, while Jacobi CG needs a few products.
 // And except for the forward systems A = M - dt L (docs/math.md §10.3): dt = 0.035 h keeps them close
 // to the mass matrix, kappa(A) ~ kappa(M) (1 + dt lambda_max(M^-1 L)) = O(1/h) with lambda_max ~ 1/h^2,
-// so Jacobi CG converges in a few dozen cheap products where CHOLMOD factorizes (measured 1.5x faster
-// for the five mesh methods at h = 0.0125, the same errors to 10 digits: bench/RESULTS.md).
+// so Jacobi CG converges in a few dozen cheap products where CHOLMOD factorizes (bench/RESULTS.md,
+// "corrlap study").
 std::string solver_for(const std::string& choice, const Eigen::SparseMatrix<double>& L, StudyKind kind) {
   if (choice != "auto") return choice;
   if (kind == StudyKind::Forward || kind == StudyKind::Cotan) return "cg";

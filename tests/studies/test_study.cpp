@@ -303,7 +303,7 @@ TEST_CASE("corrlap study: CSV files with the documented columns, resume without 
   CHECK(test::run_cli("study backward --methods fem --h ," + d2, &out, &err) == 1);
   CHECK(err.find("empty") != std::string::npos);
   CHECK(test::run_cli("study cotan --methods fem" + d2, &out, &err) == 1);
-  CHECK(err.find("no mesh given (--mesh-file") != std::string::npos);
+  CHECK(err.find("no mesh given (--mesh-file)") != std::string::npos);
   CHECK(test::run_cli("study cotan --mesh-file " + icosahedron_obj() + " --resolutions 64,x" + d2, &out, &err) == 1);
   CHECK(err.find("'x' is not an integer") != std::string::npos);
   CHECK(test::run_cli("study cotan --mesh-file " + icosahedron_obj() + " --normals true" + d2, &out, &err) == 1);
