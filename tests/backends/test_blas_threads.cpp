@@ -10,7 +10,7 @@ extern "C" int openblas_get_num_threads() __attribute__((weak));
 using corrlap::detail::SerialBlasScope;
 using corrlap::detail::set_blas_threads;
 
-TEST_CASE("SerialBlasScope runs OpenBLAS on one thread and restores the count; set_blas_threads waits for it") {
+TEST_CASE("SerialBlasScope runs OpenBLAS on one thread and restores the count, set_blas_threads waits for it") {
   if (!openblas_get_num_threads) {
     MESSAGE("BLAS is not OpenBLAS: nothing to check");
     return;

@@ -254,7 +254,7 @@ TEST_CASE("ichol needs fewer iterations than jacobi, which needs no more than no
   CHECK(it[2] < it[1]);
 }
 
-TEST_CASE("unknown keys and names list the valid ones; key solver is accepted") {
+TEST_CASE("unknown keys and names list the valid ones, key solver is accepted") {
   for (const char* name : {"eigen-ldlt", "eigen-llt", "cholmod", "cg"}) {
     CAPTURE(name);
     try {

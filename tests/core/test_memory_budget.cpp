@@ -32,7 +32,7 @@ std::string message_of(const auto& f) {
 }
 }  // namespace
 
-TEST_CASE("memory sizes: K, M, G, T suffixes are powers of 1024; anything else is named") {
+TEST_CASE("memory sizes: K, M, G, T suffixes are powers of 1024, anything else is named") {
   CHECK(parse_memory_size("1000000") == 1000000u);
   CHECK(parse_memory_size("64k") == 64u * 1024u);
   CHECK(parse_memory_size("512M") == 512ull << 20);
@@ -47,7 +47,7 @@ TEST_CASE("memory sizes: K, M, G, T suffixes are powers of 1024; anything else i
   CHECK(readable_bytes(3.0 * 1024 * 1024) == "3.0 MiB");
 }
 
-TEST_CASE("the default budget is the machine's memory; check_memory_budget names need, budget and remedy") {
+TEST_CASE("the default budget is the machine's memory, check_memory_budget names need, budget and remedy") {
   set_memory_budget(0);
   CHECK(memory_budget() == physical_memory_bytes());
   CHECK(physical_memory_bytes() > (std::uint64_t{64} << 20));

@@ -45,7 +45,7 @@ TEST_CASE("cotan on a single equilateral triangle: 1/(2 sqrt 3) weights and A/3 
   }
 }
 
-TEST_CASE("cotan eigenvalues on icospheres converge toward l(l+1); L 1 = 0, symmetric") {
+TEST_CASE("cotan eigenvalues on icospheres converge toward l(l+1), L 1 = 0, symmetric") {
   double prev_err = 1e9;
   for (int level = 2; level <= 3; ++level) {
     Eigen::MatrixX3d V;
@@ -72,7 +72,7 @@ TEST_CASE("cotan eigenvalues on icospheres converge toward l(l+1); L 1 = 0, symm
   }
 }
 
-TEST_CASE("cotan registry entry splits quads; flat surfel gives the 5-point-like stencil and h^2 masses") {
+TEST_CASE("cotan registry entry splits quads, flat surfel gives the 5-point-like stencil and h^2 masses") {
   const SurfelMesh sphere = test::sphere1_surface(0.25);
   const Operators ops = make_discretization("cotan")->assemble(sphere, NormalFields(), Config());
   CHECK((ops.L * Eigen::VectorXd::Ones(ops.L.cols())).cwiseAbs().maxCoeff() < 1e-12);

@@ -116,7 +116,7 @@ TEST_CASE("every method: L 1 = 0, L and M symmetric, L negative semi-definite, M
 }
 
 TEST_CASE(
-    "every method: flipping face orientation and normals together changes nothing; flipping only normals is rejected") {
+    "every method: flipping face orientation and normals together changes nothing, flipping only normals is rejected") {
   const SphereCase& s = base_case();
   SphereCase flipped = s;
   for (int f = 0; f < s.mesh.num_faces(); ++f)
@@ -235,7 +235,7 @@ TEST_CASE("corrected methods: inconsistent orientation follows the policy error 
   }
 }
 
-TEST_CASE("interpolated rejects a non-square face naming it; empty meshes are rejected by every quad method") {
+TEST_CASE("interpolated rejects a non-square face naming it, empty meshes are rejected by every quad method") {
   SphereCase s = flat_grid(3, 1.0);
   s.mesh.positions(5, 0) += 0.2;  // vertex 5 is a corner of faces 0, 1, 3, 4
   try {

@@ -216,7 +216,7 @@ TEST_CASE("every method parameter is a flag of every command that assembles oper
   }
 }
 
-TEST_CASE("a flag and --param give the same parameter; errors name the flag") {
+TEST_CASE("a flag and --param give the same parameter, errors name the flag") {
   const std::string mesh = test::sphere_ref("mesh.obj"), fn = test::sphere_ref("face_normals_true.txt");
   const std::string common = "operators --mesh " + mesh + " --face-normals " + fn + " --method polydec ";
   const std::string a = test::tmp_path("flag_lambda"), b = test::tmp_path("param_lambda");

@@ -84,7 +84,7 @@ TEST_CASE("cli estimators reject bad input with clear errors") {
   CHECK(err.find("(--normals)") != std::string::npos);  // the library's parameter, in CLI terms
 }
 
-TEST_CASE("cli normals on a volume file gives the reference II normals; empty volumes are rejected") {
+TEST_CASE("cli normals on a volume file gives the reference II normals, empty volumes are rejected") {
   DigitizationParams p;
   p.h = 0.2;
   p.min_aabb = -1.5;

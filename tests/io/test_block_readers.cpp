@@ -310,7 +310,7 @@ TEST_CASE("corner reserve: exact for one face degree, grows by the mean degree, 
   CHECK(few.corners().capacity() == 1000);
 }
 
-TEST_CASE("OFF reads the same at every block size; quads and mixed faces") {
+TEST_CASE("OFF reads the same at every block size, quads and mixed faces") {
   const std::string p = tmp_path("blocks.off");
   write_text(p,
              "OFF\n# quads and a triangle\n6 4 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1e-300\n"

@@ -80,7 +80,7 @@ TEST_CASE("NRRD sizes whose voxel count wraps 32 bits are rejected before readin
   expect_error([&] { read_volume(raw, huge); }, {"overflow 64 bits, more than the 16.0 GiB a volume may hold"});
 }
 
-TEST_CASE("NRRD gzip: announced sizes bounded by what the compressed bytes can hold; inflating stops at the sizes") {
+TEST_CASE("NRRD gzip: announced sizes bounded by what the compressed bytes can hold, inflating stops at the sizes") {
   if (!nrrd_gzip_supported()) {
     MESSAGE("built without zlib: gzip bounds not tested");
     return;

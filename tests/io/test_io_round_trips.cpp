@@ -160,7 +160,7 @@ TEST_CASE("volume round trips are exact for .vol, .longvol, .raw and .nrrd") {
   }
 }
 
-TEST_CASE(".vol Version 3 (zlib): DGtal's compressed files are read; written and read back exactly") {
+TEST_CASE(".vol Version 3 (zlib): DGtal's compressed files are read, written and read back exactly") {
   const std::string dgtal = corrlap::test::reference_dir() + "/volumes/pattern_6x5x4_v3.vol";
   if (!nrrd_gzip_supported()) {
     CHECK_THROWS_WITH_AS(read_volume(dgtal), doctest::Contains("zlib"), IoError);
@@ -440,7 +440,7 @@ TEST_CASE("volume writers go through a temporary file: replaced whole, or untouc
     CHECK(entry.path().filename().string().find(".tmp-") == std::string::npos);
 }
 
-TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 2 / N); --h overrides") {
+TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 2 / N), --h overrides") {
   CHECK(unit_size_grid_step(Eigen::Vector3i(6, 5, 4)) == doctest::Approx(1.0 / 3.0));
   const std::string vol = corrlap::test::reference_dir() + "/volumes/pattern_6x5x4_v3.vol";
   if (!nrrd_gzip_supported()) return;
@@ -452,10 +452,13 @@ TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 
   const SurfelMesh voxels = extract_surface(read_volume_as_voxels(vol, o));
   REQUIRE(unit.num_vertices() == voxels.num_vertices());
   CHECK((unit.positions - voxels.positions / 3.0).cwiseAbs().maxCoeff() < 1e-12);
-  // The CLI: no --h gives the same h = 1/3.
+  // The CLI: no --h gives the same h = 1/3, the volume's centre at the origin (docs/io.md).
+  o.h = 0.0;
+  o.centered = true;
+  const SurfelMesh centered = extract_surface(read_volume_as_voxels(vol, o));
   const std::string out = corrlap::test::tmp_path("unit_volume.obj");
   REQUIRE(corrlap::test::run_cli("digitize --volume " + vol + " --threshold 100 --out " + out) == 0);
-  CHECK((read_mesh(out).positions - unit.positions).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK((read_mesh(out).positions - centered.positions).cwiseAbs().maxCoeff() < 1e-12);
   o.h = -1.0;
   CHECK_THROWS_AS(read_volume_as_voxels(vol, o), InputError);
 }

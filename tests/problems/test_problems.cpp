@@ -101,7 +101,7 @@ TEST_CASE("solve_neumann_poisson_columns equals one solve_neumann_poisson per co
   CHECK_THROWS_AS(solve_neumann_poisson_columns(op.L, op.M, B, *s, pins, int(n)), InputError);
 }
 
-TEST_CASE("forward_laplacian solves (M - dt L) X = L u; error_norms of a constant are the constant") {
+TEST_CASE("forward_laplacian solves (M - dt L) X = L u, error_norms of a constant are the constant") {
   const auto& op = sphere();
   const Eigen::Index n = op.L.rows();
   const Eigen::VectorXd u = op.mesh.positions.col(0).array().square();

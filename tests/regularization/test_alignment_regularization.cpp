@@ -72,7 +72,7 @@ TEST_CASE("convolved trivial normals: unit, outward, closer to the true normals 
   CHECK_THROWS_AS(convolved_trivial_normals(mesh, 0.0), InputError);
 }
 
-TEST_CASE("regularize --baseline alignment: the reference's energies in metrics.json; open surfaces refused") {
+TEST_CASE("regularize --baseline alignment: the reference's energies in metrics.json, open surfaces refused") {
   const std::string dir = corrlap::test::tmp_path("regularize_alignment");
   std::string err;
   REQUIRE(

@@ -106,7 +106,7 @@ TEST_CASE("bad inputs are named") {
   CHECK_THROWS_AS(regularization_alpha(0.0), InputError);
 }
 
-TEST_CASE("regularize_surface: H = +1 on the unit sphere, the surface gets closer, faces kept; bad inputs named") {
+TEST_CASE("regularize_surface: H = +1 on the unit sphere, the surface gets closer, faces kept, bad inputs named") {
   const Sphere& s = sphere();
   const RegularizedSurface r = regularize_surface(s.mesh, s.normals);
   // The corrected mean curvature with exact normals at h = 0.1: within a few percent of 1

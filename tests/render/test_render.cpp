@@ -35,7 +35,7 @@ bool is_white(const Image& image, int x, int y) { return rgb_at(image, x, y) == 
 
 }  // namespace
 
-TEST_CASE("render: the nearer face is drawn, whatever the face order; the same input gives the same bytes") {
+TEST_CASE("render: the nearer face is drawn, whatever the face order, the same input gives the same bytes") {
   RenderOptions o;
   o.width = o.height = 64;
   o.view_direction = Eigen::Vector3d(0, 0, 1);  // looking down -z: larger z is nearer

@@ -39,7 +39,7 @@ std::vector<StudyRow> run_rows(const StudyOptions& o) {
 }
 }  // namespace
 
-TEST_CASE("grid steps: lists and log-spaced ranges; bad text is named") {
+TEST_CASE("grid steps: lists and log-spaced ranges, bad text is named") {
   CHECK(parse_grid_steps("0.1,0.05") == std::vector<double>{0.1, 0.05});
   const std::vector<double> r = parse_grid_steps("0.1:0.0125:4");
   REQUIRE(r.size() == 4);
@@ -182,7 +182,7 @@ std::string icosahedron_obj() {
 }
 }  // namespace
 
-TEST_CASE("cotan study: the refined, rescaled reference; sampling at its vertices; errors shrink with N") {
+TEST_CASE("cotan study: the refined, rescaled reference, sampling at its vertices, errors shrink with N") {
   const std::string path = icosahedron_obj();
   const std::vector<const TestFunction*> x2 = {&test_function("x2")};
   const CotanReference ref = make_cotan_reference(read_mesh(path), x2, 2500);

@@ -12,7 +12,7 @@
 
 using namespace corrlap;
 
-TEST_CASE("closest point on a triangle: interior, edge and vertex regions; degenerate triangles") {
+TEST_CASE("closest point on a triangle: interior, edge and vertex regions, degenerate triangles") {
   const Eigen::Vector3d a(0, 0, 0), b(2, 0, 0), c(0, 2, 0);
   ClosestPoint q = closest_point_on_triangle({0.5, 0.5, 3}, a, b, c);
   CHECK(q.distance == doctest::Approx(3).epsilon(1e-15));

@@ -54,7 +54,7 @@ TEST_CASE("loop subdivision: Loop's masks on a tetrahedron (valence 3: beta = 3/
   CHECK(found);
 }
 
-TEST_CASE("loop subdivision: boundary curves refine as cubic B-splines; affine maps commute") {
+TEST_CASE("loop subdivision: boundary curves refine as cubic B-splines, affine maps commute") {
   TriangleMesh one;
   one.positions.resize(3, 3);
   one.positions << 0, 0, 0, 2, 0, 0, 0, 2, 0;
