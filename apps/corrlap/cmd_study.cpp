@@ -37,7 +37,8 @@ struct StudyArgs {
   std::string resolutions = "128,256,512";
   bool normals_given = false;
   StudyOptions options;
-  MethodOptions method_params;  // --param and the parameter flags, for the methods that declare them
+  double diffusion = kDefaultStudyDiffusion;  // StudyOptions::diffusion when --diffusion is given
+  MethodOptions method_params;                // --param and the parameter flags, for the methods that declare them
   std::vector<double> bbox = {-2.0, 2.0};
   std::string out;
   bool resume = false, overwrite = false, no_plots = false;
@@ -46,7 +47,7 @@ struct StudyArgs {
   double alpha0 = 10.0;
   bool bbox_given = false;
   bool allow_nonmanifold = false;
-  CLI::Option *h_option = nullptr, *resolutions_option = nullptr;
+  CLI::Option *h_option = nullptr, *resolutions_option = nullptr, *diffusion_option = nullptr;
 };
 
 // The options a resumed study must share with the one in DIR (methods, h and functions may grow).
@@ -61,7 +62,7 @@ nlohmann::json fixed_options(const StudyOptions& o) {
   j["shape"] = o.shape;
   j["bbox"] = {o.min_aabb, o.max_aabb};
   j["offset"] = o.offset;
-  j["diffusion"] = o.naive ? 0.0 : o.diffusion;
+  j["diffusion"] = o.forward_diffusion();
   j["k"] = o.kind == StudyKind::Eigen ? o.k : 0;
   j["solver"] = o.linear_solver;
   j["params"] = o.method_params;
@@ -187,6 +188,7 @@ void run(StudyArgs& a) {
   o.functions = o.kind == StudyKind::Eigen ? std::vector<std::string>{} : split_list(a.functions);
   o.min_aabb = a.bbox[0];
   o.max_aabb = a.bbox[1];
+  if (a.diffusion_option->count() > 0) o.diffusion = a.diffusion;
   o.validate();
   if (a.resume && a.overwrite) throw InputError("study: --resume and --overwrite exclude each other");
 
@@ -286,8 +288,10 @@ void finish_study(const std::string& out, bool eigen, bool plots) {
     const std::vector<OrderRow> fitted = fit_orders(rows);
     write_orders_csv(orders, fitted);
     std::cout << "study: " << summary << "\nstudy: " << orders << "\n";
+    for (const std::string& shortfall : order_shortfalls(fitted))
+      std::cerr << "warning: study: " << orders << ": " << shortfall << "\n";
     for (const OrderRow& r : fitted)
-      if (r.norm == std::string("l2"))
+      if (r.norm == std::string("l2") && !std::isnan(r.order))
         std::cout << "  order " << r.study << " " << r.method << " " << r.normals << " " << r.function
                   << " L2: " << r.order
                   << (std::isnan(r.low) ? std::string()
@@ -364,11 +368,14 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
       ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--seed", args->options.seed, "seed of the centre draws")->capture_default_str();
-  cmd->add_option("--diffusion", args->options.diffusion, "forward: dt = diffusion * h (docs/math.md §10.3)")
-      ->capture_default_str();
-  cmd->add_flag("--naive", args->options.naive, "forward: no diffusion, X = M^-1 L f");
+  args->diffusion_option =
+      cmd->add_option("--diffusion", args->diffusion, "forward, cotan: dt = diffusion * h (docs/math.md §10.3)")
+          ->capture_default_str();
+  cmd->add_flag("--naive", args->options.naive,
+                "forward, cotan: no diffusion, X = M^-1 L f (dt = 0; excludes --diffusion)");
   cmd->add_option("-k", args->options.k, "eigen: number of eigenvalues")->capture_default_str();
-  cmd->add_option("--shape", args->options.shape, "implicit shape (the errors assume the unit sphere)")
+  cmd->add_option("--shape", args->options.shape,
+                  "implicit shape: sphere1 (the exact values are those of the unit sphere; cotan: the mesh)")
       ->capture_default_str();
   cmd->add_option("--bbox", args->bbox, "digitization box MIN MAX (regularization: default -10 10)")
       ->expected(2)
