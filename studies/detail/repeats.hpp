@@ -14,7 +14,7 @@ namespace corrlap::detail {
 // "centres" that are copies of one another.
 template <class T>
 inline void refuse_repeats(const std::vector<T>& values, const std::string& what, const std::string& parameter,
-                    const std::string& study) {
+                           const std::string& study) {
   for (std::size_t i = 0; i < values.size(); ++i)
     for (std::size_t j = 0; j < i; ++j) {
       bool same;
@@ -28,6 +28,5 @@ inline void refuse_repeats(const std::vector<T>& values, const std::string& what
       throw InputError(os.str(), parameter);
     }
 }
-
 
 }  // namespace corrlap::detail
