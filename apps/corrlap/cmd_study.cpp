@@ -201,6 +201,8 @@ void run(StudyArgs& a) {
   const nlohmann::json fixed = fixed_options(o);
   // Units already computed (resume): (h, centre, method) with every requested function present.
   std::set<std::tuple<double, int, std::string>> done;
+  // The rows in the file per unit: a unit recomputed for a new function must not repeat them.
+  std::map<std::tuple<double, int, std::string>, std::set<std::string>> seen;
   if (fs::exists(results)) {
     if (a.overwrite) {
       fs::remove(results);
@@ -218,7 +220,6 @@ void run(StudyArgs& a) {
                 (before.is_discarded() || !before.contains(key) ? std::string("missing") : before[key].dump()) +
                 " there, " + value.dump() + " now); use another --out or --overwrite");
       }
-      std::map<std::tuple<double, int, std::string>, std::set<std::string>> seen;
       if (eigen) {
         for (const EigenRow& r : read_eigen_csv(results)) seen[{r.h, r.center, r.method}].insert("eigen");
       } else {
@@ -247,7 +248,19 @@ void run(StudyArgs& a) {
       if (uc == center && um == method && std::abs(uh - h) <= 1e-12 * h) return true;
     return false;
   };
-  cb.rows = [&](const std::vector<StudyRow>& rows) { write_results_csv(results, rows, true); };
+  cb.rows = [&](const std::vector<StudyRow>& rows) {
+    std::vector<StudyRow> fresh;
+    for (const StudyRow& r : rows) {
+      bool present = false;
+      for (const auto& [unit, functions] : seen) {
+        const auto& [uh, uc, um] = unit;
+        present = present || (uc == r.center && um == r.method && std::abs(uh - r.h) <= 1e-12 * r.h &&
+                              functions.count(r.function) > 0);
+      }
+      if (!present) fresh.push_back(r);
+    }
+    write_results_csv(results, fresh, true);
+  };
   cb.eigen_rows = [&](const std::vector<EigenRow>& rows) { write_eigen_csv(results, rows, true); };
   cb.progress = [&](const StudyProgress& p) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

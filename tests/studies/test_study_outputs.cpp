@@ -246,6 +246,18 @@ TEST_CASE("corrlap study: refusals name the flag") {
   CHECK(err.find("internal error") == std::string::npos);
 }
 
+TEST_CASE("corrlap study --resume with a new function adds its rows only, once per unit") {
+  const std::string dir = test::tmp_path("study_resume_function");
+  std::filesystem::remove_all(dir);
+  const std::string args = "study backward --methods fem --h 0.4,0.3 --bbox -1.5 1.5 --no-plots --out " + dir;
+  std::string out, err;
+  REQUIRE(test::run_cli(args + " --functions x2", &out, &err) == 0);
+  REQUIRE(test::run_cli(args + " --functions x2,expx --resume", &out, &err) == 0);
+  const std::vector<StudyRow> rows = read_results_csv(dir + "/results.csv");
+  CHECK(rows.size() == 4);  // 2 h x (x2, expx), the x2 rows not repeated
+  for (const SummaryRow& s : summarize(rows)) CHECK(s.centers == 1);
+}
+
 TEST_CASE("corrlap study: no file of any study kind holds nan or inf, every JSON parses") {
   const std::string mesh = icosahedron_obj("icosahedron_closed.obj", 0);
   const std::string common = " --methods fem --no-plots --out ";
