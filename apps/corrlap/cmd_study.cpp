@@ -4,6 +4,7 @@
 // (results, summary, fitted orders) and plots (studies/plot_study.py). docs/studies.md.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <corrlap/core/error.hpp>
@@ -48,6 +49,7 @@ struct StudyArgs {
   bool bbox_given = false;
   bool allow_nonmanifold = false;
   CLI::Option *h_option = nullptr, *resolutions_option = nullptr, *diffusion_option = nullptr;
+  const CLI::App* command = nullptr;
 };
 
 // The options a resumed study must share with the one in DIR (methods, h and functions may grow).
@@ -165,7 +167,43 @@ void run_regularization(const StudyArgs& a) {
   if (!a.no_plots) run_plot_script(a.out);
 }
 
+// An option of one kind of study given to another is refused rather than silently ignored.
+void refuse_foreign_options(const StudyArgs& a) {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> kinds_of = {
+      {"--h", {"forward", "backward", "eigen", "regularization"}},
+      {"--functions", {"forward", "backward", "cotan"}},
+      {"--shape", {"forward", "backward", "eigen"}},
+      {"--bbox", {"forward", "backward", "eigen", "regularization"}},
+      {"--offset", {"forward", "backward", "eigen", "regularization"}},
+      {"--centers", {"forward", "backward", "eigen", "cotan"}},
+      {"--seed", {"forward", "backward", "eigen", "cotan"}},
+      {"--diffusion", {"forward", "cotan"}},
+      {"--naive", {"forward", "cotan"}},
+      {"-k", {"eigen"}},
+      {"--resolutions", {"cotan", "regularization"}},
+      {"--mesh-file", {"cotan"}},
+      {"--refine-vertices", {"cotan"}},
+      {"--reference-values", {"cotan"}},
+      {"--reference-laplacian", {"cotan"}},
+      {"--shapes", {"regularization"}},
+      {"--alpha0", {"regularization"}},
+      {"--allow-nonmanifold", {"regularization"}},
+  };
+  for (const auto& [flag, kinds] : kinds_of) {
+    if (a.command->get_option(flag)->count() == 0 || std::find(kinds.begin(), kinds.end(), a.kind) != kinds.end())
+      continue;
+    std::string list;
+    for (std::size_t i = 0; i < kinds.size(); ++i)
+      list += (i == 0 ? "" : i + 1 == kinds.size() ? " and " : ", ") + kinds[i];
+    throw InputError("study " + a.kind + ": " + flag + " does not apply to this study (it belongs to " + list +
+                     (kinds.size() > 1 ? " studies)" : " study)"));
+  }
+}
+
 void run(StudyArgs& a) {
+  if (a.kind == "forward" || a.kind == "backward" || a.kind == "eigen" || a.kind == "cotan" ||
+      a.kind == "regularization")
+    refuse_foreign_options(a);
   if (a.kind == "regularization") return run_regularization(a);
   StudyOptions& o = a.options;
   o.kind = parse_study_kind(a.kind);
@@ -415,6 +453,7 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
   cmd->add_flag("--resume", args->resume, "continue the study in --out: computed units are not recomputed");
   cmd->add_flag("--overwrite", args->overwrite, "replace the study in --out");
   cmd->add_flag("--no-plots", args->no_plots, "tables only");
+  args->command = cmd;
   cmd->callback([args] { run(*args); });
 });
 

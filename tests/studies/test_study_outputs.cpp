@@ -236,7 +236,8 @@ TEST_CASE("corrlap study: refusals name the flag") {
   CHECK(err.find("naive and diffusion exclude each other") != std::string::npos);
   CHECK(err.find("(--naive)") != std::string::npos);
   CHECK(test::run_cli("study backward --methods fem --h 0.4 --naive" + out_dir, &out, &err) == 1);
-  CHECK(err.find("(--naive)") != std::string::npos);
+  CHECK(err.find("study backward: --naive does not apply to this study (it belongs to forward and cotan studies)") !=
+        std::string::npos);
   CHECK(test::run_cli("study backward --methods fem --h 0.4 --shape torus" + out_dir, &out, &err) == 1);
   CHECK(err.find("shape 'torus' has no reference solution") != std::string::npos);
   CHECK(err.find("(--shape)") != std::string::npos);
@@ -245,6 +246,18 @@ TEST_CASE("corrlap study: refusals name the flag") {
   CHECK(err.find("the mesh is not closed: 3 boundary edge(s)") != std::string::npos);
   CHECK(err.find("(--mesh-file)") != std::string::npos);
   CHECK(err.find("internal error") == std::string::npos);
+  // An option of another kind of study is refused, not ignored.
+  CHECK(test::run_cli("study cotan --methods fem --mesh-file " + icosahedron_obj("icosahedron_closed.obj", 0) +
+                          " --h 0.1" + out_dir,
+                      &out, &err) == 1);
+  CHECK(err.find("study cotan: --h does not apply to this study (it belongs to forward, backward, eigen and "
+                 "regularization studies)") != std::string::npos);
+  CHECK(test::run_cli("study backward --methods fem --h 0.4 -k 5" + out_dir, &out, &err) == 1);
+  CHECK(err.find("study backward: -k does not apply to this study (it belongs to eigen study)") != std::string::npos);
+  CHECK(test::run_cli("study regularization --shape torus" + out_dir, &out, &err) == 1);
+  CHECK(err.find("study regularization: --shape does not apply") != std::string::npos);
+  CHECK(test::run_cli("study eigen --methods fem --h 0.4 --shapes torus" + out_dir, &out, &err) == 1);
+  CHECK(err.find("study eigen: --shapes does not apply") != std::string::npos);
 }
 
 TEST_CASE("corrlap study --resume with a new function adds its rows only, once per unit") {
