@@ -2,13 +2,48 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/discretizations/cotan.hpp>
 #include <corrlap/surface/loop_subdivision.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace corrlap {
+namespace {
+
+// The study voxelizes the inside of the mesh and compares on the whole digital surface, which is
+// closed: an open mesh has no inside, and its boundary would be compared with the cut of the
+// voxels. Checked before the subdivision, whose vertex budget an open mesh can defeat.
+void require_closed(const TriangleIndices& triangles) {
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(3 * std::size_t(triangles.rows()));
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = triangles(f, k), b = triangles(f, (k + 1) % 3);
+      edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  long long open = 0, nonmanifold = 0;
+  std::pair<int, int> example{-1, -1};
+  for (std::size_t i = 0, j = 0; i < edges.size(); i = j) {
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 2) continue;
+    if (example.first < 0) example = edges[i];
+    (j - i == 1 ? open : nonmanifold) += 1;
+  }
+  if (open == 0 && nonmanifold == 0) return;
+  throw InputError("cotan study: the mesh is not closed: " + std::to_string(open) + " boundary edge(s), " +
+                       std::to_string(nonmanifold) + " edge(s) with more than two triangles (e.g. the edge between " +
+                       "vertices " + std::to_string(example.first) + " and " + std::to_string(example.second) +
+                       ", numbered from 0); the study voxelizes the inside of the mesh and compares on its whole "
+                       "surface, so it needs a closed (watertight) triangle mesh: close its holes first",
+                   "mesh_file");
+}
+
+}  // namespace
 
 CotanReference make_cotan_reference(const PolygonMesh& mesh, const std::vector<const TestFunction*>& functions,
                                     long long min_vertices) {
@@ -18,6 +53,7 @@ CotanReference make_cotan_reference(const PolygonMesh& mesh, const std::vector<c
   ref.input_vertices = int(mesh.positions.rows());
   TriangleMesh t{mesh.positions, triangulate(mesh)};
   ref.input_triangles = int(t.triangles.rows());
+  require_closed(t.triangles);
   const Eigen::Vector3d lo = t.positions.colwise().minCoeff(), hi = t.positions.colwise().maxCoeff();
   const double side = (hi - lo).maxCoeff();
   if (!(side > 0)) throw InputError("cotan study: the mesh has no extent");

@@ -29,7 +29,8 @@ struct CotanReference {
 /// Triangulates `mesh` (polygons fanned), centres its bounding box at 0 and scales its longest side
 /// to 2 (so that resolution N means h = 2 / N), Loop-subdivides it until it has `min_vertices`
 /// vertices, then evaluates each function at the vertices and its cotan Laplacian. Throws
-/// InputError for an empty or non-manifold mesh, zero-area triangles or vertices without normal.
+/// InputError for an empty mesh, one that is not closed (an edge without exactly two triangles),
+/// zero-area triangles or vertices without normal.
 CotanReference make_cotan_reference(const PolygonMesh& mesh, const std::vector<const TestFunction*>& functions,
                                     long long min_vertices);
 

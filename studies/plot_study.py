@@ -15,7 +15,9 @@ Outputs, in DIR/plots/, each in every requested format (default png at dpi 150 a
                                               h^1 forward and cotan); norm is linf or l2
   eigen_<normals>_h<h>.<ext>                  |relative error| of eigenvalues 1.. (mean over
                                               centres), one line per method, multiplets marked
-Empty and NaN values are skipped. The written paths are printed one per line on stdout.
+Empty values are undefined and skipped (corrlap writes an empty field, never nan: docs/studies.md,
+"Undefined values"; the nan of older files reads the same). The written paths are printed one per
+line on stdout.
 
 Exit codes: 0 success; 1 malformed or missing input (message on stderr); 2 bad command line;
 3 matplotlib not available (plots skipped).

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "detail/csv.hpp"
+#include "detail/repeats.hpp"
 
 namespace corrlap {
 
@@ -58,7 +59,11 @@ void RegularizationStudyOptions::validate() const {
     if (h.empty() && (n < 8 || n > 2048))
       throw InputError("study regularization: resolution " + std::to_string(n) + " is outside [8, 2048]");
   for (double x : h)
-    if (!(x > 0.0) || !std::isfinite(x)) throw InputError("study regularization: h must be positive");
+    if (!(x > 0.0) || !std::isfinite(x)) throw InputError("study regularization: h must be positive", "h");
+  detail::refuse_repeats(shapes, "shape", "shapes", "study regularization");
+  detail::refuse_repeats(methods, "method", "methods", "study regularization");
+  detail::refuse_repeats(h, "grid step h =", "h", "study regularization");
+  if (h.empty()) detail::refuse_repeats(resolutions, "resolution", "resolutions", "study regularization");
   if (normals != to_string(NormalSource::II) && normals != to_string(NormalSource::True))
     throw InputError("study regularization: normals '" + normals + "': expected ii or true", "normals");
   if (!(alpha0 > 0.0)) throw InputError("study regularization: alpha0 must be positive");
@@ -172,10 +177,10 @@ std::vector<RegularizationStudyRow> read_regularization_csv(const std::string& p
     r.shape = row.fields[1];
     r.method = row.fields[2];
     r.normals = row.fields[3];
-    r.h = csv.number(row, 4);
-    r.resolution = int(csv.number(row, 5));
-    r.vertices = (long long)csv.number(row, 6);
-    r.faces = (long long)csv.number(row, 7);
+    r.h = csv.required_number(row, 4);
+    r.resolution = int(csv.required_integer(row, 5));
+    r.vertices = csv.required_integer(row, 6);
+    r.faces = csv.required_integer(row, 7);
     r.distance_before = csv.number(row, 8);
     r.distance_after = csv.number(row, 9);
     r.angle_before = csv.number(row, 10);

@@ -24,6 +24,7 @@
 #include <sstream>
 
 #include "cotan_reference.hpp"
+#include "detail/repeats.hpp"
 
 namespace corrlap {
 
@@ -49,8 +50,12 @@ const char* to_string(StudyKind kind) {
   return "?";
 }
 
+double StudyOptions::forward_diffusion() const { return naive ? 0.0 : diffusion.value_or(kDefaultStudyDiffusion); }
+
 void StudyOptions::validate() const {
+  const std::string study = std::string("study ") + to_string(kind);
   if (methods.empty()) throw InputError("study: no method given", "methods");
+  detail::refuse_repeats(methods, "method", "methods", study);
   const std::vector<std::string> known = discretization_registry().names();
   for (const std::string& m : methods)
     if (std::find(known.begin(), known.end(), m) == known.end()) (void)make_discretization(m);  // lists the names
@@ -69,6 +74,11 @@ void StudyOptions::validate() const {
       if (n < 4 || n > 4096)
         throw InputError("study cotan: resolution " + std::to_string(n) + " must be in [4, 4096] voxels",
                          "resolutions");
+    detail::refuse_repeats(resolutions, "resolution", "resolutions", study);
+    if (shape != StudyOptions{}.shape)
+      throw InputError("study cotan: the surface is the mesh (mesh_file), not an implicit shape: shape '" + shape +
+                           "' does not apply",
+                       "shape");
     if (refine_vertices < 0 || refine_vertices > 100000000)
       throw InputError("study cotan: refine_vertices must be in [0, 1e8]", "refine_vertices");
     if (reference_values != "interpolated" && reference_values != "at-foot")
@@ -86,22 +96,43 @@ void StudyOptions::validate() const {
         os << "study: grid step h = " << step << " must be positive and finite";
         throw InputError(os.str(), "h");
       }
+    detail::refuse_repeats(h, "grid step h =", "h", study);
+    // The reference values (the test functions' Laplacians, the eigenvalues l(l+1)) are those of
+    // the unit sphere: any other shape would be compared against the wrong truth.
+    if (make_implicit_shape(shape).sphere_radius() != 1.0)
+      throw InputError(study + ": shape '" + shape +
+                           "' has no reference solution: the exact values are those of the unit sphere; use sphere1 "
+                           "(x^2+y^2+z^2-1), or the cotan study for a surface given as a mesh",
+                       "shape");
     (void)study_normal_source(*this);
   }
   if (kind != StudyKind::Eigen) {
     if (functions.empty()) throw InputError("study: no test function given (functions: x2, expx, p6)", "functions");
     for (const std::string& f : functions) (void)test_function(f);  // InputError listing the names
+    detail::refuse_repeats(functions, "test function", "functions", study);
   }
   if (centers < 1 || centers > 10000) throw InputError("study: centers must be in [1, 10000]", "centers");
-  if ((kind == StudyKind::Forward || kind == StudyKind::Cotan) && !naive &&
-      !(diffusion > 0.0 && std::isfinite(diffusion)))
-    throw InputError("study: diffusion must be positive (or naive)", "diffusion");
+  if (kind == StudyKind::Forward || kind == StudyKind::Cotan) {
+    if (naive && diffusion)
+      throw InputError(study +
+                           ": naive and diffusion exclude each other: naive is dt = 0, diffusion sets dt = "
+                           "diffusion * h; give one of them",
+                       "naive");
+    if (diffusion && !(*diffusion > 0.0 && std::isfinite(*diffusion)))
+      throw InputError(study + ": diffusion must be positive and finite (naive gives dt = 0)", "diffusion");
+  } else if (naive || diffusion) {
+    throw InputError(study + ": " + (naive ? "naive" : "diffusion") +
+                         " belongs to the forward and cotan studies (the evaluation X = (M - dt L)^-1 L f)",
+                     naive ? "naive" : "diffusion");
+  }
   if (kind == StudyKind::Eigen && (k < 1 || k > 1000))
     throw InputError("study: k (the number of eigenvalues) must be in [1, 1000]", "k");
   if (linear_solver != "auto") (void)make_linear_solver(linear_solver);  // InputError listing the backends
-  if (!(min_aabb < max_aabb)) throw InputError("study: the box needs MIN < MAX", "bbox");
+  if (!(min_aabb < max_aabb) || !std::isfinite(min_aabb) || !std::isfinite(max_aabb))
+    throw InputError("study: the box needs finite MIN < MAX", "bbox");
   if (offset < 0) throw InputError("study: offset must be >= 0", "offset");
-  if (!(ii_k > 0) || !std::isfinite(ii_alpha)) throw InputError("study: II radius parameters must be positive");
+  if (!(ii_k > 0) || !std::isfinite(ii_k) || !std::isfinite(ii_alpha))
+    throw InputError("study: II radius parameters must be positive and finite");
 }
 
 NormalSource study_normal_source(const StudyOptions& o) {
@@ -266,7 +297,7 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
   s.face_centres = s.mesh.face_centroids();
   const ReferenceValues values =
       o.reference_values == "at-foot" ? ReferenceValues::AtFoot : ReferenceValues::Interpolated;
-  const double dt = o.reference_laplacian == "diffused" && !o.naive ? o.diffusion * h : 0.0;
+  const double dt = o.reference_laplacian == "diffused" ? o.forward_diffusion() * h : 0.0;
   const Eigen::MatrixXd truth = diffused_reference_laplacian(reference, dt);
   ReferenceSamples at_vertices = sample_reference(reference, truth, s.mesh.positions, c, values);
   ReferenceSamples at_faces = sample_reference(reference, truth, s.face_centres, c, values);
@@ -446,7 +477,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
               (o.linear_solver == "auto" || o.linear_solver == "cg")) {
             Eigen::VectorXd mass;
             const std::optional<Eigen::MatrixXd> X =
-                heat_kernel_forward(s, params, s.face_f, o.naive ? 0.0 : o.diffusion * h, mass, heat_kernel_storage);
+                heat_kernel_forward(s, params, s.face_f, o.forward_diffusion() * h, mass, heat_kernel_storage);
             if (X) {
               Eigen::SparseMatrix<double> M(mass.size(), mass.size());
               M.setIdentity();
@@ -502,7 +533,7 @@ void run_study(const StudyOptions& o, const StudyCallbacks& cb) {
                 errors[j] = poisson_errors(ops.M, G.col(Eigen::Index(j)), F.col(Eigen::Index(j)));
             } else {
               // docs/math.md §10.3: X = (M - dt L)^{-1} L f, dt = diffusion * h (0: naive).
-              const double dt = o.naive ? 0.0 : o.diffusion * h;
+              const double dt = o.forward_diffusion() * h;
               const Eigen::MatrixXd LF = ops.L * F;
               make_forward_system(ops.L, ops.M, dt);  // ops.L is now A = M - dt L
               solver->set_positions(unknown_positions);

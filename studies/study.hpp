@@ -9,6 +9,7 @@
 #include <corrlap/estimators/normal_estimation.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,12 +34,17 @@ struct StudyOptions {
   double ii_k = 3.0, ii_alpha = 1.0 / 3.0;  ///< II radius k h^alpha (the paper's 1/3)
   int centers = 1;                          ///< N: centre 0 when 1, else uniform draws (§10.1)
   unsigned long long seed = 1;              ///< of the centre draws
-  std::string shape = "sphere1";            ///< implicit shape (a unit sphere for the errors)
-  double min_aabb = -2.0, max_aabb = 2.0;   ///< docs/math.md §10.1 box
-  int offset = 5;                           ///< extra voxels around the box
-  double diffusion = 0.035;                 ///< forward: dt = diffusion * h (§10.3)
-  bool naive = false;                       ///< forward: dt = 0 (X = M^-1 L f)
-  int k = 49;                               ///< eigen: number of eigenvalues
+  /// Implicit shape: the unit sphere (sphere1, or its polynomial), the only shape whose exact
+  /// Laplacians and eigenvalues the studies know; the cotan study's surface is its mesh instead
+  std::string shape = "sphere1";
+  double min_aabb = -2.0, max_aabb = 2.0;  ///< docs/math.md §10.1 box
+  int offset = 5;                          ///< extra voxels around the box
+  /// Forward and cotan: dt = diffusion * h (§10.3); unset: kDefaultStudyDiffusion
+  std::optional<double> diffusion;
+  /// Forward and cotan: dt = 0 (X = M^-1 L f), the paper's naive evaluation. It is diffusion 0 by
+  /// another name, so giving both is refused rather than letting one win.
+  bool naive = false;
+  int k = 49;  ///< eigen: number of eigenvalues
   /// Backend of the linear solves: a registered name, or "auto" (CHOLMOD; Jacobi CG for operators
   /// with more than 64 nonzeros per row, i.e. the heat kernel)
   std::string linear_solver = "auto";
@@ -52,9 +58,15 @@ struct StudyOptions {
   /// evaluation (M - dt L)^-1 L f with the study's dt, so that both sides carry the same smoothing.
   std::string reference_laplacian = "plain";
 
-  /// InputError naming the first invalid option (unknown method or function, h <= 0, empty lists...).
+  /// InputError naming the first invalid option (unknown method or function, h <= 0, empty lists,
+  /// a value given twice, a shape without a reference, an option of another kind of study...).
   void validate() const;
+  /// dt / h of the forward systems: 0 when naive, else diffusion or its default.
+  double forward_diffusion() const;
 };
+
+/// dt = 0.035 h: the diffusion of the paper's forward evaluation (docs/math.md §10.3).
+inline constexpr double kDefaultStudyDiffusion = 0.035;
 
 /// The study's normals in the library's vocabulary (parse_normal_source): "true", "ii", "exact" for
 /// the forward, backward and eigen studies; for the cotan study "mesh", its name for the given
@@ -96,7 +108,9 @@ struct EigenRow {
   int center = 0;
   int index = 0;
   double exact = 0, computed = 0;
-  double relative_error = 0;  ///< (computed - exact) / exact; NaN for index 0
+  /// (computed - exact) / exact; NaN (an empty field) for index 0, whose exact value is 0: there
+  /// `computed` is the absolute error itself
+  double relative_error = 0;
   double time_s = 0;
 };
 

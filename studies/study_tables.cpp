@@ -115,7 +115,19 @@ std::vector<OrderRow> fit_orders(const std::vector<StudyRow>& rows) {
         h_min = std::min(h_min, r->h);
         h_max = std::max(h_max, r->h);
       }
-      if (x.size() < 2 || !(h_min < h_max)) continue;
+      OrderRow o;
+      copy_labels(*g.front(), o);
+      o.norm = norm;
+      o.points = int(x.size());
+      o.order = o.low = o.high = kNaN;
+      o.h_min = x.empty() ? kNaN : h_min;
+      o.h_max = x.empty() ? kNaN : h_max;
+      // A slope needs two distinct h: the group stays in the table with its order undefined, so
+      // that the table and the warning (order_shortfalls) say what is missing.
+      if (x.size() < 2 || !(h_min < h_max)) {
+        out.push_back(o);
+        continue;
+      }
       const double n = double(x.size());
       double mx = 0, my = 0;
       for (std::size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
@@ -123,14 +135,7 @@ std::vector<OrderRow> fit_orders(const std::vector<StudyRow>& rows) {
       my /= n;
       double sxx = 0, sxy = 0;
       for (std::size_t i = 0; i < x.size(); ++i) sxx += (x[i] - mx) * (x[i] - mx), sxy += (x[i] - mx) * (y[i] - my);
-      OrderRow o;
-      copy_labels(*g.front(), o);
-      o.norm = norm;
       o.order = sxy / sxx;
-      o.points = int(x.size());
-      o.h_min = h_min;
-      o.h_max = h_max;
-      o.low = o.high = kNaN;
       if (x.size() >= 3) {
         double ssr = 0;
         for (std::size_t i = 0; i < x.size(); ++i) {
@@ -144,6 +149,30 @@ std::vector<OrderRow> fit_orders(const std::vector<StudyRow>& rows) {
       }
       out.push_back(o);
     }
+  return out;
+}
+
+std::vector<std::string> order_shortfalls(const std::vector<OrderRow>& orders) {
+  const auto label = [](const OrderRow& r) {
+    return r.study + " " + r.method + " " + r.normals + " " + r.function + " " + (r.norm == "l2" ? "L2" : "Linf") +
+           ", " + std::to_string(r.points) + " row(s)";
+  };
+  int no_order = 0, no_interval = 0;
+  const OrderRow *first_order = nullptr, *first_interval = nullptr;
+  for (const OrderRow& r : orders) {
+    if (std::isnan(r.order)) {
+      if (no_order++ == 0) first_order = &r;
+    } else if (std::isnan(r.low)) {
+      if (no_interval++ == 0) first_interval = &r;
+    }
+  }
+  std::vector<std::string> out;
+  if (no_order > 0)
+    out.push_back(std::to_string(no_order) + " order(s) left empty (e.g. " + label(*first_order) +
+                  "): a slope needs rows at two grid steps h or more with a positive error; give more grid steps");
+  if (no_interval > 0)
+    out.push_back(std::to_string(no_interval) + " interval(s) left empty (e.g. " + label(*first_interval) +
+                  "): the t-interval needs three rows or more; give a third grid step or more centres");
   return out;
 }
 
@@ -197,11 +226,11 @@ std::vector<StudyRow> read_results_csv(const std::string& path) {
     r.method = row.fields[1];
     r.normals = row.fields[2];
     r.function = row.fields[3];
-    r.h = csv.number(row, 4);
-    r.center = int(csv.number(row, 5));
-    r.c = Eigen::Vector3d(csv.number(row, 6), csv.number(row, 7), csv.number(row, 8));
-    r.vertices = (long long)csv.number(row, 9);
-    r.faces = (long long)csv.number(row, 10);
+    r.h = csv.required_number(row, 4);
+    r.center = int(csv.required_integer(row, 5));
+    r.c = Eigen::Vector3d(csv.required_number(row, 6), csv.required_number(row, 7), csv.required_number(row, 8));
+    r.vertices = csv.required_integer(row, 9);
+    r.faces = csv.required_integer(row, 10);
     r.error_linf = csv.number(row, 11);
     r.error_l2 = csv.number(row, 12);
     r.time_s = csv.number(row, 13);
@@ -217,10 +246,10 @@ std::vector<EigenRow> read_eigen_csv(const std::string& path) {
     EigenRow r;
     r.method = row.fields[1];
     r.normals = row.fields[2];
-    r.h = csv.number(row, 3);
-    r.center = int(csv.number(row, 4));
-    r.index = int(csv.number(row, 5));
-    r.exact = csv.number(row, 6);
+    r.h = csv.required_number(row, 3);
+    r.center = int(csv.required_integer(row, 4));
+    r.index = int(csv.required_integer(row, 5));
+    r.exact = csv.required_number(row, 6);
     r.computed = csv.number(row, 7);
     r.relative_error = csv.number(row, 8);
     r.time_s = csv.number(row, 9);

@@ -4,6 +4,7 @@
 // (results, summary, fitted orders) and plots (studies/plot_study.py). docs/studies.md.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <corrlap/core/error.hpp>
@@ -37,7 +38,8 @@ struct StudyArgs {
   std::string resolutions = "128,256,512";
   bool normals_given = false;
   StudyOptions options;
-  MethodOptions method_params;  // --param and the parameter flags, for the methods that declare them
+  double diffusion = kDefaultStudyDiffusion;  // StudyOptions::diffusion when --diffusion is given
+  MethodOptions method_params;                // --param and the parameter flags, for the methods that declare them
   std::vector<double> bbox = {-2.0, 2.0};
   std::string out;
   bool resume = false, overwrite = false, no_plots = false;
@@ -46,7 +48,8 @@ struct StudyArgs {
   double alpha0 = 10.0;
   bool bbox_given = false;
   bool allow_nonmanifold = false;
-  CLI::Option *h_option = nullptr, *resolutions_option = nullptr;
+  CLI::Option *h_option = nullptr, *resolutions_option = nullptr, *diffusion_option = nullptr;
+  const CLI::App* command = nullptr;
 };
 
 // The options a resumed study must share with the one in DIR (methods, h and functions may grow).
@@ -61,7 +64,7 @@ nlohmann::json fixed_options(const StudyOptions& o) {
   j["shape"] = o.shape;
   j["bbox"] = {o.min_aabb, o.max_aabb};
   j["offset"] = o.offset;
-  j["diffusion"] = o.naive ? 0.0 : o.diffusion;
+  j["diffusion"] = o.forward_diffusion();
   j["k"] = o.kind == StudyKind::Eigen ? o.k : 0;
   j["solver"] = o.linear_solver;
   j["params"] = o.method_params;
@@ -164,7 +167,43 @@ void run_regularization(const StudyArgs& a) {
   if (!a.no_plots) run_plot_script(a.out);
 }
 
+// An option of one kind of study given to another is refused rather than silently ignored.
+void refuse_foreign_options(const StudyArgs& a) {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> kinds_of = {
+      {"--h", {"forward", "backward", "eigen", "regularization"}},
+      {"--functions", {"forward", "backward", "cotan"}},
+      {"--shape", {"forward", "backward", "eigen"}},
+      {"--bbox", {"forward", "backward", "eigen", "regularization"}},
+      {"--offset", {"forward", "backward", "eigen", "regularization"}},
+      {"--centers", {"forward", "backward", "eigen", "cotan"}},
+      {"--seed", {"forward", "backward", "eigen", "cotan"}},
+      {"--diffusion", {"forward", "cotan"}},
+      {"--naive", {"forward", "cotan"}},
+      {"-k", {"eigen"}},
+      {"--resolutions", {"cotan", "regularization"}},
+      {"--mesh-file", {"cotan"}},
+      {"--refine-vertices", {"cotan"}},
+      {"--reference-values", {"cotan"}},
+      {"--reference-laplacian", {"cotan"}},
+      {"--shapes", {"regularization"}},
+      {"--alpha0", {"regularization"}},
+      {"--allow-nonmanifold", {"regularization"}},
+  };
+  for (const auto& [flag, kinds] : kinds_of) {
+    if (a.command->get_option(flag)->count() == 0 || std::find(kinds.begin(), kinds.end(), a.kind) != kinds.end())
+      continue;
+    std::string list;
+    for (std::size_t i = 0; i < kinds.size(); ++i)
+      list += (i == 0 ? "" : i + 1 == kinds.size() ? " and " : ", ") + kinds[i];
+    throw InputError("study " + a.kind + ": " + flag + " does not apply to this study (it belongs to " + list +
+                     (kinds.size() > 1 ? " studies)" : " study)"));
+  }
+}
+
 void run(StudyArgs& a) {
+  if (a.kind == "forward" || a.kind == "backward" || a.kind == "eigen" || a.kind == "cotan" ||
+      a.kind == "regularization")
+    refuse_foreign_options(a);
   if (a.kind == "regularization") return run_regularization(a);
   StudyOptions& o = a.options;
   o.kind = parse_study_kind(a.kind);
@@ -187,6 +226,7 @@ void run(StudyArgs& a) {
   o.functions = o.kind == StudyKind::Eigen ? std::vector<std::string>{} : split_list(a.functions);
   o.min_aabb = a.bbox[0];
   o.max_aabb = a.bbox[1];
+  if (a.diffusion_option->count() > 0) o.diffusion = a.diffusion;
   o.validate();
   if (a.resume && a.overwrite) throw InputError("study: --resume and --overwrite exclude each other");
 
@@ -199,6 +239,8 @@ void run(StudyArgs& a) {
   const nlohmann::json fixed = fixed_options(o);
   // Units already computed (resume): (h, centre, method) with every requested function present.
   std::set<std::tuple<double, int, std::string>> done;
+  // The rows in the file per unit: a unit recomputed for a new function must not repeat them.
+  std::map<std::tuple<double, int, std::string>, std::set<std::string>> seen;
   if (fs::exists(results)) {
     if (a.overwrite) {
       fs::remove(results);
@@ -216,7 +258,6 @@ void run(StudyArgs& a) {
                 (before.is_discarded() || !before.contains(key) ? std::string("missing") : before[key].dump()) +
                 " there, " + value.dump() + " now); use another --out or --overwrite");
       }
-      std::map<std::tuple<double, int, std::string>, std::set<std::string>> seen;
       if (eigen) {
         for (const EigenRow& r : read_eigen_csv(results)) seen[{r.h, r.center, r.method}].insert("eigen");
       } else {
@@ -245,7 +286,19 @@ void run(StudyArgs& a) {
       if (uc == center && um == method && std::abs(uh - h) <= 1e-12 * h) return true;
     return false;
   };
-  cb.rows = [&](const std::vector<StudyRow>& rows) { write_results_csv(results, rows, true); };
+  cb.rows = [&](const std::vector<StudyRow>& rows) {
+    std::vector<StudyRow> fresh;
+    for (const StudyRow& r : rows) {
+      bool present = false;
+      for (const auto& [unit, functions] : seen) {
+        const auto& [uh, uc, um] = unit;
+        present = present || (uc == r.center && um == r.method && std::abs(uh - r.h) <= 1e-12 * r.h &&
+                              functions.count(r.function) > 0);
+      }
+      if (!present) fresh.push_back(r);
+    }
+    write_results_csv(results, fresh, true);
+  };
   cb.eigen_rows = [&](const std::vector<EigenRow>& rows) { write_eigen_csv(results, rows, true); };
   cb.progress = [&](const StudyProgress& p) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -286,8 +339,10 @@ void finish_study(const std::string& out, bool eigen, bool plots) {
     const std::vector<OrderRow> fitted = fit_orders(rows);
     write_orders_csv(orders, fitted);
     std::cout << "study: " << summary << "\nstudy: " << orders << "\n";
+    for (const std::string& shortfall : order_shortfalls(fitted))
+      std::cerr << "warning: study: " << orders << ": " << shortfall << "\n";
     for (const OrderRow& r : fitted)
-      if (r.norm == std::string("l2"))
+      if (r.norm == std::string("l2") && !std::isnan(r.order))
         std::cout << "  order " << r.study << " " << r.method << " " << r.normals << " " << r.function
                   << " L2: " << r.order
                   << (std::isnan(r.low) ? std::string()
@@ -364,11 +419,14 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
       ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--seed", args->options.seed, "seed of the centre draws")->capture_default_str();
-  cmd->add_option("--diffusion", args->options.diffusion, "forward: dt = diffusion * h (docs/math.md §10.3)")
-      ->capture_default_str();
-  cmd->add_flag("--naive", args->options.naive, "forward: no diffusion, X = M^-1 L f");
+  args->diffusion_option =
+      cmd->add_option("--diffusion", args->diffusion, "forward, cotan: dt = diffusion * h (docs/math.md §10.3)")
+          ->capture_default_str();
+  cmd->add_flag("--naive", args->options.naive,
+                "forward, cotan: no diffusion, X = M^-1 L f (dt = 0; excludes --diffusion)");
   cmd->add_option("-k", args->options.k, "eigen: number of eigenvalues")->capture_default_str();
-  cmd->add_option("--shape", args->options.shape, "implicit shape (the errors assume the unit sphere)")
+  cmd->add_option("--shape", args->options.shape,
+                  "implicit shape: sphere1 (the exact values are those of the unit sphere; cotan: the mesh)")
       ->capture_default_str();
   cmd->add_option("--bbox", args->bbox, "digitization box MIN MAX (regularization: default -10 10)")
       ->expected(2)
@@ -395,6 +453,7 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
   cmd->add_flag("--resume", args->resume, "continue the study in --out: computed units are not recomputed");
   cmd->add_flag("--overwrite", args->overwrite, "replace the study in --out");
   cmd->add_flag("--no-plots", args->no_plots, "tables only");
+  args->command = cmd;
   cmd->callback([args] { run(*args); });
 });
 

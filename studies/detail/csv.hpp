@@ -1,6 +1,7 @@
 #pragma once
-// The study tables' CSV conventions (internal): 17 significant digits, "nan" for NaN, a header
-// line checked on reading, and errors naming the file and line.
+// The study tables' CSV conventions (internal): every number through `number` (17 significant
+// digits; an empty field for an undefined value), a header line checked on reading, and errors
+// naming the file and line.
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <cstdio>
@@ -16,8 +17,11 @@ namespace corrlap::detail {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// The one writer of numbers in study files: a value that is not finite (an undefined relative
+// error, an order or interval without enough points) is an empty field, never "nan" or "inf",
+// which spreadsheets and most CSV readers do not take as numbers (docs/studies.md).
 inline std::string number(double v) {
-  if (std::isnan(v)) return "nan";
+  if (!std::isfinite(v)) return "";
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
@@ -62,14 +66,30 @@ class CsvReader {
     std::vector<std::string> fields;
   };
   const std::vector<Row>& rows() const { return rows_; }
+  /// A value that may be undefined: an empty field (or "nan", as files written before the empty
+  /// convention hold) is NaN.
   double number(const Row& r, std::size_t column) const {
     const std::string& s = r.fields[column];
-    if (s == "nan") return kNaN;
+    if (s.empty() || s == "nan") return kNaN;
+    return required_number(r, column);
+  }
+  /// A value every row has (h, centre, counts): an empty field is an error naming the line.
+  double required_number(const Row& r, std::size_t column) const {
+    const std::string& s = r.fields[column];
     char* end = nullptr;
     const double v = std::strtod(s.c_str(), &end);
-    if (s.empty() || end != s.c_str() + s.size())
-      throw IoError("study: '" + path_ + "', line " + std::to_string(r.line) + ": '" + s + "' is not a number");
+    if (s.empty() || end != s.c_str() + s.size() || !std::isfinite(v))
+      throw IoError("study: '" + path_ + "', line " + std::to_string(r.line) + ", column " +
+                    std::to_string(column + 1) + ": '" + s + "' is not a number");
     return v;
+  }
+  /// A count or index: a whole number in [0, 2^53].
+  long long required_integer(const Row& r, std::size_t column) const {
+    const double v = required_number(r, column);
+    if (!(v >= 0.0 && v <= 0x1.0p53) || v != std::floor(v))
+      throw IoError("study: '" + path_ + "', line " + std::to_string(r.line) + ", column " +
+                    std::to_string(column + 1) + ": '" + r.fields[column] + "' is not a count");
+    return (long long)v;
   }
 
  private:

@@ -64,8 +64,9 @@ def eigen_rows(centers=2):
             for index in range(49):
                 l = math.isqrt(index)
                 exact = l * (l + 1)
-                rel = "nan" if index == 0 else -c * 1e-4 * (1 + l) ** 2 * (1 + 0.1 * center)
-                computed = exact if index == 0 else exact * (1 + rel)
+                # Index 0 (exact 0): an undefined relative error is an empty field, as corrlap writes it.
+                rel = "" if index == 0 else -c * 1e-4 * (1 + l) ** 2 * (1 + 0.1 * center)
+                computed = 1e-12 if index == 0 else exact * (1 + rel)
                 rows.append(("eigen", method, "true", 0.05, center, index, exact, computed, rel,
                              0.1))
     return rows
@@ -160,6 +161,18 @@ def test_nan_and_empty_values_are_skipped(tmp_path):
     assert len(paths) == 2 * 5
     check_png_svg(tmp_path / "plots" / "backward_true_x2_l2")
     check_png_svg(tmp_path / "plots" / "eigen_true_h0.05")
+
+
+def test_empty_orders_leave_the_legend_without_an_order(tmp_path):
+    """orders.csv as corrlap writes it with one grid step: the order and interval fields empty."""
+    write(tmp_path / "summary.csv", SUMMARY_HEADER, summary_rows())
+    rows = orders_rows()
+    rows[0] = rows[0][:5] + ("", "", "") + rows[0][8:]  # fem x2 linf
+    write(tmp_path / "orders.csv", ORDERS_HEADER, rows)
+    plot_study.plot_study(str(tmp_path), formats=("svg",))
+    linf = (tmp_path / "plots" / "backward_true_x2_linf.svg").read_text()
+    assert "fem (order" not in linf and "interpolated (order 1.93)" in linf
+    assert "fem (order 1.93)" in (tmp_path / "plots" / "backward_true_x2_l2.svg").read_text()
 
 
 def test_missing_column_is_exit_1_naming_it(tmp_path):
