@@ -13,7 +13,7 @@ void bind_regularization(py::module_& m) {
   m.def(
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
-         double h, const py::dict& params, double alpha0, py::object curvature_radius, py::object size,
+         std::optional<double> h, const py::dict& params, double alpha0, std::optional<double> curvature_radius, std::optional<double> size,
          const std::string& solver, const py::dict& solver_options, bool allow_nonmanifold) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
@@ -23,8 +23,8 @@ void bind_regularization(py::module_& m) {
         o.method = method;
         o.method_params = config_arg(params, method);
         o.alpha0 = alpha0;
-        if (!curvature_radius.is_none()) o.curvature_radius = curvature_radius.cast<double>();
-        if (!size.is_none()) o.size = size.cast<double>();
+        o.curvature_radius = curvature_radius;
+        o.size = size;
         o.solver = config_arg(solver_options, solver);
         o.solver.set("solver", solver);
         const RegularizedSurface r = [&] {
