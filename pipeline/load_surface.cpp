@@ -2,17 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <limits>
-#include <optional>
-#include <type_traits>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/mesh_voxelization.hpp>
+#include <cstring>
+#include <limits>
+#include <optional>
 #include <sstream>
+#include <type_traits>
 
 namespace corrlap {
 namespace {
@@ -82,8 +82,9 @@ template <class T, bool Swapped, class Inside>
 std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eigen::Vector3i& n,
                                           const InsideTest<T>& test, Inside&& inside) {
   std::array<int, 3> axes = {0, 1, 2};
-  std::stable_sort(axes.begin(), axes.end(),
-                   [&](int a, int b) { return std::abs(in.strides[std::size_t(a)]) > std::abs(in.strides[std::size_t(b)]); });
+  std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) {
+    return std::abs(in.strides[std::size_t(a)]) > std::abs(in.strides[std::size_t(b)]);
+  });
   const auto [a0, a1, a2] = axes;
   const std::ptrdiff_t s0 = in.strides[std::size_t(a0)], s1 = in.strides[std::size_t(a1)],
                        s2 = in.strides[std::size_t(a2)];
@@ -169,17 +170,28 @@ VoxelGrid threshold_array(const VolumeArrayInput& in) {
   }
   if (in.h) check_grid_step(*in.h, "volume");
   switch (in.type) {
-    case VoxelValueType::Bool: return threshold_as<bool>(in);
-    case VoxelValueType::Int8: return threshold_as<std::int8_t>(in);
-    case VoxelValueType::Int16: return threshold_as<std::int16_t>(in);
-    case VoxelValueType::Int32: return threshold_as<std::int32_t>(in);
-    case VoxelValueType::Int64: return threshold_as<std::int64_t>(in);
-    case VoxelValueType::UInt8: return threshold_as<std::uint8_t>(in);
-    case VoxelValueType::UInt16: return threshold_as<std::uint16_t>(in);
-    case VoxelValueType::UInt32: return threshold_as<std::uint32_t>(in);
-    case VoxelValueType::UInt64: return threshold_as<std::uint64_t>(in);
-    case VoxelValueType::Float32: return threshold_as<float>(in);
-    case VoxelValueType::Float64: return threshold_as<double>(in);
+    case VoxelValueType::Bool:
+      return threshold_as<bool>(in);
+    case VoxelValueType::Int8:
+      return threshold_as<std::int8_t>(in);
+    case VoxelValueType::Int16:
+      return threshold_as<std::int16_t>(in);
+    case VoxelValueType::Int32:
+      return threshold_as<std::int32_t>(in);
+    case VoxelValueType::Int64:
+      return threshold_as<std::int64_t>(in);
+    case VoxelValueType::UInt8:
+      return threshold_as<std::uint8_t>(in);
+    case VoxelValueType::UInt16:
+      return threshold_as<std::uint16_t>(in);
+    case VoxelValueType::UInt32:
+      return threshold_as<std::uint32_t>(in);
+    case VoxelValueType::UInt64:
+      return threshold_as<std::uint64_t>(in);
+    case VoxelValueType::Float32:
+      return threshold_as<float>(in);
+    case VoxelValueType::Float64:
+      return threshold_as<double>(in);
   }
   throw std::logic_error("threshold_array: unknown VoxelValueType");
 }
@@ -218,8 +230,7 @@ void check_grid_step(double h, const std::string& what) {
 }
 
 VolumeArrayInput VolumeArrayInput::c_order(std::span<const double> values, const Eigen::Vector3i& size) {
-  if (size.minCoeff() < 0 ||
-      std::size_t(size.x()) * std::size_t(size.y()) * std::size_t(size.z()) != values.size())
+  if (size.minCoeff() < 0 || std::size_t(size.x()) * std::size_t(size.y()) * std::size_t(size.z()) != values.size())
     throw InputError("volume: " + std::to_string(values.size()) + " values for " + std::to_string(size.x()) + "x" +
                          std::to_string(size.y()) + "x" + std::to_string(size.z()) + " voxels",
                      "volume");

@@ -4,12 +4,12 @@
 // (docs/architecture.md, "The data flow").
 #include <Eigen/Core>
 #include <array>
-#include <cstddef>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <cstddef>
 #include <functional>
 #include <optional>
 #include <span>

@@ -145,7 +145,7 @@ VoxelValueType voxel_value_type(const py::dtype& dtype, const std::string& name)
   if (kind == 'u' && size == 8) return VoxelValueType::UInt64;
   if (kind == 'f' && size == 4) return VoxelValueType::Float32;
   if (kind == 'f' && size == 8) return VoxelValueType::Float64;
-  throw py::value_error(name + ": dtype " + std::string(py::str(dtype)) +
+  throw py::value_error(name + ": dtype " + std::string(py::str(py::handle(dtype))) +
                         " is not supported (expected bool, an integer type, float32 or float64); convert it, e.g. " +
                         name + ".astype(numpy.float32)");
 }

@@ -74,7 +74,8 @@ void bind_normals(py::module_& m) {
       py::arg("offset"), py::arg("center"), py::arg("k"), py::arg("alpha"), py::arg("at"));
   m.def(
       "ii_normals_volume",
-      [](py::handle volume, py::handle V, py::handle F, std::optional<double> h, double threshold, double k, double alpha,
+      [](py::handle volume, py::handle V, py::handle F, std::optional<double> h, double threshold, double k,
+         double alpha,
          const std::string& at) { return ii_normals(array_voxels(volume, h, threshold), V, F, k, alpha, at); },
       py::arg("volume"), py::arg("V"), py::arg("F"), py::arg("h"), py::arg("threshold"), py::arg("k"), py::arg("alpha"),
       py::arg("at"));

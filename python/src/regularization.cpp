@@ -13,8 +13,9 @@ void bind_regularization(py::module_& m) {
   m.def(
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
-         std::optional<double> h, const py::dict& params, double alpha0, std::optional<double> curvature_radius, std::optional<double> size,
-         const std::string& solver, const py::dict& solver_options, bool allow_nonmanifold) {
+         std::optional<double> h, const py::dict& params, double alpha0, std::optional<double> curvature_radius,
+         std::optional<double> size, const std::string& solver, const py::dict& solver_options,
+         bool allow_nonmanifold) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)

@@ -23,8 +23,8 @@ py::dict describe(const Registry& registry) {
 // A matrix of the system must be square and non-empty.
 void square_arg(Eigen::Index rows, Eigen::Index cols, const std::string& name) {
   if (rows != cols || rows == 0)
-    throw py::value_error(name + ": expected a square matrix with at least one row, got " + std::to_string(rows) + " x " +
-                          std::to_string(cols));
+    throw py::value_error(name + ": expected a square matrix with at least one row, got " + std::to_string(rows) +
+                          " x " + std::to_string(cols));
 }
 
 }  // namespace

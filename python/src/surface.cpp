@@ -3,12 +3,12 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <limits>
-#include <optional>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
+#include <limits>
+#include <optional>
 #include <span>
 
 #include "bindings.hpp"

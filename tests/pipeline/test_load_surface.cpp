@@ -3,9 +3,9 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <corrlap/corrlap.hpp>
 #include <cstdint>
 #include <limits>
-#include <corrlap/corrlap.hpp>
 #include <vector>
 
 #include "test_support.hpp"

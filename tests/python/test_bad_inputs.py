@@ -127,7 +127,17 @@ CASES = [
     ("laplacian lam=-1", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "polydec", face_normals=fn, lam=-1),
      ValueError, r"lambda = -1: expected >= 0"),
     ("laplacian integer parameter 5.5", lambda V, F, fn, L, M: corrlap.laplacian(
-        V, F, "vrm", face_normals=fn, max_iterations=5.5), ValueError, r"max_iterations.*an integer"),
+        V, F, "corrected-vrm", face_normals=fn, max_iterations=5.5), ValueError, r"max_iterations = 5.5: expected an integer"),
+    ("laplacian integer parameter True", lambda V, F, fn, L, M: corrlap.laplacian(
+        V, F, "corrected-vrm", face_normals=fn, max_iterations=True), ValueError, r"max_iterations"),
+    ("heat-kernel k=nan", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "heat-kernel", face_normals=fn, k=NAN),
+     ValueError, r"heat-kernel: k = nan: expected a finite number"),
+    ("heat-kernel t=0", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "heat-kernel", face_normals=fn, t=0),
+     ValueError, r"heat-kernel: t = 0"),
+    ("heat-kernel alpha=inf", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "heat-kernel", face_normals=fn,
+                                                                       alpha=INF), ValueError, r"alpha = inf"),
+    ("heat-kernel cutoff=-1", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "heat-kernel", face_normals=fn,
+                                                                       cutoff=-1), ValueError, r"cutoff = -1"),
     ("laplacian unknown keyword", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "fem", face_normals=fn, bogus=1),
      ValueError, r"bogus"),
     ("laplacian option list", lambda V, F, fn, L, M: corrlap.laplacian(V, F, "fem", face_normals=fn, mass=[1]),
