@@ -82,8 +82,11 @@ template <class T, bool Swapped, class Inside>
 std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eigen::Vector3i& n,
                                           const InsideTest<T>& test, Inside&& inside) {
   std::array<int, 3> axes = {0, 1, 2};
-  std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) {
-    return std::abs(in.strides[std::size_t(a)]) > std::abs(in.strides[std::size_t(b)]);
+  // Equal strides (a broadcast): the grid's own order, x innermost, so that a word's 64 bits are
+  // set in a row.
+  std::sort(axes.begin(), axes.end(), [&](int a, int b) {
+    const std::ptrdiff_t sa = std::abs(in.strides[std::size_t(a)]), sb = std::abs(in.strides[std::size_t(b)]);
+    return sa > sb || (sa == sb && a > b);
   });
   const auto [a0, a1, a2] = axes;
   const std::ptrdiff_t s0 = in.strides[std::size_t(a0)], s1 = in.strides[std::size_t(a1)],
