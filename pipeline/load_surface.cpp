@@ -227,7 +227,7 @@ VoxelGrid voxelize_file(const MeshFileInput& in, const LoadMessages& messages) {
 void check_grid_step(double h, const std::string& what) {
   if (!(h > 0.0) || !std::isfinite(h)) {
     std::ostringstream os;
-    os << what << ": grid step h = " << h << " must be positive and finite (or not given: the default)";
+    os << what << ": grid step h = " << h << " must be positive and finite";
     throw InputError(os.str(), "h");
   }
 }

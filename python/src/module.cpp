@@ -28,6 +28,7 @@ PYBIND11_MODULE(_core, m) {
   bind_solvers(m);
   bind_regularization(m);
   m.def("set_threads", &corrlap::set_thread_count, py::arg("n"));
+  m.def("get_threads", &corrlap::thread_count);
   // The memory budget every allocation sized by the input is checked against (core/memory_budget.hpp):
   // CORRLAP_MAX_MEMORY as for the CLI, else the machine's memory, until set_max_memory.
   corrlap::apply_memory_budget_from_environment();
@@ -38,5 +39,4 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("size"));
   m.def("get_max_memory", &corrlap::memory_budget);
-  m.def("get_threads", &corrlap::thread_count);
 }
