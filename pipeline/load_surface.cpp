@@ -1,5 +1,6 @@
 #include "load_surface.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
@@ -7,7 +8,11 @@
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/mesh_voxelization.hpp>
+#include <cstring>
+#include <limits>
+#include <optional>
 #include <sstream>
+#include <type_traits>
 
 namespace corrlap {
 namespace {
@@ -19,48 +24,179 @@ struct Overloaded : F... {
 template <class... F>
 Overloaded(F...) -> Overloaded<F...>;
 
-void check_step(double h, const std::string& what) {
-  if (!(h > 0.0) || !std::isfinite(h)) {
-    std::ostringstream os;
-    os << what << ": grid step h = " << h << " must be positive and finite";
-    throw InputError(os.str(), "h");
-  }
-}
-
 bool is_named_shape(const std::string& name) {
   for (const auto& [shape, polynomial] : named_shapes())
     if (shape == name) return true;
   return false;
 }
 
+// Inside iff value > threshold, decided in the array's own type, so that no value is converted to
+// a type that cannot hold it: an integer is inside iff it is >= the smallest integer above the
+// threshold (exact for 64-bit values, which a double cannot all represent); float32 and float64
+// compare as doubles (exact); bool is 0 or 1.
+template <class T>
+struct InsideTest {
+  T lowest_inside{};
+  bool none = false;  // no value of T is above the threshold
+  double threshold = 0.0;
+
+  explicit InsideTest(double t) : threshold(t) {
+    if constexpr (std::is_integral_v<T>) {
+      const double f = std::floor(t);
+      if (f < double(std::numeric_limits<T>::lowest()))
+        lowest_inside = std::numeric_limits<T>::lowest();
+      else if (f >= double(std::numeric_limits<T>::max()))
+        none = true;
+      else
+        lowest_inside = T(T(f) + 1);  // f is in range here, so the conversion is exact
+    }
+  }
+  bool inside(T v) const {
+    if constexpr (std::is_integral_v<T>)
+      return v >= lowest_inside;
+    else
+      return double(v) > threshold;
+  }
+  static bool is_nan(T v) {
+    if constexpr (std::is_floating_point_v<T>)
+      return std::isnan(v);
+    else
+      return false;
+  }
+};
+
+template <class T, bool Swapped>
+T read_value(const char* p) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, p, sizeof(T));
+  if constexpr (Swapped) std::reverse(bytes, bytes + sizeof(T));
+  T v;
+  std::memcpy(&v, bytes, sizeof(T));
+  return v;
+}
+
+// Calls inside(index) for every inside voxel of the box [0, n) of the array, walking the memory in
+// its own order (the axis of smallest stride innermost); returns the index of the first NaN met
+// instead, if any.
+template <class T, bool Swapped, class Inside>
+std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eigen::Vector3i& n,
+                                          const InsideTest<T>& test, Inside&& inside) {
+  std::array<int, 3> axes = {0, 1, 2};
+  // Equal strides (a broadcast): the grid's own order, x innermost, so that a word's 64 bits are
+  // set in a row.
+  std::sort(axes.begin(), axes.end(), [&](int a, int b) {
+    const std::ptrdiff_t sa = std::abs(in.strides[std::size_t(a)]), sb = std::abs(in.strides[std::size_t(b)]);
+    return sa > sb || (sa == sb && a > b);
+  });
+  const auto [a0, a1, a2] = axes;
+  const std::ptrdiff_t s0 = in.strides[std::size_t(a0)], s1 = in.strides[std::size_t(a1)],
+                       s2 = in.strides[std::size_t(a2)];
+  const char* base = static_cast<const char*>(in.data);
+  Eigen::Vector3i i;
+  for (i[a0] = 0; i[a0] < n[a0]; ++i[a0])
+    for (i[a1] = 0; i[a1] < n[a1]; ++i[a1]) {
+      const char* row = base + std::ptrdiff_t(i[a0]) * s0 + std::ptrdiff_t(i[a1]) * s1;
+      for (i[a2] = 0; i[a2] < n[a2]; ++i[a2]) {
+        T v;
+        if constexpr (std::is_same_v<T, bool>)
+          v = *reinterpret_cast<const unsigned char*>(row + std::ptrdiff_t(i[a2]) * s2) != 0;
+        else
+          v = read_value<T, Swapped>(row + std::ptrdiff_t(i[a2]) * s2);
+        if (InsideTest<T>::is_nan(v)) return i;
+        if (test.inside(v)) inside(i);
+      }
+    }
+  return std::nullopt;
+}
+
+[[noreturn]] void empty_volume(double threshold) {
+  std::ostringstream os;
+  os << "volume: no voxel above the threshold " << threshold
+     << " (empty volume); lower the threshold or check the array";
+  throw InputError(os.str(), "threshold");
+}
+
+[[noreturn]] void nan_value(const Eigen::Vector3i& at) {
+  throw InputError("volume: value at [" + std::to_string(at.x()) + ", " + std::to_string(at.y()) + ", " +
+                       std::to_string(at.z()) + "] is NaN; replace NaN (e.g. numpy.nan_to_num) before digitizing",
+                   "volume");
+}
+
 // The box of read_volume_as_voxels(centered): one voxel of padding, the volume's centre at the origin.
+template <class T, bool Swapped>
+VoxelGrid threshold_typed(const VolumeArrayInput& in) {
+  const InsideTest<T> test(in.threshold);
+  if (test.none) empty_volume(in.threshold);
+  const Eigen::Vector3i size = in.size;
+  // A broadcast axis (stride 0) repeats its values: the distinct values are checked first, so that
+  // an empty or NaN volume of any announced size is refused before the grid is allocated.
+  if (in.strides[0] == 0 || in.strides[1] == 0 || in.strides[2] == 0) {
+    Eigen::Vector3i distinct = size;
+    for (int a = 0; a < 3; ++a)
+      if (in.strides[std::size_t(a)] == 0) distinct[a] = 1;
+    bool any_inside = false;
+    if (const auto nan = scan_array<T, Swapped>(in, distinct, test, [&](const Eigen::Vector3i&) { any_inside = true; }))
+      nan_value(*nan);
+    if (!any_inside) empty_volume(in.threshold);
+  }
+  const Eigen::Vector3i shift = volume_centering_shift(size);
+  // The constructor checks the grid against the memory budget before allocating it.
+  VoxelGrid grid(Eigen::Vector3i::Constant(-1) - shift, size - shift, in.h ? *in.h : unit_size_grid_step(size));
+  std::int64_t inside = 0;
+  // Voxel (x, y, z) is the grid's (x - shift): its bit is x + 1 of the row (y - shift.y, z - shift.z).
+  const auto nan = scan_array<T, Swapped>(in, size, test, [&](const Eigen::Vector3i& i) {
+    const int bit = i.x() + 1;
+    grid.row(i.y() - shift.y(), i.z() - shift.z())[bit >> 6] |= std::uint64_t{1} << (bit & 63);
+    ++inside;
+  });
+  if (nan) nan_value(*nan);
+  if (inside == 0) empty_volume(in.threshold);
+  return grid;
+}
+
+template <class T>
+VoxelGrid threshold_as(const VolumeArrayInput& in) {
+  return in.byte_swapped && sizeof(T) > 1 ? threshold_typed<T, true>(in) : threshold_typed<T, false>(in);
+}
+
 VoxelGrid threshold_array(const VolumeArrayInput& in) {
   const Eigen::Vector3i size = in.size;
-  if (size.minCoeff() <= 0) throw InputError("volume: empty array", "volume");
-  if (std::size_t(size.x()) * std::size_t(size.y()) * std::size_t(size.z()) != in.values.size())
-    throw InputError("volume: " + std::to_string(in.values.size()) + " values for " + std::to_string(size.x()) + "x" +
-                         std::to_string(size.y()) + "x" + std::to_string(size.z()) + " voxels",
+  if (size.minCoeff() <= 0)
+    throw InputError("volume: empty array (" + std::to_string(size.x()) + "x" + std::to_string(size.y()) + "x" +
+                         std::to_string(size.z()) + " voxels)",
                      "volume");
-  if (in.h) check_step(*in.h, "volume");
-  const Eigen::Vector3i shift = volume_centering_shift(size);
-  VoxelGrid grid(Eigen::Vector3i::Constant(-1) - shift, size - shift, in.h ? *in.h : unit_size_grid_step(size));
-  const double* p = in.values.data();
-  std::int64_t inside = 0;
-  for (int x = 0; x < size.x(); ++x)
-    for (int y = 0; y < size.y(); ++y)
-      for (int z = 0; z < size.z(); ++z) {
-        const double v = p[(std::int64_t(x) * size.y() + y) * size.z() + z];
-        if (std::isnan(v))
-          throw InputError("volume: value at [" + std::to_string(x) + ", " + std::to_string(y) + ", " +
-                               std::to_string(z) + "] is NaN",
-                           "volume");
-        if (v > in.threshold) {
-          grid.set(x - shift.x(), y - shift.y(), z - shift.z(), true);
-          ++inside;
-        }
-      }
-  if (inside == 0) throw InputError("volume: no voxel above the threshold (empty volume)", "threshold");
-  return grid;
+  if (!in.data) throw InputError("volume: no values", "volume");
+  if (!std::isfinite(in.threshold)) {
+    std::ostringstream os;
+    os << "volume: threshold = " << in.threshold << " must be a finite number";
+    throw InputError(os.str(), "threshold");
+  }
+  if (in.h) check_grid_step(*in.h, "volume");
+  switch (in.type) {
+    case VoxelValueType::Bool:
+      return threshold_as<bool>(in);
+    case VoxelValueType::Int8:
+      return threshold_as<std::int8_t>(in);
+    case VoxelValueType::Int16:
+      return threshold_as<std::int16_t>(in);
+    case VoxelValueType::Int32:
+      return threshold_as<std::int32_t>(in);
+    case VoxelValueType::Int64:
+      return threshold_as<std::int64_t>(in);
+    case VoxelValueType::UInt8:
+      return threshold_as<std::uint8_t>(in);
+    case VoxelValueType::UInt16:
+      return threshold_as<std::uint16_t>(in);
+    case VoxelValueType::UInt32:
+      return threshold_as<std::uint32_t>(in);
+    case VoxelValueType::UInt64:
+      return threshold_as<std::uint64_t>(in);
+    case VoxelValueType::Float32:
+      return threshold_as<float>(in);
+    case VoxelValueType::Float64:
+      return threshold_as<double>(in);
+  }
+  throw std::logic_error("threshold_array: unknown VoxelValueType");
 }
 
 VoxelGrid voxelize_file(const MeshFileInput& in, const LoadMessages& messages) {
@@ -68,7 +204,7 @@ VoxelGrid voxelize_file(const MeshFileInput& in, const LoadMessages& messages) {
   if (in.resolution > 0 && in.h) throw InputError(what + ": give either a resolution or a grid step h, not both", "h");
   if (in.resolution <= 0 && !in.h)
     throw InputError(what + " needs a resolution (voxels along the longest side) or a grid step h", "resolution");
-  if (in.h) check_step(*in.h, what);
+  if (in.h) check_grid_step(*in.h, what);
   MeshVoxelizationParams params;
   params.resolution = in.resolution;
   params.h = in.h.value_or(0.0);
@@ -87,6 +223,28 @@ VoxelGrid voxelize_file(const MeshFileInput& in, const LoadMessages& messages) {
 }
 
 }  // namespace
+
+void check_grid_step(double h, const std::string& what) {
+  if (!(h > 0.0) || !std::isfinite(h)) {
+    std::ostringstream os;
+    os << what << ": grid step h = " << h << " must be positive and finite";
+    throw InputError(os.str(), "h");
+  }
+}
+
+VolumeArrayInput VolumeArrayInput::c_order(std::span<const double> values, const Eigen::Vector3i& size) {
+  if (size.minCoeff() < 0 || std::size_t(size.x()) * std::size_t(size.y()) * std::size_t(size.z()) != values.size())
+    throw InputError("volume: " + std::to_string(values.size()) + " values for " + std::to_string(size.x()) + "x" +
+                         std::to_string(size.y()) + "x" + std::to_string(size.z()) + " voxels",
+                     "volume");
+  VolumeArrayInput in;
+  in.size = size;
+  in.data = values.data();
+  in.type = VoxelValueType::Float64;
+  const auto z = std::ptrdiff_t(sizeof(double));
+  in.strides = {z * size.y() * size.z(), z * size.z(), z};
+  return in;
+}
 
 std::string describe(const SurfaceInput& input) {
   std::ostringstream os;
@@ -121,14 +279,14 @@ std::string describe(const SurfaceInput& input) {
 VoxelGrid load_voxels(const SurfaceInput& input, const LoadMessages& messages) {
   return std::visit(Overloaded{
                         [&](const ImplicitShapeInput& s) {
-                          check_step(s.digitization.h, "shape '" + s.shape + "'");
+                          check_grid_step(s.digitization.h, "shape '" + s.shape + "'");
                           return digitize(make_implicit_shape(s.shape, s.center), s.digitization);
                         },
                         [&](const VolumeFileInput& v) {
                           VolumeReadOptions opt;
                           opt.threshold = v.threshold;
                           // World units by default (docs/io.md): the longest side spans 2, h = 2 / N.
-                          if (v.h) check_step(*v.h, "volume file '" + v.path + "'");
+                          if (v.h) check_grid_step(*v.h, "volume file '" + v.path + "'");
                           opt.h = v.h.value_or(0.0);
                           opt.centered = true;  // the volume's centre at the origin (docs/io.md)
                           opt.raw_dimensions = v.raw_dimensions;

@@ -3,11 +3,13 @@
 // volume file, a volume in memory, a triangle mesh to voxelize, or a quad mesh of surfels
 // (docs/architecture.md, "The data flow").
 #include <Eigen/Core>
+#include <array>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <cstddef>
 #include <functional>
 #include <optional>
 #include <span>
@@ -32,14 +34,26 @@ struct VolumeFileInput {
   std::optional<double> h;                        ///< default: 2 / the longest side in voxels
 };
 
-/// A volume in memory, as the file reader would see it: value (x, y, z) at
-/// values[(x * size.y() + y) * size.z() + z] (a C-ordered array indexed [x][y][z]); inside = value
-/// > threshold; centred like a volume file. The values are read during load_surface only.
+/// The element type of a volume in memory (numpy's bool, int8 ... uint64, float32, float64).
+enum class VoxelValueType { Bool, Int8, Int16, Int32, Int64, UInt8, UInt16, UInt32, UInt64, Float32, Float64 };
+
+/// A volume in memory, read where it is, in its own element type and layout (no copy): value
+/// (x, y, z) at the bytes data + x * strides[0] + y * strides[1] + z * strides[2]. Any strides
+/// work: C or Fortran order, views with steps, negative strides, and 0 along an axis (a broadcast
+/// array, whose values repeat). Inside = value > threshold (bool: true > threshold, true = 1);
+/// centred like a volume file. The values are read during load_surface only; NaN is refused.
 struct VolumeArrayInput {
   Eigen::Vector3i size = Eigen::Vector3i::Zero();
-  std::span<const double> values;
+  const void* data = nullptr;
+  VoxelValueType type = VoxelValueType::Float64;
+  std::array<std::ptrdiff_t, 3> strides = {0, 0, 0};  ///< in bytes
+  bool byte_swapped = false;                          ///< the values are in the other byte order
   double threshold = 0.0;
   std::optional<double> h;  ///< default: 2 / the longest side in voxels
+
+  /// A C-ordered array of doubles indexed [x][y][z]: value (x, y, z) at values[(x * size.y() + y)
+  /// * size.z() + z]. InputError when the count does not match the size.
+  static VolumeArrayInput c_order(std::span<const double> values, const Eigen::Vector3i& size);
 };
 
 /// A closed triangle (or polygon) mesh voxelized: the voxels whose centres are inside.
@@ -107,6 +121,9 @@ struct LoadMessages {
 /// "threshold": Error::parameter) or the file, IoError for unreadable files, and InputError when no
 /// voxel is inside.
 LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messages = {});
+
+/// Refuses (InputError tagged "h", `what` first) a grid step that is not positive and finite.
+void check_grid_step(double h, const std::string& what);
 
 /// Only the voxels of an input that has some (not a QuadMeshInput: InputError), without the surface.
 VoxelGrid load_voxels(const SurfaceInput& input, const LoadMessages& messages = {});

@@ -12,10 +12,17 @@ L u = lambda M u are <= 0 (-lambda ~ l(l+1) on the unit sphere). ``positive=True
 eigs gives -L and -lambda instead, the convention of robust_laplacian and gpytoolbox.
 
 Arrays in may be any numpy array-like of int32/int64/float32/float64 in C or Fortran order; a wrong
-dtype or shape, a NaN or an out-of-range face index raises ValueError naming the argument. The C++
-library's errors keep their message: bad input (including unreadable files) raises ValueError, a
-failed solve RuntimeError. The long calls release the GIL, and use the threads of set_threads(n).
+dtype or shape, a NaN or an out-of-range face index raises ValueError naming the argument. None is
+the only way to ask for a default; a value outside its parameter's domain (h=0, h=nan, k=0) raises
+ValueError and a value of the wrong type (k=5.5, h="x", h=True) TypeError, both naming the
+parameter. The C++ library's errors keep their message: bad input (including unreadable files)
+raises ValueError, a failed solve RuntimeError. Allocations sized by the input are checked against
+the memory budget (set_max_memory) first. The long calls release the GIL, and use the threads of
+set_threads(n).
 """
+
+import numbers as _numbers
+import operator as _operator
 
 import numpy as _np
 import scipy.sparse as _sparse
@@ -24,7 +31,8 @@ from . import _core
 
 __all__ = [
     "digitize", "digitize_volume", "read_mesh", "write_mesh", "true_normals", "ii_normals", "curvature",
-    "laplacian", "solve", "eigs", "regularize", "set_threads", "get_threads", "methods", "backends",
+    "laplacian", "solve", "eigs", "regularize", "set_threads", "get_threads", "set_max_memory", "get_max_memory",
+    "methods", "backends",
 ]
 
 def _csc(parts):
@@ -55,9 +63,36 @@ def _warn(messages):
         warnings.warn(m, RuntimeWarning, stacklevel=3)
 
 
+def _real(value, name, required=False):
+    """A real argument as a float, None (the default) as None. Its range is the library's to check
+    (ValueError naming the parameter); here only the type: a bool, a string or a complex number is
+    a TypeError naming it, never silently a number."""
+    if value is None:
+        if required:
+            raise TypeError(f"{name}: a number is required, got None")
+        return None
+    if isinstance(value, (bool, _np.bool_)) or not isinstance(value, _numbers.Real):
+        raise TypeError(f"{name}: expected a real number, got {type(value).__name__} {value!r}")
+    return float(value)
+
+
+def _integer(value, name):
+    """An integer argument: an int or a numpy integer (never a float such as 5.5, never a bool),
+    within the library's int range."""
+    if isinstance(value, (bool, _np.bool_)):
+        raise TypeError(f"{name}: expected an integer, got bool {value!r}")
+    try:
+        i = _operator.index(value)
+    except TypeError:
+        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}") from None
+    if not -2**31 <= i < 2**31:
+        raise ValueError(f"{name}: {i} is out of range (|{name}| < 2^31)")
+    return i
+
+
 def _bbox(bbox):
     lo, hi = bbox
-    return float(lo), float(hi)
+    return _real(lo, "bbox", required=True), _real(hi, "bbox", required=True)
 
 
 def digitize(shape, h, bbox=(-10.0, 10.0), offset=5, center=(0.0, 0.0, 0.0)):
@@ -75,7 +110,8 @@ def digitize(shape, h, bbox=(-10.0, 10.0), offset=5, center=(0.0, 0.0, 0.0)):
     from outside, numbered as the reference implementation and `corrlap digitize` number them.
     """
     lo, hi = _bbox(bbox)
-    return _core.digitize(str(shape), float(h), lo, hi, int(offset), _np.reshape(center, (1, 3)))
+    return _core.digitize(str(shape), _real(h, "h", required=True), lo, hi, _integer(offset, "offset"),
+                          _np.reshape(center, (1, 3)))
 
 
 def digitize_volume(volume, h=None, threshold=0.0):
@@ -83,13 +119,17 @@ def digitize_volume(volume, h=None, threshold=0.0):
     its value is > threshold (bool arrays: True), centred at the origin as `corrlap digitize --volume`
     centres a volume file.
 
-    volume     (nx, ny, nz) bool or real array
-    h          grid step; None: 2 / max(nx, ny, nz), so that the longest side spans 2 (the CLI's default)
-    threshold  inside iff value > threshold
+    volume     (nx, ny, nz) array of bool, int8 ... int64, uint8 ... uint64, float32 or float64, read
+               where it is, in its own dtype and strides (C or Fortran order, views, broadcasts):
+               no converted copy is made, and the voxel grid (one bit per voxel) is checked
+               against the memory budget before it is allocated
+    h          grid step > 0; None: 2 / max(nx, ny, nz), so that the longest side spans 2 (the CLI's default)
+    threshold  inside iff value > threshold (finite; bool arrays: True is 1)
 
-    Returns V (#V, 3) float64 and F (#F, 4) int64 quads.
+    Returns V (#V, 3) float64 and F (#F, 4) int64 quads. A NaN value, or no voxel inside, raises
+    ValueError naming it.
     """
-    return _core.digitize_volume(volume, 0.0 if h is None else float(h), float(threshold))
+    return _core.digitize_volume(volume, _real(h, "h"), _real(threshold, "threshold", required=True))
 
 
 def read_mesh(path):
@@ -133,10 +173,11 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbo
         if h is None:
             raise ValueError("h: required with a shape")
         lo, hi = _bbox(bbox)
-        return _core.ii_normals_shape(volume_or_shape, V, F, float(h), lo, hi, int(offset),
-                                      _np.reshape(center, (1, 3)), float(k), float(alpha), at)
-    return _core.ii_normals_volume(volume_or_shape, V, F, 0.0 if h is None else float(h), float(threshold),
-                                   float(k), float(alpha), at)
+        return _core.ii_normals_shape(volume_or_shape, V, F, _real(h, "h"), lo, hi, _integer(offset, "offset"),
+                                      _np.reshape(center, (1, 3)), _real(k, "k", required=True),
+                                      _real(alpha, "alpha", required=True), str(at))
+    return _core.ii_normals_volume(volume_or_shape, V, F, _real(h, "h"), _real(threshold, "threshold", required=True),
+                                   _real(k, "k", required=True), _real(alpha, "alpha", required=True), str(at))
 
 
 def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vertices", constant=False):
@@ -151,7 +192,8 @@ def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vert
     Returns H, G, k1, k2 (n,) mean, Gaussian and principal curvatures (k1 <= k2; the unit sphere
     has H = 1) and d1, d2 (n, 3) their unit principal directions.
     """
-    return _core.curvature(V, F, face_normals, vertex_normals, float(radius), at, bool(constant))
+    return _core.curvature(V, F, face_normals, vertex_normals, _real(radius, "radius", required=True), str(at),
+                           bool(constant))
 
 
 def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, h=None, positive=False, **params):
@@ -179,8 +221,8 @@ def laplacian(V, F, method="fem", face_normals=None, vertex_normals=None, h=None
     surface, normals and parameters.
     """
     params = {_PARAMETER_OF_KEYWORD.get(k, k): v for k, v in params.items()}
-    Lp, Mp, _domain, warnings = _core.laplacian(V, F, str(method), face_normals, vertex_normals,
-                                                0.0 if h is None else float(h), params)
+    Lp, Mp, _domain, warnings = _core.laplacian(V, F, str(method), face_normals, vertex_normals, _real(h, "h"),
+                                                params)
     _warn(warnings)
     L = _csc(Lp)
     if positive:
@@ -254,8 +296,8 @@ def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, p
     """
     Lp = _sparse_parts(L, "L")
     Mp = _sparse_parts(M, "M")
-    values, vectors, _method, _iterations = _core.eigs(Lp, Mp, int(k), solver or "", str(eigen_solver), options,
-                                                       positions)
+    values, vectors, _method, _iterations = _core.eigs(Lp, Mp, _integer(k, "k"), solver or "", str(eigen_solver),
+                                                       options, positions)
     return (values if positive else -values), vectors
 
 
@@ -279,8 +321,9 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
 
     Returns P (#V, 3), and H (#V,) too when return_curvature.
     """
-    P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), 0.0 if h is None else float(h),
-                                      params, float(alpha0), curvature_radius, size, str(solver),
+    P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
+                                      _real(alpha0, "alpha0", required=True),
+                                      _real(curvature_radius, "curvature_radius"), _real(size, "size"), str(solver),
                                       dict(solver_options or {}), bool(allow_nonmanifold))
     _warn(warnings)
     return (P, H) if return_curvature else P
@@ -291,12 +334,38 @@ def set_threads(n):
     Process-wide, the last call wins. Surfaces, normals, curvature and operators are bitwise the
     same for any thread count; solves and eigenpairs agree to rounding (OpenBLAS's sums depend on
     its thread count)."""
-    _core.set_threads(int(n))
+    _core.set_threads(_integer(n, "n"))
 
 
 def get_threads():
     """The current thread limit (the hardware concurrency unless set_threads was called)."""
     return _core.get_threads()
+
+
+def set_max_memory(size):
+    """Sets the memory budget: every allocation whose size comes from the input (a volume's voxel
+    grid, a surface, a file's counts) is checked against it before it is made, and an absurd one
+    raises ValueError with the numbers instead of exhausting the machine. size: bytes (int) or a
+    text such as "8G", "512M" (powers of 1024), as `corrlap --max-memory`; None: the default, the
+    machine's memory (or CORRLAP_MAX_MEMORY when set at import). Process-wide."""
+    if size is not None and not isinstance(size, str):
+        size = str(_integer_bytes(size))
+    _core.set_max_memory(size)
+
+
+def get_max_memory():
+    """The current memory budget in bytes (set_max_memory)."""
+    return _core.get_max_memory()
+
+
+def _integer_bytes(value):
+    if isinstance(value, (bool, _np.bool_)):
+        raise TypeError(f"size: expected bytes (an int) or a text such as '8G', got bool {value!r}")
+    try:
+        return _operator.index(value)
+    except TypeError:
+        raise TypeError(f"size: expected bytes (an int) or a text such as '8G', got {type(value).__name__} "
+                        f"{value!r}") from None
 
 
 def methods():

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <corrlap/core/voxel_grid.hpp>
+#include <optional>
 #include <string>
 
 namespace corrlap::python {
@@ -22,7 +23,7 @@ void bind_regularization(py::module_& m);
 VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, double bbox_max, int offset,
                        py::handle center);
 /// Voxels of a 3D array indexed volume[x, y, z], inside = value > threshold, centred as the CLI
-/// centres a volume file (docs/io.md); h <= 0: the longest side spans 2.
-VoxelGrid array_voxels(py::handle volume, double h, double threshold);
+/// centres a volume file (docs/io.md); no h: the longest side spans 2.
+VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double threshold);
 
 }  // namespace corrlap::python

@@ -131,12 +131,31 @@ Eigen::MatrixXd matrix_arg(py::handle obj, const std::string& name, Eigen::Index
   return m;
 }
 
-SurfelMesh mesh_arg(py::handle V, py::handle F, double h) {
-  if (!(h >= 0.0) || !std::isfinite(h)) throw py::value_error("h: must be positive (or None: unknown)");
+VoxelValueType voxel_value_type(const py::dtype& dtype, const std::string& name) {
+  const char kind = dtype.kind();
+  const auto size = dtype.itemsize();
+  if (kind == 'b') return VoxelValueType::Bool;
+  if (kind == 'i' && size == 1) return VoxelValueType::Int8;
+  if (kind == 'i' && size == 2) return VoxelValueType::Int16;
+  if (kind == 'i' && size == 4) return VoxelValueType::Int32;
+  if (kind == 'i' && size == 8) return VoxelValueType::Int64;
+  if (kind == 'u' && size == 1) return VoxelValueType::UInt8;
+  if (kind == 'u' && size == 2) return VoxelValueType::UInt16;
+  if (kind == 'u' && size == 4) return VoxelValueType::UInt32;
+  if (kind == 'u' && size == 8) return VoxelValueType::UInt64;
+  if (kind == 'f' && size == 4) return VoxelValueType::Float32;
+  if (kind == 'f' && size == 8) return VoxelValueType::Float64;
+  throw py::value_error(name + ": dtype " + std::string(py::str(py::handle(dtype))) +
+                        " is not supported (expected bool, an integer type, float32 or float64); convert it, e.g. " +
+                        name + ".astype(numpy.float32)");
+}
+
+SurfelMesh mesh_arg(py::handle V, py::handle F, std::optional<double> h) {
+  if (h) check_grid_step(*h, "the surface");
   SurfelMesh mesh;
   mesh.positions = points_arg(V, "V");
   mesh.faces = faces_arg(F, "F", mesh.positions.rows());
-  mesh.h = h;
+  mesh.h = h.value_or(0.0);  // 0: unknown (SurfelMesh::grid_step uses the mean edge length)
   return mesh;
 }
 
@@ -153,11 +172,12 @@ Config config_arg(const py::dict& options, const std::string& what) {
   Config config;
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
+    if (value.is_none()) continue;
     if (py::isinstance<py::bool_>(value)) {
       config.set(k, value.cast<bool>());
     } else if (py::isinstance<py::str>(value)) {
       config.set(k, value.cast<std::string>());
-    } else if (!value.is_none() && py::hasattr(value, "__float__")) {
+    } else if (py::hasattr(value, "__float__")) {
       config.set(k, value.cast<double>());  // ints too: the CLI's key=value numbers are doubles
     } else {
       throw py::value_error(what + ": option '" + k + "' has type " + std::string(py::str(value.get_type())) +

@@ -4,12 +4,15 @@
 // failure a ValueError naming the argument. Outputs are numpy arrays the caller owns.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/pipeline/load_surface.hpp>
+#include <optional>
 #include <string>
 
 namespace corrlap::python {
@@ -28,14 +31,20 @@ Eigen::MatrixXd matrix_arg(py::handle obj, const std::string& name, Eigen::Index
 /// The array behind `obj` as numpy, refusing complex, object, string and (unless allow_bool) bool dtypes.
 py::array numeric_array(py::handle obj, const std::string& name, bool allow_bool = false);
 
-/// V, F and the grid step (0: unknown, as for a mesh read from a file) as a SurfelMesh without surfels.
-SurfelMesh mesh_arg(py::handle V, py::handle F, double h);
+/// The element type of a volume (bool, int8 ... uint64, float32, float64); other dtypes (float16,
+/// longdouble) are refused with a hint.
+VoxelValueType voxel_value_type(const py::dtype& dtype, const std::string& name);
+
+/// V, F and the grid step (not given: unknown, as for a mesh read from a file; given: positive and
+/// finite) as a SurfelMesh without surfels.
+SurfelMesh mesh_arg(py::handle V, py::handle F, std::optional<double> h = std::nullopt);
 
 /// face_normals (#F, 3) and vertex_normals (#V, 3), each None or an array, as the library's request
 /// of given normals (NormalSource::Given) for resolve_normals.
 NormalRequest given_normals_arg(py::handle face_normals, py::handle vertex_normals, const SurfelMesh& mesh);
 
-/// Keyword options as a Config: bool, int, float and str values (the types of the CLI's key=value).
+/// Keyword options as a Config: bool, int, float and str values (the types of the CLI's key=value);
+/// None is "not given" (the default).
 Config config_arg(const py::dict& options, const std::string& what);
 
 /// CSC arrays (data, indices, indptr, shape) viewing the matrix's own storage: the matrix is moved

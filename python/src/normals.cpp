@@ -22,7 +22,7 @@ bool at_vertices(const std::string& at) {
 py::array_t<double> ii_normals(const VoxelGrid& grid, py::handle V, py::handle F, double k, double alpha,
                                const std::string& at) {
   const bool vertices = at_vertices(at);
-  const SurfelMesh given = mesh_arg(V, F, 0.0);
+  const SurfelMesh given = mesh_arg(V, F);
   Eigen::MatrixX3d n;
   {
     py::gil_scoped_release release;
@@ -51,7 +51,7 @@ void bind_normals(py::module_& m) {
         const bool vertices = at_vertices(at);
         const Eigen::MatrixX3d c = points_arg(center, "center", 1);
         const ImplicitShape s = make_implicit_shape(shape, c.row(0).transpose());
-        const SurfelMesh mesh = mesh_arg(V, F, 0.0);
+        const SurfelMesh mesh = mesh_arg(V, F);
         NormalFields n;
         {
           py::gil_scoped_release release;
@@ -74,7 +74,8 @@ void bind_normals(py::module_& m) {
       py::arg("offset"), py::arg("center"), py::arg("k"), py::arg("alpha"), py::arg("at"));
   m.def(
       "ii_normals_volume",
-      [](py::handle volume, py::handle V, py::handle F, double h, double threshold, double k, double alpha,
+      [](py::handle volume, py::handle V, py::handle F, std::optional<double> h, double threshold, double k,
+         double alpha,
          const std::string& at) { return ii_normals(array_voxels(volume, h, threshold), V, F, k, alpha, at); },
       py::arg("volume"), py::arg("V"), py::arg("F"), py::arg("h"), py::arg("threshold"), py::arg("k"), py::arg("alpha"),
       py::arg("at"));
@@ -83,8 +84,7 @@ void bind_normals(py::module_& m) {
       [](py::handle V, py::handle F, py::object face_normals, py::object vertex_normals, double radius,
          const std::string& at, bool constant) {
         const bool vertices = at_vertices(at);
-        if (!(radius >= 0.0)) throw py::value_error("radius: must be >= 0");
-        const SurfelMesh mesh = mesh_arg(V, F, 0.0);
+        const SurfelMesh mesh = mesh_arg(V, F);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         const bool have_face = request.face_normals.rows() > 0;
         if (constant && !have_face) throw py::value_error("face_normals: constant=True needs face normals");

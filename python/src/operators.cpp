@@ -31,7 +31,7 @@ void bind_operators(py::module_& m) {
   m.def(
       "laplacian",
       [](py::handle V, py::handle F, const std::string& method, py::handle face_normals, py::handle vertex_normals,
-         double h, const py::dict& params) {
+         std::optional<double> h, const py::dict& params) {
         const auto disc = make_discretization(method);
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const Config config = config_arg(params, method);
@@ -71,7 +71,7 @@ void bind_operators(py::module_& m) {
   m.def(
       "_time_fem_assembly",
       [](py::handle V, py::handle F, py::handle face_normals) {
-        const SurfelMesh mesh = mesh_arg(V, F, 0.0);
+        const SurfelMesh mesh = mesh_arg(V, F);
         NormalFields normals;
         normals.face = points_arg(face_normals, "face_normals", mesh.num_faces());
         const auto disc = make_discretization("fem");

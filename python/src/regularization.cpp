@@ -13,8 +13,9 @@ void bind_regularization(py::module_& m) {
   m.def(
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
-         double h, const py::dict& params, double alpha0, py::object curvature_radius, py::object size,
-         const std::string& solver, const py::dict& solver_options, bool allow_nonmanifold) {
+         std::optional<double> h, const py::dict& params, double alpha0, std::optional<double> curvature_radius,
+         std::optional<double> size, const std::string& solver, const py::dict& solver_options,
+         bool allow_nonmanifold) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)
@@ -23,8 +24,8 @@ void bind_regularization(py::module_& m) {
         o.method = method;
         o.method_params = config_arg(params, method);
         o.alpha0 = alpha0;
-        if (!curvature_radius.is_none()) o.curvature_radius = curvature_radius.cast<double>();
-        if (!size.is_none()) o.size = size.cast<double>();
+        o.curvature_radius = curvature_radius;
+        o.size = size;
         o.solver = config_arg(solver_options, solver);
         o.solver.set("solver", solver);
         const RegularizedSurface r = [&] {

@@ -20,6 +20,13 @@ py::dict describe(const Registry& registry) {
   return out;
 }
 
+// A matrix of the system must be square and non-empty.
+void square_arg(Eigen::Index rows, Eigen::Index cols, const std::string& name) {
+  if (rows != cols || rows == 0)
+    throw py::value_error(name + ": expected a square matrix with at least one row, got " + std::to_string(rows) +
+                          " x " + std::to_string(cols));
+}
+
 }  // namespace
 
 void bind_solvers(py::module_& m) {
@@ -27,9 +34,7 @@ void bind_solvers(py::module_& m) {
       "solve",
       [](py::handle data, py::handle indices, py::handle indptr, Eigen::Index rows, Eigen::Index cols, py::handle b,
          const std::string& solver, const py::dict& options, py::handle positions) {
-        if (rows != cols)
-          throw py::value_error("A: expected a square matrix, got " + std::to_string(rows) + " x " +
-                                std::to_string(cols));
+        square_arg(rows, cols, "A");
         Eigen::SparseMatrix<double> A = sparse_in(data, indices, indptr, rows, cols, "A");
         bool was_vector = false;
         const Eigen::MatrixXd B = matrix_arg(b, "b", rows, was_vector);
@@ -39,7 +44,8 @@ void bind_solvers(py::module_& m) {
         {
           py::gil_scoped_release release;
           backend->compute(std::move(A));
-          X = backend->solve(B);
+          // No right-hand side, no solution to compute (a backend may refuse an empty B).
+          X = B.cols() == 0 ? Eigen::MatrixXd(rows, 0) : backend->solve(B);
         }
         return was_vector ? py::object(to_numpy(Eigen::VectorXd(X.col(0)))) : py::object(to_numpy(X));
       },
@@ -49,14 +55,15 @@ void bind_solvers(py::module_& m) {
       "eigs",
       [](py::tuple L, py::tuple M, int k, const std::string& solver, const std::string& eigen_solver,
          const py::dict& options, py::handle positions) {
-        if (k <= 0) throw py::value_error("k: must be positive");
         auto matrix = [](const py::tuple& t, const char* name) {
           const auto rows = t[3].cast<Eigen::Index>(), cols = t[4].cast<Eigen::Index>();
-          if (rows != cols) throw py::value_error(std::string(name) + ": expected a square matrix");
+          square_arg(rows, cols, name);
           return sparse_in(t[0], t[1], t[2], rows, cols, name);
         };
         const Eigen::SparseMatrix<double> Ls = matrix(L, "L"), Ms = matrix(M, "M");
-        if (Ls.rows() != Ms.rows()) throw py::value_error("L, M: different sizes");
+        if (Ls.rows() != Ms.rows())
+          throw py::value_error("L, M: different sizes (" + std::to_string(Ls.rows()) + " and " +
+                                std::to_string(Ms.rows()) + " rows); pass the L and M of one laplacian call");
         Config config = config_arg(options, eigen_solver);
         // As `corrlap eigs`: the shift-invert linear solver is "solver", cholmod unless named.
         bool takes_solver = false;

@@ -1,10 +1,14 @@
 // Voxels -> digital surface (the library's load_surface), and mesh files: digitize, digitize_volume,
 // read_mesh, write_mesh.
+#include <pybind11/stl.h>
+
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
+#include <limits>
+#include <optional>
 #include <span>
 
 #include "bindings.hpp"
@@ -25,7 +29,6 @@ py::tuple surface_of(const SurfaceInput& input) {
 ImplicitShapeInput shape_input(const std::string& shape, double h, double bbox_min, double bbox_max, int offset,
                                py::handle center) {
   const Eigen::MatrixX3d c = points_arg(center, "center", 1);
-  if (!(h > 0.0) || !std::isfinite(h)) throw py::value_error("h: must be positive");
   ImplicitShapeInput in;
   in.shape = shape;
   in.center = c.row(0).transpose();
@@ -33,18 +36,26 @@ ImplicitShapeInput shape_input(const std::string& shape, double h, double bbox_m
   return in;
 }
 
-// The array as the library's in-memory volume; `values` keeps the (converted) data alive.
-VolumeArrayInput array_input(py::handle volume, double h, double threshold,
-                             py::array_t<double, py::array::c_style | py::array::forcecast>& values) {
-  const py::array a = numeric_array(volume, "volume", /*allow_bool=*/true);
-  if (a.ndim() != 3)
-    throw py::value_error("volume: expected a 3D array, got " + std::to_string(a.ndim()) + " dimensions");
-  values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+// The array as the library's in-memory volume, read where it is: its own dtype, strides and byte
+// order (no converted copy, whatever its size). `keep` holds the array alive while it is read.
+VolumeArrayInput array_input(py::handle volume, std::optional<double> h, double threshold, py::array& keep) {
+  keep = numeric_array(volume, "volume", /*allow_bool=*/true);
+  if (keep.ndim() != 3)
+    throw py::value_error("volume: expected a 3D array, got " + std::to_string(keep.ndim()) + " dimensions");
   VolumeArrayInput in;
-  in.size = Eigen::Vector3i(int(a.shape(0)), int(a.shape(1)), int(a.shape(2)));
-  in.values = std::span<const double>(values.data(), std::size_t(values.size()));
+  in.type = voxel_value_type(keep.dtype(), "volume");
+  for (int a = 0; a < 3; ++a) {
+    // The grid pads each side by a voxel: its int coordinates must hold size + 2.
+    if (keep.shape(a) > std::numeric_limits<int>::max() - 2)
+      throw py::value_error("volume: axis " + std::to_string(a) + " has " + std::to_string(keep.shape(a)) +
+                            " voxels, more than a voxel grid holds");
+    in.size[a] = int(keep.shape(a));
+    in.strides[std::size_t(a)] = keep.strides(a);
+  }
+  in.data = keep.data();
+  in.byte_swapped = !keep.dtype().attr("isnative").cast<bool>();
   in.threshold = threshold;
-  if (h > 0.0) in.h = h;
+  in.h = h;
   return in;
 }
 
@@ -57,8 +68,8 @@ VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, doub
   return load_voxels(in);
 }
 
-VoxelGrid array_voxels(py::handle volume, double h, double threshold) {
-  py::array_t<double, py::array::c_style | py::array::forcecast> values;
+VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double threshold) {
+  py::array values;
   const VolumeArrayInput in = array_input(volume, h, threshold, values);
   py::gil_scoped_release release;
   return load_voxels(in);
@@ -73,8 +84,8 @@ void bind_surface(py::module_& m) {
       py::arg("shape"), py::arg("h"), py::arg("bbox_min"), py::arg("bbox_max"), py::arg("offset"), py::arg("center"));
   m.def(
       "digitize_volume",
-      [](py::handle volume, double h, double threshold) {
-        py::array_t<double, py::array::c_style | py::array::forcecast> values;
+      [](py::handle volume, std::optional<double> h, double threshold) {
+        py::array values;
         return surface_of(array_input(volume, h, threshold, values));
       },
       py::arg("volume"), py::arg("h"), py::arg("threshold"));
@@ -105,7 +116,7 @@ void bind_surface(py::module_& m) {
       "write_mesh",
       [](const std::string& path, py::handle V, py::handle F, const py::dict& vertex_scalars,
          const py::dict& face_scalars, py::object vertex_normals, py::object face_normals) {
-        const SurfelMesh mesh = mesh_arg(V, F, 0.0);
+        const SurfelMesh mesh = mesh_arg(V, F);
         MeshAttributes attributes;
         for (const auto& [name, values] : vertex_scalars)
           attributes.vertex_scalars[py::str(name)] =

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <corrlap/corrlap.hpp>
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "test_support.hpp"
@@ -72,9 +74,7 @@ TEST_CASE("load_surface of a volume array equals the volume file, and its frame 
   write_volume(path, volume);
   VolumeFileInput file;
   file.path = path;
-  VolumeArrayInput array;
-  array.size = {6, 6, 4};
-  array.values = values;
+  VolumeArrayInput array = VolumeArrayInput::c_order(values, {6, 6, 4});
   array.threshold = 0.5;
   const LoadedSurface a = load_surface(file), b = load_surface(array);
   CHECK(a.mesh.positions == b.mesh.positions);
@@ -91,8 +91,71 @@ TEST_CASE("load_surface of a volume array equals the volume file, and its frame 
   CHECK(load_surface(array).h == 0.1);
   array.threshold = 2.0;
   CHECK_THROWS_WITH_AS(load_surface(array), doctest::Contains("empty volume"), InputError);
-  array.values = std::span<const double>(values.data(), 5);
-  CHECK_THROWS_WITH_AS(load_surface(array), doctest::Contains("5 values for 6x6x4 voxels"), InputError);
+  CHECK_THROWS_WITH_AS(VolumeArrayInput::c_order(std::span<const double>(values.data(), 5), {6, 6, 4}),
+                       doctest::Contains("5 values for 6x6x4 voxels"), InputError);
+}
+
+TEST_CASE("a volume array is read in its own type and strides: any order, broadcasts, 64-bit integers") {
+  const std::vector<double> values = edge_touching_blocks();
+  const LoadedSurface reference = load_surface(VolumeArrayInput::c_order(values, {6, 6, 4}));
+  // The same voxels as uint8 in Fortran order (x fastest), and as big-endian-swapped int32.
+  std::vector<std::uint8_t> fortran(values.size());
+  std::vector<std::int32_t> swapped(values.size());
+  for (int x = 0; x < 6; ++x)
+    for (int y = 0; y < 6; ++y)
+      for (int z = 0; z < 4; ++z) {
+        const double v = values[std::size_t((x * 6 + y) * 4 + z)];
+        fortran[std::size_t((z * 6 + y) * 6 + x)] = std::uint8_t(200 * v);
+        std::uint32_t bits = std::uint32_t(std::int32_t(7 * v));
+        bits = (bits >> 24) | ((bits >> 8) & 0xff00u) | ((bits << 8) & 0xff0000u) | (bits << 24);
+        swapped[std::size_t((x * 6 + y) * 4 + z)] = std::int32_t(bits);
+      }
+  VolumeArrayInput f;
+  f.size = {6, 6, 4};
+  f.data = fortran.data();
+  f.type = VoxelValueType::UInt8;
+  f.strides = {1, 6, 36};
+  f.threshold = 100.0;
+  const LoadedSurface a = load_surface(f);
+  CHECK(a.mesh.positions == reference.mesh.positions);
+  CHECK(a.mesh.faces == reference.mesh.faces);
+  VolumeArrayInput s;
+  s.size = {6, 6, 4};
+  s.data = swapped.data();
+  s.type = VoxelValueType::Int32;
+  s.byte_swapped = true;
+  s.strides = {4 * 24, 4 * 4, 4};
+  s.threshold = 6.5;
+  const LoadedSurface b = load_surface(s);
+  CHECK(b.mesh.faces == reference.mesh.faces);
+  // Integers are compared as integers: 2^62 + 1 > 2^62, though both are 2^62 as doubles.
+  const std::int64_t big[2] = {std::int64_t(1) << 62, (std::int64_t(1) << 62) + 1};
+  VolumeArrayInput one;
+  one.size = {1, 1, 1};
+  one.type = VoxelValueType::Int64;
+  one.threshold = std::ldexp(1.0, 62);
+  one.data = &big[1];
+  CHECK(load_surface(one).grid->count() == 1);
+  one.data = &big[0];
+  CHECK_THROWS_WITH_AS(load_surface(one), doctest::Contains("empty volume"), InputError);
+  // A broadcast volume of 1600^3 voxels (every stride 0, one value) is refused before any allocation.
+  const double zero = 0.0, nan = std::nan("");
+  VolumeArrayInput broadcast;
+  broadcast.size = {1600, 1600, 1600};
+  broadcast.data = &zero;
+  try {
+    (void)load_surface(broadcast);
+    FAIL("an empty volume was accepted");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("no voxel above the threshold 0 (empty volume)") != std::string::npos);
+    CHECK(e.parameter() == "threshold");
+  }
+  broadcast.data = &nan;
+  CHECK_THROWS_WITH_AS(load_surface(broadcast), doctest::Contains("value at [0, 0, 0] is NaN"), InputError);
+  broadcast.data = &zero;
+  broadcast.threshold = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH_AS(load_surface(broadcast), doctest::Contains("threshold = inf must be a finite number"),
+                       InputError);
 }
 
 TEST_CASE("load_surface of a mesh to voxelize reports its warnings and note through the callbacks") {
@@ -126,9 +189,7 @@ TEST_CASE("load_surface of a mesh to voxelize reports its warnings and note thro
 
 TEST_CASE("surface checks: one policy for open and non-manifold surfaces, the boundary from MeshInfo") {
   const std::vector<double> values = edge_touching_blocks();
-  VolumeArrayInput array;
-  array.size = {6, 6, 4};
-  array.values = values;
+  VolumeArrayInput array = VolumeArrayInput::c_order(values, {6, 6, 4});
   array.threshold = 0.5;
   const LoadedSurface s = load_surface(array);
   CHECK_THROWS_WITH_AS(check_regularizable(s.mesh, false), doctest::Contains("not manifold (2 non-manifold edges"),

@@ -254,7 +254,10 @@ def test_bad_method_and_option_keep_the_cli_message(sphere, tmp_path):
     with pytest.raises(ValueError, match="nope"):
         corrlap.solve(M - L, np.ones(len(V)), solver="nope")
     with pytest.raises(ValueError, match="option 'ordering' has type"):
-        corrlap.solve(M - L, np.ones(len(V)), solver="cholmod", ordering=None)
+        corrlap.solve(M - L, np.ones(len(V)), solver="cholmod", ordering=[1])
+    # None is "not given": the default, as everywhere in the module.
+    b = np.ones(len(V))
+    assert np.array_equal(corrlap.solve(M - L, b, ordering=None), corrlap.solve(M - L, b))
 
 
 def test_solver_failure_raises_runtime_error(sphere):
