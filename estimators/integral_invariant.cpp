@@ -86,7 +86,7 @@ void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_r
     os << "II normals: the object is " << across
        << " voxels across (its bounding box's diagonal) and the II radius r/h = " << digital_radius
        << " voxels covers all of it from every surfel, so the normals would not see the surface; use "
-       << "a smaller ii_radius (r/h at least 1) or a finer resolution";
+       << "a smaller ii_radius (while r/h stays at least 1) or a finer resolution";
     throw InputError(os.str(), "ii_radius");
   }
 }

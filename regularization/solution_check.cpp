@@ -1,8 +1,10 @@
 #include "solution_check.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
+#include <limits>
 #include <sstream>
 
 namespace corrlap {
@@ -32,8 +34,10 @@ SolutionCheck check_solution(const SurfelMesh& input, const Eigen::MatrixX3d& re
   c.area_ratio = area_before > 0.0 ? surface_area(out) / area_before : 1.0;
   const Eigen::RowVector3d side_before = input.positions.colwise().maxCoeff() - input.positions.colwise().minCoeff();
   const Eigen::RowVector3d side_after = result.colwise().maxCoeff() - result.colwise().minCoeff();
+  c.extent_ratio = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 3; ++k)
     if (side_before[k] > 0.0) c.extent_ratio = std::min(c.extent_ratio, side_after[k] / side_before[k]);
+  if (!std::isfinite(c.extent_ratio)) c.extent_ratio = 1.0;  // a point: no extent to compare
   const bool collapsed = c.area_ratio < kMinAreaRatio || c.extent_ratio < kMinExtentRatio;
   const bool blown_up = c.area_ratio > kMaxAreaRatio;
   const bool inaccurate = residual && !(*residual <= kMaxResidual);

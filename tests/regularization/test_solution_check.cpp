@@ -152,8 +152,9 @@ TEST_CASE("check_solution: a collapsed, blown-up, non-finite or inexact result f
   Eigen::MatrixX3d nan = mesh.positions;
   nan(5, 1) = std::nan("");
   CHECK(message(nan, 0.0).find("the position of vertex 5 is not finite") != std::string::npos);
-  CHECK(message(mesh.positions, 1e-3).find("is not the solution of its system (area ratio 1, extent ratio 1, residual "
-                                           "0.001;") != std::string::npos);
+  CHECK(message(mesh.positions, 1e-3)
+            .find("is not the solution of its system (area ratio 1, extent ratio 1, residual "
+                  "0.001;") != std::string::npos);
   CHECK(message(mesh.positions, std::nan("")).find("is not the solution") != std::string::npos);
 }
 
@@ -191,8 +192,10 @@ TEST_CASE("corrlap reconstruct --methods heat-kernel: refused before any computa
   std::filesystem::remove_all(dir);
   std::string err;
   const auto start = std::chrono::steady_clock::now();
-  CHECK(test::run_cli("reconstruct --mesh-file " + ico3() + " --resolution 8 --subdivide 1 --methods fem,heat-kernel "
-                      "--out " + dir,
+  CHECK(test::run_cli("reconstruct --mesh-file " + ico3() +
+                          " --resolution 8 --subdivide 1 --methods fem,heat-kernel "
+                          "--out " +
+                          dir,
                       nullptr, &err) == 1);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   MESSAGE("refused in " << seconds << " s");
@@ -210,7 +213,8 @@ TEST_CASE("a one-voxel volume: the II ball covers the object, named as such, not
   // The default radius, 3 h^(1/3) with h = 2, is 1.9 voxels: the ball holds the voxel from every surfel.
   CHECK(test::run_cli("regularize --volume " + vol + " --threshold 0 --no-render --out " + dir, nullptr, &err) == 1);
   CHECK(err.find("II normals: the object is 1.73205 voxels across") != std::string::npos);
-  CHECK(err.find("use a smaller ii_radius (r/h at least 1) or a finer resolution (--ii-radius)") != std::string::npos);
+  CHECK(err.find("use a smaller ii_radius (while r/h stays at least 1) or a finer resolution (--ii-radius)") !=
+        std::string::npos);
   // A radius between one voxel and the diagonal passes that check; the normals still lie in the
   // surfels' planes, and the operators say what that means for estimated normals.
   CHECK(test::run_cli("operators --volume " + vol + " --threshold 0 --method fem --ii-radius 2 --out " + dir, nullptr,
