@@ -64,6 +64,7 @@
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/normal_map_reconstruction.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
+#include <corrlap/regularization/solution_check.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 
 // Pictures: a headless z-buffer rendering of a surface with a colour map, written as PNG.

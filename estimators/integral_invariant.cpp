@@ -9,6 +9,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <sstream>
 #include <string>
 
 namespace corrlap {
@@ -72,6 +73,22 @@ void check_radius(const VoxelGrid& grid, double digital_radius) {
   if (digital_radius > double(extent))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
                      " is larger than the volume (" + std::to_string(extent) + " voxels)");
+}
+
+// A ball that covers the whole object from every surfel sees the same voxels everywhere: the
+// normals would carry no information about the surface (on a single voxel they lie in the surfels'
+// planes, which the operators then report as flipped).
+void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_radius) {
+  if (mesh.num_vertices() == 0) return;
+  const double across = (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h;
+  if (digital_radius >= across) {
+    std::ostringstream os;
+    os << "II normals: the object is " << across
+       << " voxels across (its bounding box's diagonal) and the II radius r/h = " << digital_radius
+       << " voxels covers all of it from every surfel, so the normals would not see the surface; use "
+       << "a smaller ii_radius (while r/h stays at least 1) or a finer resolution";
+    throw InputError(os.str(), "ii_radius");
+  }
 }
 
 /// sum_{u=0}^{m} u^2 extended to negative m so that sum_{u=p}^{q} u^2 = G(q) - G(p-1).
@@ -277,6 +294,7 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
   const double h = grid.h();
   const double rd = ii_digital_radius(h, params);
   check_radius(grid, rd);
+  check_radius_fits_object(mesh, h, rd);
   // Distinct centres: inner and outer voxels of all surfels (docs/math.md §7 step 3), shared by neighbours.
   const Eigen::Vector3i lo = grid.lower();
   const Eigen::Vector3i sz = grid.size() + Eigen::Vector3i::Constant(2);  // outer voxels may be 1 outside

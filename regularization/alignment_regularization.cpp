@@ -6,6 +6,8 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <corrlap/regularization/solution_check.hpp>
+#include <limits>
 #include <vector>
 
 namespace corrlap {
@@ -78,6 +80,17 @@ double energy_and_gradient(const Problem& pr, const Eigen::MatrixX3d& q, Eigen::
 Problem make_problem(const SurfelMesh& mesh, const Eigen::MatrixX3d& normals, const Eigen::MatrixX3d& p,
                      const AlignmentParams& params) {
   check_normals(normals, mesh.num_faces(), "alignment regularization: face normals");
+  const auto check = [](double value, const char* name, bool zero_allowed) {
+    if (std::isfinite(value) && (value > 0.0 || (zero_allowed && value == 0.0))) return;
+    throw InputError(std::string("alignment regularization: ") + name + " must be a finite number " +
+                         (zero_allowed ? ">= 0" : "> 0") + ", got " + std::to_string(value),
+                     name);
+  };
+  check(params.alpha, "alpha", false);
+  check(params.beta, "beta", true);
+  check(params.gamma, "gamma", true);
+  check(params.dt, "dt", false);
+  check(params.epsilon, "epsilon", false);
   const EdgeTopology topology = build_edges(mesh);
   if (!compute_mesh_info(mesh, topology).closed())
     throw InputError("alignment regularization: the surface is open (it has boundary edges)");
@@ -119,6 +132,7 @@ AlignmentResult alignment_regularization(const SurfelMesh& mesh, const Eigen::Ma
   }
   r.energy_final = energy;
   r.positions = q * h;
+  (void)check_solution(mesh, r.positions, std::nullopt, "alignment regularization");
   return r;
 }
 
@@ -167,13 +181,15 @@ AlignmentResult alignment_minimizer(const SurfelMesh& mesh, const Eigen::MatrixX
     for (int k = 0; k < 3; ++k) rhs[3 * v + k] = params.alpha * p(v, k);
   AlignmentResult r;
   r.energy_initial = energy_and_gradient(pr, p, nullptr);
-  solver.compute(std::move(H));
+  solver.compute(H);  // kept for the residual
   const Eigen::VectorXd x = solver.solve(rhs);
   if (!x.allFinite()) throw NumericalError("alignment minimizer: the solver returned non-finite positions");
   Eigen::MatrixX3d q(V, 3);
   for (int v = 0; v < V; ++v) q.row(v) = x.segment<3>(3 * v).transpose();
   r.energy_final = energy_and_gradient(pr, q, nullptr);
   r.positions = q * h;
+  const double residual = (rhs - H * x).norm() / std::max(rhs.norm(), std::numeric_limits<double>::min());
+  (void)check_solution(mesh, r.positions, residual, "alignment minimizer");
   return r;
 }
 

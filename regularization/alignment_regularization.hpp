@@ -35,7 +35,9 @@ double alignment_energy(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_nor
 /// pointel's surfel count, the fairness neighbours held fixed), the step adapted by 0.5 / 1.1, the
 /// loop stopped at max_iterations or when the step falls below epsilon. energy_final is the energy
 /// of the last evaluation, as the reference returns it. Works in grid units (positions / h).
-/// Throws InputError for mismatched normals or an open surface.
+/// Throws InputError for mismatched normals, an open surface or a parameter that is not finite
+/// and positive (alpha, dt, epsilon; beta, gamma may be 0); NumericalError when the result fails
+/// check_solution (solution_check.hpp), as alignment_minimizer.
 AlignmentResult alignment_regularization(const SurfelMesh& mesh, const Eigen::MatrixX3d& face_normals,
                                          const AlignmentParams& params = {});
 

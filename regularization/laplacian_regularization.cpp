@@ -56,7 +56,32 @@ Eigen::MatrixX3d normal_equations_rhs(const Eigen::SparseMatrix<double>& L, cons
   return alpha * (Ml * p) - 2.0 * (L * mean_curvature_normals(normals, H));
 }
 
+// The relative residual of the normal equations, max over the columns of |R_j| / |b_j|.
+double relative_residual(const Eigen::MatrixXd& R, const Eigen::MatrixXd& rhs) {
+  double worst = 0.0;
+  for (Eigen::Index j = 0; j < R.cols(); ++j)
+    worst = std::max(worst, R.col(j).norm() / std::max(rhs.col(j).norm(), std::numeric_limits<double>::min()));
+  return worst;
+}
+
+void check_alpha(double alpha, const Eigen::SparseMatrix<double>& Ml, const Eigen::MatrixX3d& p) {
+  if (!(alpha > 0.0) || !std::isfinite(alpha))
+    throw InputError("regularization: alpha must be a positive number", "alpha");
+  const double largest = max_regularization_alpha(Ml.sum(), p.cwiseAbs().maxCoeff());
+  if (alpha > largest) {
+    std::ostringstream os;
+    os << "regularization: alpha = " << alpha << " is beyond what the solve represents in double precision on "
+       << "this surface (at most " << largest << "): the attachment term alpha M_l p would overflow";
+    throw InputError(os.str(), "alpha");
+  }
+}
+
 }  // namespace
+
+double max_regularization_alpha(double area, double reach) {
+  return kMaxAttachmentScale /
+         (std::max(area, std::numeric_limits<double>::min()) * std::max(reach, std::numeric_limits<double>::min()));
+}
 
 Eigen::SparseMatrix<double> lumped_mass(const Eigen::SparseMatrix<double>& M) {
   const Eigen::VectorXd row_sums = M * Eigen::VectorXd::Ones(M.cols());
@@ -82,10 +107,11 @@ double regularization_alpha(double h, double alpha0) {
 
 Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                       const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
-                                      const Eigen::VectorXd& H, double alpha, LinearSolver& solver) {
+                                      const Eigen::VectorXd& H, double alpha, LinearSolver& solver,
+                                      SolverReport* report) {
   check_inputs(L, M, p, normals, H);
-  if (!(alpha > 0.0) || !std::isfinite(alpha)) throw InputError("regularization: alpha must be a positive number");
   const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
+  check_alpha(alpha, Ml, p);
   const Eigen::VectorXd inverse_mass = Ml.diagonal().cwiseInverse();
   // L M_l^{-1} L + alpha M_l: symmetric, and positive definite since L M_l^{-1} L >= 0 and M_l > 0.
   const Eigen::SparseMatrix<double> scaled_L = inverse_mass.asDiagonal() * L;
@@ -97,6 +123,12 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
   solver.compute(std::move(A));
   const Eigen::MatrixXd q = solver.solve(rhs);
   if (!q.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
+  if (report) {
+    report->status = SolverStatus::Success;
+    // A was moved into the solver: A q from its factors L and M_l.
+    const Eigen::MatrixXd Aq = L * (scaled_L * q) + alpha * (Ml * q);
+    report->residual = relative_residual(rhs - Aq, rhs);
+  }
   return q;
 }
 
@@ -105,8 +137,8 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
                                                      const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
                                                      double alpha, LinearSolver& solver, SolverReport* report) {
   check_inputs(L, M, p, normals, H);
-  if (!(alpha > 0.0) || !std::isfinite(alpha)) throw InputError("regularization: alpha must be a positive number");
   const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
+  check_alpha(alpha, Ml, p);
   const Eigen::VectorXd mass = Ml.diagonal(), inverse_mass = mass.cwiseInverse();
   const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
   // B = sqrt(alpha) M_l - L, SPD when L is negative semi-definite (the header's bound).
@@ -140,12 +172,6 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   cg_options.set("on_no_convergence", "warn");
   SolverReport local;
   SolverReport& cg = report ? *report : local;
-  const auto relative_residual = [&](const Eigen::MatrixXd& R) {
-    double worst = 0.0;
-    for (Eigen::Index j = 0; j < R.cols(); ++j)
-      worst = std::max(worst, R.col(j).norm() / std::max(rhs.col(j).norm(), std::numeric_limits<double>::min()));
-    return worst;
-  };
   const Eigen::SparseMatrix<double> absL = L.cwiseAbs();
   const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
     const Eigen::MatrixXd absq = q.cwiseAbs();
@@ -174,7 +200,7 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
     if (!step.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
     q += step;
     residual = rhs - multiply(q);
-    normwise = relative_residual(residual);
+    normwise = relative_residual(residual, rhs);
     backward = backward_error(q, residual);
   }
   cg.iterations = iterations;

@@ -16,17 +16,27 @@ Eigen::SparseMatrix<double> lumped_mass(const Eigen::SparseMatrix<double>& M);
 /// so that both terms scale alike under refinement (L p' ~ h^2 per vertex, p' - p ~ h).
 double regularization_alpha(double h, double alpha0 = 10.0);
 
+/// The largest attachment weight alpha whose system the solve represents in double precision, for
+/// a surface of area at most `area` (the sum of M_l) whose coordinates are at most `reach` in
+/// absolute value. The right-hand side alpha M_l p is bounded by alpha area reach, and the solvers
+/// form inner products of such vectors (their squares) and products with A (a third factor): the
+/// bound keeps alpha area reach at or below kMaxAttachmentScale, whose cube stays finite.
+double max_regularization_alpha(double area, double reach);
+inline constexpr double kMaxAttachmentScale = 1e90;
+
 /// docs/math.md §9.2: the minimizer p' (#V x 3) of |M_l^{-1} L p' + 2 H n|^2_{M_l} + alpha |p' - p|^2_{M_l},
 /// from its normal equations
 ///     (L M_l^{-1} L + alpha M_l) p' = alpha M_l p - 2 L (H n),
 /// one factorization of the SPD matrix and three right-hand sides (the coordinates).
 /// L, M: #V x #V (L symmetric negative semi-definite, M the mass, lumped here); p, normals: #V x 3
 /// (normals unit); H: #V mean curvatures (the unit sphere has H = 1 with outward normals, so that
-/// Delta p = -2 H n). Throws InputError on mismatched sizes, non-finite inputs or alpha <= 0;
-/// SolverError from the solver. With exact data (L p = -2 M_l H n) it returns p.
+/// Delta p = -2 H n). Throws InputError on mismatched sizes, non-finite inputs, alpha <= 0 or above
+/// max_regularization_alpha; SolverError from the solver. With exact data (L p = -2 M_l H n) it
+/// returns p. `report`, if given, receives the relative residual of the normal equations.
 Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                       const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
-                                      const Eigen::VectorXd& H, double alpha, LinearSolver& solver);
+                                      const Eigen::VectorXd& H, double alpha, LinearSolver& solver,
+                                      SolverReport* report = nullptr);
 
 /// The same p' as regularize_positions (to the CG tolerance, 1e-10 relative residual of the
 /// normal equations), without forming L M_l^{-1} L, whose two-ring pattern makes its Cholesky

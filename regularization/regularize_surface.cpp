@@ -8,8 +8,11 @@
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
+#include <corrlap/regularization/surface_quality.hpp>
+#include <corrlap/surface/extract_surface.hpp>
 #include <numbers>
 #include <optional>
+#include <sstream>
 
 namespace corrlap {
 
@@ -19,21 +22,126 @@ double regularization_size(const SurfelMesh& mesh) {
 }
 
 namespace {
+// A number as a user wrote it (1e+300, 0.01), not std::to_string's fixed point.
+std::string number_text(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 double object_size(const SurfelMesh& mesh, const RegularizationOptions& o) {
   const double size = o.size ? *o.size : regularization_size(mesh);
-  if (!(size > 0.0) || !std::isfinite(size)) throw InputError("regularization: the size must be positive");
+  if (!(size > 0.0) || !std::isfinite(size))
+    throw InputError("regularization: the object size must be a positive number, got " + number_text(size) +
+                         (o.size ? "" : " (the surface's half bounding box)"),
+                     "size");
   return size;
+}
+
+// A real option: finite and above `min` (or at least `min` when `open` is false).
+void check_real(double value, const char* parameter, const char* what, double min, bool open = true) {
+  if (std::isfinite(value) && (open ? value > min : value >= min)) return;
+  throw InputError("regularization: " + std::string(what) + " must be a finite number " + (open ? "> " : ">= ") +
+                       number_text(min) + ", got " + number_text(value),
+                   parameter);
+}
+
+void check_edit(const PrincipalCurvatureEdit& e, const char* parameter) {
+  if (!std::isfinite(e.value) || (e.kind == PrincipalCurvatureEdit::Kind::Clamp && e.value < 0.0))
+    throw InputError(
+        "regularization: the principal curvature edit " + e.describe() + " needs a finite value (>= 0 for clamp)",
+        parameter);
+}
+
+// The h that alpha = alpha0 / (h size)^2 uses.
+double alpha_h(const SurfelMesh& mesh, const RegularizationOptions& o) {
+  return o.alpha_step ? *o.alpha_step : mesh.grid_step();
+}
+
+// Whether `method` with `params` defines its operators on vertices, asked of the method itself on
+// the smallest closed surface (one voxel's six surfels, microseconds): the interface does not
+// declare it, and a method's parameters can change it (heat-kernel's variant). A probe that fails
+// says nothing: the assembly on the real surface reports its own error.
+bool on_vertices(const Discretization& method, const Config& params) {
+  static const SurfelMesh cube = [] {
+    VoxelGrid grid(Eigen::Vector3i(-1, -1, -1), Eigen::Vector3i(1, 1, 1), 1.0);
+    grid.set(0, 0, 0, true);
+    return extract_surface(grid);
+  }();
+  NormalFields normals;
+  normals.face = cube.face_normals_from_positions();
+  normals.vertex = vertex_normals_from_face_normals(normals.face, cube.faces, cube.num_vertices());
+  try {
+    return method.assemble(cube, normals, params).domain == Operators::Domain::Vertices;
+  } catch (const Error&) {
+    return true;
+  }
+}
+// The error for a method whose operators live on faces, naming the methods (and the choices of
+// this one's parameters) that define them on vertices.
+[[noreturn]] void refuse_face_method(const std::string& method) {
+  std::string able;
+  for (const std::string& name : discretization_registry().names())
+    if (on_vertices(*make_discretization(name), Config{})) able += (able.empty() ? "" : ", ") + name;
+  const auto refused = make_discretization(method);
+  for (const Parameter& p : refused->parameters().items())
+    for (const std::string& value : p.choices) {
+      Config variant;
+      variant.set(p.name, value);
+      if (on_vertices(*refused, variant)) able += ", or " + method + " with " + p.name + "=" + value;
+    }
+  throw InputError("regularization: method '" + method +
+                       "' defines its operators on faces, and the positions live on vertices; use " + able,
+                   "method");
 }
 }  // namespace
 
+void check_regularization_options(const RegularizationOptions& o) {
+  const auto method = make_discretization(o.method);
+  (void)method->parameters().read(o.method_params, o.method);
+  if (!on_vertices(*method, o.method_params)) refuse_face_method(o.method);
+  (void)make_linear_solver(o.solver, kDefaultLinearSolver);
+  if (o.size) check_real(*o.size, "size", "the object size", 0.0);
+  if (o.curvature_radius) check_real(*o.curvature_radius, "curvature_radius", "the curvature radius", 0.0);
+  check_real(o.alpha0, "alpha0", "alpha0", 0.0);
+  if (o.alpha_step) check_real(*o.alpha_step, "alpha_step", "the step of alpha", 0.0);
+  if (!std::isfinite(o.h_scale))
+    throw InputError("regularization: the mean curvature scale must be a finite number, got " + number_text(o.h_scale),
+                     "h_scale");
+  if (o.h_clamp) check_real(*o.h_clamp, "h_clamp", "the mean curvature clamp", 0.0, /*open=*/false);
+  check_real(o.normal_attachment, "normal_attachment", "the normal attachment", 0.0);
+  check_edit(o.k1_edit, "k1");
+  check_edit(o.k2_edit, "k2");
+}
+
+void check_regularization_options(const SurfelMesh& mesh, const RegularizationOptions& o) {
+  check_regularization_options(o);
+  if (mesh.num_vertices() == 0) throw InputError("regularization: the surface has no vertex");
+  const double size = object_size(mesh, o), h = alpha_h(mesh, o);
+  const double alpha = regularization_alpha(h * size, o.alpha0);
+  // The staircase's area bounds the sum of every method's lumped mass (corrected areas project it).
+  const double largest = max_regularization_alpha(surface_area(mesh), mesh.positions.cwiseAbs().maxCoeff());
+  if (alpha > largest) {
+    const double alpha0_max = largest * (h * size) * (h * size);
+    throw InputError("regularization: alpha0 = " + number_text(o.alpha0) +
+                         " gives alpha = alpha0 / (h size)^2 = " + number_text(alpha) +
+                         ", beyond what the solve represents in double precision on this surface: the attachment "
+                         "term alpha M p would overflow and the result would be garbage (all zeros); alpha0 up to " +
+                         number_text(alpha0_max) +
+                         " can be solved here, and the paper uses 0.01 to 1000 (a larger alpha0 keeps the result "
+                         "closer to the input)",
+                     "alpha0");
+  }
+}
+
 RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const NormalFields& normals,
                                                  const RegularizationOptions& o) {
+  check_regularization_options(mesh, o);
   if (!normals.has_vertex()) throw InputError("regularization: vertex normals are needed");
   RegularizationCurvature c;
   const double h = mesh.grid_step();
   c.size = object_size(mesh, o);
   c.curvature_radius = o.curvature_radius ? *o.curvature_radius : 0.1 * c.size;
-  if (!(c.curvature_radius > 0.0)) throw InputError("regularization: the curvature radius must be positive");
   Stopwatch watch;
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
   // Principal edits need k1, k2 and their directions; H alone has a faster walk (equal results).
@@ -91,7 +199,8 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
 
 RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,
                                       const RegularizationOptions& o, const RegularizationCurvature* curvature) {
-  // Options first: a bad name fails before the curvature and the assembly.
+  // Options first: a bad name or value fails before the curvature and the assembly.
+  check_regularization_options(mesh, o);
   auto solver = make_linear_solver(o.solver, kDefaultLinearSolver);
   auto method = make_discretization(o.method);
   const int boundary_edges = compute_mesh_info(mesh).boundary_edges;
@@ -105,13 +214,12 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
 
   RegularizedSurface r;
   r.h = mesh.grid_step();
-  if (o.alpha_step && !(*o.alpha_step > 0.0)) throw InputError("regularization: the alpha step must be positive");
   r.solver = o.solver.get_string("solver", kDefaultLinearSolver);
   std::optional<RegularizationCurvature> computed;
   if (!curvature) curvature = &computed.emplace(regularization_curvature(mesh, normals, o));
   r.size = curvature->size;
   r.curvature_radius = curvature->curvature_radius;
-  r.alpha = regularization_alpha((o.alpha_step ? *o.alpha_step : r.h) * r.size, o.alpha0);
+  r.alpha = regularization_alpha(alpha_h(mesh, o) * r.size, o.alpha0);
   r.H = curvature->H;
   r.normals = curvature->normals;
   r.normal_angle_change_deg = curvature->normal_angle_change_deg;
@@ -120,12 +228,11 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
 
   Operators ops = method->assemble(mesh, normals, o.method_params);
   r.warnings = ops.warnings;
-  if (ops.domain != Operators::Domain::Vertices)
-    throw InputError("regularization: method '" + o.method +
-                     "' defines operators on faces; positions live on vertices");
+  if (ops.domain != Operators::Domain::Vertices) refuse_face_method(o.method);
   r.operators_seconds = watch.lap();
 
   r.mesh = mesh;
+  double residual = 0.0;
   // With a direct backend, CG preconditioned by a factorization with L's pattern gives the normal
   // equations' solution at a fraction of the cost of factorizing L M_l^{-1} L (the header of
   // regularize_positions_preconditioned); it needs L negative semi-definite, else the direct solve.
@@ -136,6 +243,7 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
           regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver, &cg);
       r.solve_scheme = "preconditioned-cg";
       r.solve_iterations = cg.iterations;
+      residual = cg.residual;
     } catch (const SolverError& e) {
       if (e.status() != SolverStatus::NotPositiveDefinite) throw;
       r.warnings.push_back("regularization: " + std::string(e.what()) +
@@ -143,10 +251,13 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     }
   }
   if (r.solve_scheme.empty()) {
-    r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver);
+    SolverReport direct;
+    r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver, &direct);
     r.solve_scheme = "direct";
+    residual = direct.residual;
   }
   r.solve_seconds = watch.lap();
+  r.check = check_solution(mesh, r.mesh.positions, residual, "regularization (" + o.method + ")");
   r.energy_before = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, mesh.positions);
   r.energy_after = regularization_energy(ops.L, ops.M, mesh.positions, r.normals, r.H, r.mesh.positions);
   return r;

@@ -8,6 +8,7 @@
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
+#include <corrlap/regularization/solution_check.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +38,19 @@ struct RegularizationOptions {
   Config solver;                   ///< linear solver ("solver" key: backend name; default cholmod)
 };
 
+/// Checks the options before any computation, in one wording for every front end (the CLI adds its
+/// flags, Python its keywords): the method exists and defines its operators on vertices
+/// (InputError "method" listing those that do), its parameters and the solver are valid, and
+/// every real option is finite and in range (InputError naming it: size, curvature_radius, alpha0,
+/// alpha_step, h_scale, h_clamp, normal_attachment, k1/k2 edits). regularize_surface calls it.
+void check_regularization_options(const RegularizationOptions& options);
+
+/// The same, and what the options ask of this surface, still before the curvature and the solve:
+/// alpha0 small enough for the attachment term alpha M_l p to be represented in the solve
+/// (max_regularization_alpha; InputError "alpha0" naming the largest alpha0 this surface
+/// allows). Front ends call it as soon as the surface is known, before writing anything.
+void check_regularization_options(const SurfelMesh& mesh, const RegularizationOptions& options);
+
 struct RegularizedSurface {
   SurfelMesh mesh;           ///< the input's faces and vertex order, regularized positions
   Eigen::VectorXd H;         ///< #V mean curvature used (after the edits)
@@ -47,6 +61,7 @@ struct RegularizedSurface {
   /// or "direct" (regularize_positions: with "cg", or when L is not negative semi-definite).
   std::string solve_scheme;
   int solve_iterations = 0;                          ///< CG iterations of the preconditioned scheme
+  SolutionCheck check;                               ///< the result against the input (check_solution)
   RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
   double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;
   double normal_angle_change_deg = 0.0;  ///< mean angle between n' and n (0 without principal edits)
@@ -73,8 +88,9 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
 
 /// Regularizes a closed surface with unit vertex normals (#V x 3, normals.vertex; the method's
 /// own normals come from the same fields). Throws InputError for an open surface (naming its
-/// boundary edge count), a method defined on faces, bad options; NumericalError when H or the
-/// result is not finite; SolverError from the solve.
+/// boundary edge count), a method defined on faces, bad options (check_regularization_options,
+/// before any computation); NumericalError when H is not finite or the result fails
+/// check_solution; SolverError from the solve.
 /// `curvature`: regularization_curvature(mesh, normals, options) computed before (reused across
 /// methods; curvature_seconds is then 0), or null to compute it here.
 RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields& normals,

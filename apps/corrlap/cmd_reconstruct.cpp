@@ -42,9 +42,19 @@ struct ReconstructArgs {
 void run(const ReconstructArgs& a) {
   const std::vector<std::string> methods = split_list(a.methods);
   if (methods.empty()) throw InputError("reconstruct: no method (--methods)");
-  for (const std::string& m : methods) (void)make_discretization(m);  // a bad name fails first
   const Config solver_config = a.solver.config();
-  (void)make_linear_solver(solver_config, kDefaultLinearSolver);
+  RegularizationOptions o;
+  o.alpha0 = a.alpha0;
+  o.solver = solver_config;
+  // Every method and option before any computation; what the surface allows once it is known.
+  const auto check_methods = [&](const SurfelMesh* surface) {
+    for (const std::string& method : methods) {
+      o.method = method;
+      o.method_params = a.method_params.config(method, /*only_declared=*/true);
+      surface ? check_regularization_options(*surface, o) : check_regularization_options(o);
+    }
+  };
+  check_methods(nullptr);
 
   nlohmann::json stages, m;
   Stopwatch t;
@@ -71,15 +81,13 @@ void run(const ReconstructArgs& a) {
             << a.resolution << " (h = " << report.h << ", " << coarse.num_faces() << " surfels), subdivided "
             << a.subdivide << " times: " << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces\n";
 
-  RegularizationOptions o;
   o.size = size;
   // Paper Fig. 16: curvature radius 0.2 and |H| <= 10 for a unit-sized model.
   o.curvature_radius = a.curvature_radius ? *a.curvature_radius : 0.2 * size;
   o.h_clamp = a.h_clamp ? *a.h_clamp : 10.0 / size;
-  o.alpha0 = a.alpha0;
   // The positions are wrong by up to a coarse voxel, not a subdivided one: alpha from the coarse h.
   o.alpha_step = report.h;
-  o.solver = solver_config;
+  check_methods(&mesh);
   std::filesystem::create_directories(a.out);
   const DistanceToMesh before = distance_to_mesh(mesh, locator);
   MeshAttributes input_attr;

@@ -162,15 +162,15 @@ void run(const RegularizeArgs& a) {
   if (!a.k2_edit.empty()) o.k2_edit = PrincipalCurvatureEdit::parse(a.k2_edit);
   o.normal_attachment = a.normal_attachment;
   o.solver = a.solver.config();
-  // The backend and the method first: a bad name fails before the (possibly long) normals.
-  (void)make_linear_solver(o.solver, kDefaultLinearSolver);
-  (void)make_discretization(o.method);
+  // The options first: a bad name or value fails before the (possibly long) normals.
+  check_regularization_options(o);
 
   nlohmann::json stages;
   Stopwatch t;
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
   check_regularizable(mesh, a.allow_nonmanifold, "regularize");
+  if (a.baseline.empty()) check_regularization_options(mesh, o);
   stages["surface_s"] = t.lap();
   std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces, h = " << mesh.grid_step() << "\n";
@@ -219,6 +219,9 @@ void run(const RegularizeArgs& a) {
   m["solver"] = r.solver;
   m["solve_scheme"] = r.solve_scheme;
   if (r.solve_scheme == "preconditioned-cg") m["solve_iterations"] = r.solve_iterations;
+  m["solve_residual"] = *r.check.residual;
+  m["area_ratio"] = r.check.area_ratio;
+  m["extent_ratio"] = r.check.extent_ratio;
   m["time_s"] = stages;
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;

@@ -124,7 +124,10 @@ PreparedNormals prepare_normals(const SurfelMesh& mesh, const NormalFields& norm
   if (out_report) *out_report = r;
   if (r.inconsistent == 0) return result;
   if (2 * r.inconsistent > r.checked)
-    throw InputError(r.summary(method) + ": the normals point inward (flipped); flip them or the face orientation");
+    throw InputError(r.summary(method) +
+                     ": on more than half of them the normals point inward or lie in the surfels' planes: given "
+                     "normals are flipped (flip them or the face orientation); estimated ones did not see the surface "
+                     "(II normals whose ball is as large as the object: a smaller ii_radius or a finer resolution)");
   switch (policy) {
     case OrientationPolicy::Error:
       throw InputError(r.summary(method));
