@@ -123,7 +123,9 @@ OutputFolder::OutputFolder(const std::string& folder, const std::string& paramet
     created_.push_back(dir.string());
   }
   if (mode_ == Mode::Staged) {
-    const fs::path temp = target.parent_path() / temporary_name(target);
+    // Beside an absent destination, so that commit() is one rename; inside an existing one, which
+    // is the only folder the user must be able to write to (`--out /tmp`).
+    const fs::path temp = (fs::is_directory(target) ? target : target.parent_path()) / temporary_name(target);
     create(temp);
     path_ = temp.string();
     return;

@@ -27,9 +27,10 @@ void check_output_file(const std::string& path, const std::string& parameter = "
 /// An output folder written atomically.
 ///
 /// Staged (the default): the files are written into a hidden temporary folder beside the
-/// destination (same parent, so commit() is a rename). commit() renames it into place when the
-/// destination does not exist; when it does (a re-run into the same folder), each produced file
-/// is moved into it, replacing a file of the same name; the folder's other files stay.
+/// destination (same parent, so commit() is a rename), or inside it when it exists. commit()
+/// renames it into place when the destination does not exist; when it does (a re-run into the
+/// same folder), each produced file is moved into it, replacing a file of the same name; the
+/// folder's other files stay.
 ///
 /// InPlace: the files are written into the destination itself (for a study whose rows must
 /// survive an interrupted run, to be resumed). A rollback removes the files and folders that were
