@@ -23,13 +23,21 @@ fs::path normalized(const std::string& path) {
   return p;
 }
 
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+// Built by appending: GCC 12 at -O3 warns (-Wrestrict, a false positive) on "'" + a temporary.
+std::string quoted(const fs::path& p) {
+  std::string q = "'";
+  q += p.string();
+  q += "'";
+  return q;
+}
 
 // A name no other run of this or another process uses beside `base`.
 std::string temporary_name(const fs::path& base) {
   static std::atomic<int> counter{0};
-  return "." + base.filename().string() + ".corrlap-tmp-" + std::to_string(::getpid()) + "-" +
-         std::to_string(++counter);
+  std::string name = ".";
+  name += base.filename().string();
+  name += ".corrlap-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(++counter);
+  return name;
 }
 
 // The nearest existing ancestor of `p` (the current folder for a relative name); IoError when it
