@@ -72,12 +72,14 @@ void check_output_folder(const std::string& path, const std::string& parameter) 
   const fs::file_status s = fs::status(p, ec);
   if (fs::exists(s)) {
     if (fs::is_regular_file(s))
-      throw IoError("output folder '" + path + "' is an existing file; the output is a folder: name a new or an "
-                    "existing folder",
+      throw IoError("output folder '" + path +
+                        "' is an existing file; the output is a folder: name a new or an "
+                        "existing folder",
                     parameter);
     if (!fs::is_directory(s))
-      throw IoError("output folder '" + path + "' is a special file (a device, pipe or socket), not a folder; name a "
-                    "new or an existing folder",
+      throw IoError("output folder '" + path +
+                        "' is a special file (a device, pipe or socket), not a folder; name a "
+                        "new or an existing folder",
                     parameter);
     if (::access(p.c_str(), W_OK | X_OK) != 0)
       throw IoError("output folder '" + path + "': cannot write in it (" + std::strerror(errno) +
@@ -93,8 +95,7 @@ void check_output_file(const std::string& path, const std::string& parameter) {
   const fs::path p(path);
   std::error_code ec;
   const fs::file_status s = fs::status(p, ec);
-  if (fs::is_directory(s))
-    throw IoError("output file '" + path + "' is an existing folder; name a file", parameter);
+  if (fs::is_directory(s)) throw IoError("output file '" + path + "' is an existing folder; name a file", parameter);
   if (fs::exists(s) && !fs::is_regular_file(s)) return;  // /dev/null, a pipe: written in place
   if (!p.has_filename()) throw IoError("output file '" + path + "' names a folder; name a file", parameter);
   const fs::path folder = writable_ancestor(p, path, "output file", parameter);
@@ -140,7 +141,8 @@ OutputFolder::OutputFolder(const std::string& folder, const std::string& paramet
   }
   path_ = normalized(folder).string();  // as the user named it: the command's messages show it
   if (fs::exists(target)) {
-    for (const fs::directory_entry& e : fs::directory_iterator(target)) existing_.push_back(e.path().filename().string());
+    for (const fs::directory_entry& e : fs::directory_iterator(target))
+      existing_.push_back(e.path().filename().string());
   } else {
     create(target);
     created_target_ = true;
@@ -205,9 +207,9 @@ void OutputFolder::commit() {
       move_into(path_, target_, folder_, parameter_);
       fs::remove_all(path_, ec);
     } else if (ec) {
-      throw IoError("output folder '" + folder_ + "': cannot rename the finished output into place (" + ec.message() +
-                        ")",
-                    parameter_);
+      throw IoError(
+          "output folder '" + folder_ + "': cannot rename the finished output into place (" + ec.message() + ")",
+          parameter_);
     }
   }
   committed_ = true;

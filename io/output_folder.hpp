@@ -67,9 +67,9 @@ class OutputFolder {
   std::string folder_, parameter_, target_, path_;
   Mode mode_;
   bool committed_ = false;
-  bool created_target_ = false;          // InPlace: the destination did not exist
-  std::vector<std::string> created_;     // parent folders created, outermost first
-  std::vector<std::string> existing_;    // InPlace: the names in the destination at construction
+  bool created_target_ = false;        // InPlace: the destination did not exist
+  std::vector<std::string> created_;   // parent folders created, outermost first
+  std::vector<std::string> existing_;  // InPlace: the names in the destination at construction
 };
 
 /// One output file written atomically: the command writes path(), a hidden temporary sibling with

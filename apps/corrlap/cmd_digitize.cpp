@@ -26,8 +26,7 @@ void run(const DigitizeArgs& a) {
   // Every output checked before the computation, and all of them put in place together at the end:
   // a failure leaves none of them.
   if (const std::string ext = file_extension(a.out); !a.out.empty() && ext != "obj" && ext != "ply")
-    throw IoError("mesh file '" + a.out + "': unsupported extension '" + ext +
-                      "' for writing (supported: .obj, .ply)",
+    throw IoError("mesh file '" + a.out + "': unsupported extension '" + ext + "' for writing (supported: .obj, .ply)",
                   "out");
   std::optional<StagedFile> out, volume_out, face_normals_out, vertex_normals_out;
   if (!a.out.empty()) out.emplace(a.out, "out");

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <corrlap/core/mesh_topology.hpp>
-#include <corrlap/io/mesh_io.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/io/mesh_io.hpp>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>

@@ -19,9 +19,7 @@ bool is_special_file(const std::string& path) {
 }  // namespace
 
 OutputFile::OutputFile(const std::string& path, const char* what, bool binary)
-    : path_(path),
-      temp_(is_special_file(path) ? path : path + ".tmp-" + std::to_string(::getpid())),
-      what_(what) {
+    : path_(path), temp_(is_special_file(path) ? path : path + ".tmp-" + std::to_string(::getpid())), what_(what) {
   file_ = std::fopen(temp_.c_str(), binary ? "wb" : "w");
   if (!file_) throw IoError(what_ + " file '" + path_ + "': cannot open for writing: " + std::strerror(errno));
 }

@@ -123,6 +123,9 @@ TEST_CASE("every command with --out refuses an unusable output before computing:
 TEST_CASE("a failing command leaves no new file") {
   const std::string dir = make_inputs("cli_outputs_failing");
   write_text(dir + "/one_normal.txt", "0 0 1\n");
+  corrlap::PolygonMesh open = corrlap::test::icosphere(1);
+  open.faces.pop_back();
+  corrlap::write_obj(dir + "/open.obj", open);
   REQUIRE(run_cli("digitize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --volume-out " + dir + "/in.vol") == 0);
   const std::vector<std::string> failing = {
       // Fails after loading, before writing.
@@ -137,8 +140,9 @@ TEST_CASE("a failing command leaves no new file") {
       "digitize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --volume-out {D}/x.vol --out {D}/file.txt/x.obj",
       // Fails after the volume is written: a volume has no true normals.
       "digitize --volume {D}/in.vol --threshold 0 --volume-out {D}/x.vol --out {D}/x.ply --normals true",
-      // Fails in the study, after study.json is written.
-      "study eigen --h 0.5 --methods polydec -k 100000 --no-plots --out {D}/st",
+      // Fail in the study, after study.json is written: inward normals, an open mesh.
+      "study backward --h 0.5 --methods fem --normals ii --no-plots --out {D}/st",
+      "study cotan --mesh-file {D}/open.obj --resolutions 16 --methods polydec --no-plots --out {D}/st",
   };
   for (const std::string& call : failing) {
     const std::string args = expand(call, dir);
