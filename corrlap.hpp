@@ -32,6 +32,7 @@
 
 // Files: meshes, volumes, normals, scalars, Matrix Market.
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
 

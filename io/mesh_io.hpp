@@ -30,6 +30,7 @@ PolygonMesh read_obj(const std::string& path);
 /// PLY, ASCII or binary little-endian: vertex x y z (any numeric type), face list
 /// "vertex_indices" or "vertex_index". Other elements are skipped. When `attributes` is given,
 /// vertex/face properties nx ny nz become normals and every other scalar property a named scalar.
+/// Vertex positions and normals must be finite; a named scalar may hold NaN (an undefined value).
 PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes = nullptr);
 /// OFF (also COFF/NOFF headers): counts line, vertices (extra columns ignored), faces "n i1 .. in".
 PolygonMesh read_off(const std::string& path);

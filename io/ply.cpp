@@ -362,8 +362,15 @@ void read_elements(Body& body, const std::string& path, const std::vector<Elemen
       reserve.emplace(out.mesh.faces, std::size_t(e.count));
       sink.emplace(CornerSink{path, e.properties[std::size_t(face_list)], std::int64_t(nv), out.mesh.faces});
     }
+    // Positions and normals must be finite; a named scalar may hold NaN (an undefined value), which
+    // only the consumer that uses that scalar refuses (render_mesh).
+    std::vector<char> must_be_finite(targets.size(), 0);
+    for (std::size_t p = 0; p < targets.size(); ++p) {
+      const std::string& name = e.properties[p].name;
+      must_be_finite[p] = is_v && (targets[p].what == Target::Position || name == "nx" || name == "ny" || name == "nz");
+    }
     auto store = [&](std::uint64_t i, std::size_t p, double v) {
-      if (is_v && !std::isfinite(v))
+      if (must_be_finite[p] && !std::isfinite(v))
         fail(path, "vertex " + std::to_string(i) + ": non-finite value of '" + e.properties[p].name + "'");
       const Target& t = targets[p];
       if (t.what == Target::Position)

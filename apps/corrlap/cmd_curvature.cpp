@@ -3,8 +3,8 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
-#include <filesystem>
 #include <iostream>
 
 #include "command.hpp"
@@ -48,6 +48,7 @@ void run(const CurvatureArgs& a) {
   } else if (!opt.face_file.empty() || !opt.vertex_file.empty()) {
     throw InputError("--face-normals/--vertex-normals go with --mesh; with a shape or volume use --normals true|ii");
   }
+  OutputFolder out(a.out);  // checked before the computation
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
   // The normals of `corrlap operators` for the same source (docs/math.md §1.5, resolve_normals);
@@ -57,18 +58,18 @@ void run(const CurvatureArgs& a) {
                                                            : CorrectedCurvature::constant(mesh, n.face);
   const CurvatureEstimates ef = cc.at_faces(a.radius);
   const CurvatureEstimates ev = cc.at_vertices(a.radius);
-  std::filesystem::create_directories(a.out);
-  write_set(a.out, "faces", ef);
-  write_set(a.out, "vertices", ev);
+  write_set(out.path(), "faces", ef);
+  write_set(out.path(), "vertices", ev);
   MeshAttributes attr;
   attr.face_scalars = {{"H", ef.H}, {"G", ef.G}, {"k1", ef.k1}, {"k2", ef.k2}};
   attr.vertex_scalars = {{"H", ev.H}, {"G", ev.G}, {"k1", ev.k1}, {"k2", ev.k2}};
   try {
-    write_mesh(a.out + "/curvature.ply", mesh, attr);
+    write_mesh(out.file("curvature.ply"), mesh, attr);
   } catch (const Error& e) {
     // The text files above are the contract; the PLY is a convenience for viewers.
     std::cerr << "warning: curvature.ply not written: " << e.what() << "\n";
   }
+  out.commit();
   const Eigen::Vector3d t = cc.totals();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "curvature (" << (cc.interpolated_normals() ? "interpolated vertex normals" : "constant face normals")

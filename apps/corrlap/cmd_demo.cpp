@@ -137,7 +137,7 @@ void study_section() {
   StudyCallbacks cb;
   cb.rows = [&](const std::vector<StudyRow>& rows) { write_results_csv(dir + "/results.csv", rows, true); };
   run_study(o, cb);
-  finish_study(dir, false, true);
+  finish_study(dir, dir, false, true);
   std::fflush(stdout);
 }
 

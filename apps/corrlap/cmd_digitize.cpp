@@ -2,9 +2,11 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <iostream>
+#include <optional>
 
 #include "command.hpp"
 #include "library_errors.hpp"
@@ -21,14 +23,26 @@ struct DigitizeArgs {
 };
 
 void run(const DigitizeArgs& a) {
+  // Every output checked before the computation, and all of them put in place together at the end:
+  // a failure leaves none of them.
+  if (const std::string ext = file_extension(a.out); !a.out.empty() && ext != "obj" && ext != "ply")
+    throw IoError("mesh file '" + a.out + "': unsupported extension '" + ext + "' for writing (supported: .obj, .ply)",
+                  "out");
+  std::optional<StagedFile> out, volume_out, face_normals_out, vertex_normals_out;
+  if (!a.out.empty()) out.emplace(a.out, "out");
+  if (!a.volume_out.empty()) volume_out.emplace(a.volume_out, "volume_out");
+  if (!a.face_normals_out.empty()) face_normals_out.emplace(a.face_normals_out, "face_normals");
+  if (!a.vertex_normals_out.empty()) vertex_normals_out.emplace(a.vertex_normals_out, "vertex_normals");
   const LoadedSurface loaded = a.source.load();
-  if (!a.volume_out.empty()) {
+  std::string volume_note;
+  if (volume_out) {
     VolumeWriteOptions options;
     const std::string ext = file_extension(a.volume_out);
     options.compressed = (ext == "vol" || ext == "longvol") && nrrd_gzip_supported();  // Version 3, as DGtal
-    write_volume(a.volume_out, voxels_to_volume(*loaded.grid), options);
-    std::cerr << "wrote " << a.volume_out << " (" << loaded.grid->size().x() << "x" << loaded.grid->size().y() << "x"
-              << loaded.grid->size().z() << " voxels, 255 inside" << (options.compressed ? ", Version 3" : "") << ")\n";
+    write_volume(volume_out->path(), voxels_to_volume(*loaded.grid), options);
+    volume_note = "wrote " + a.volume_out + " (" + std::to_string(loaded.grid->size().x()) + "x" +
+                  std::to_string(loaded.grid->size().y()) + "x" + std::to_string(loaded.grid->size().z()) +
+                  " voxels, 255 inside" + (options.compressed ? ", Version 3" : "") + ")\n";
   }
   const SurfelMesh& mesh = loaded.mesh;
   const bool ply = file_extension(a.out) == "ply";
@@ -42,12 +56,15 @@ void run(const DigitizeArgs& a) {
     // docs/math.md §1.5: vertex normals = normalized sum of incident face normals (the reference's choice)
     const NormalFields n =
         in_cli_terms([&] { return resolve_normals(loaded, NormalKind::Vertex, request, "digitize"); });
-    if (!a.face_normals_out.empty()) write_normals(a.face_normals_out, n.face);
-    if (!a.vertex_normals_out.empty()) write_normals(a.vertex_normals_out, n.vertex);
+    if (face_normals_out) write_normals(face_normals_out->path(), n.face);
+    if (vertex_normals_out) write_normals(vertex_normals_out->path(), n.vertex);
     attributes.face_normals = n.face;  // PLY output carries them too
     attributes.vertex_normals = n.vertex;
   }
-  if (!a.out.empty()) write_mesh(a.out, OutputUnits::parse(a.output_units, loaded).mesh(mesh), attributes);
+  if (out) write_mesh(out->path(), OutputUnits::parse(a.output_units, loaded).mesh(mesh), attributes);
+  for (std::optional<StagedFile>* f : {&volume_out, &face_normals_out, &vertex_normals_out, &out})
+    if (*f) (*f)->commit();
+  std::cerr << volume_note;
   std::cerr << "digitized " << loaded.description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces" << (a.out.empty() ? "" : " -> " + a.out) << "\n";
 }

@@ -5,9 +5,11 @@
 #include <chrono>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "command.hpp"
 #include "operator_options.hpp"
@@ -25,6 +27,8 @@ struct EigsArgs {
 
 void run(const EigsArgs& a) {
   if (a.k <= 0) throw InputError("-k must be positive");
+  std::optional<StagedFile> out;  // checked before the computation
+  if (!a.out.empty()) out.emplace(a.out);
   const OperatorOptions::Input in = a.options.prepare();
   const Operators ops = a.options.assemble(in);
   if (const BoundaryCondition boundary = boundary_condition(in.mesh); !boundary.closed())
@@ -43,7 +47,8 @@ void run(const EigsArgs& a) {
   if (a.out.empty()) {
     for (Eigen::Index i = 0; i < r.values.size(); ++i) std::printf("%.17g\n", r.values[i]);
   } else {
-    write_scalars(a.out, r.values);
+    write_scalars(out->path(), r.values);
+    out->commit();
   }
   // A value -lambda < 0 means L u = lambda M u with lambda > 0: L is not negative semi-definite
   // (tolerance: rounding of the dense or shift-invert solve, relative to the largest value).

@@ -1,5 +1,6 @@
 // corrlap normals: face or vertex normals of a digital surface (trivial, true, integral invariant).
 #include <chrono>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <iostream>
 
@@ -21,13 +22,15 @@ struct NormalsArgs {
 
 void run(const NormalsArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
+  StagedFile out(a.out);  // checked before the computation
   const LoadedSurface surface = a.source.load();
   // Vertices: the normalized sum of the incident face normals (docs/math.md §1.5), as every command uses.
   const bool at_vertices = a.at == "vertices";
   const NormalFields fields =
       a.normals.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
   const Eigen::MatrixX3d& n = at_vertices ? fields.vertex : fields.face;
-  write_normals(a.out, n);
+  write_normals(out.path(), n);
+  out.commit();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << a.normals.describe(surface) << " normals of " << surface.description << ": " << n.rows() << " " << a.at
             << " -> " << a.out << " (" << secs << " s)\n";

@@ -1,6 +1,6 @@
 // corrlap operators: writes L.mtx and M.mtx (Matrix Market, full precision) of one discretization.
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
-#include <filesystem>
 #include <iostream>
 
 #include "command.hpp"
@@ -16,9 +16,9 @@ struct OperatorsArgs {
 };
 
 void run(const OperatorsArgs& a) {
+  OutputFolder out(a.out);  // checked before the assembly
   const Operators ops = a.options.build(a.all);
-  std::filesystem::create_directories(a.out);
-  const std::string dir = a.out + "/";
+  const std::string dir = out.path() + "/";
   write_matrix_market(dir + "L.mtx", ops.L);
   write_matrix_market(dir + "M.mtx", ops.M);
   std::string written = "L.mtx M.mtx";
@@ -32,6 +32,7 @@ void run(const OperatorsArgs& a) {
   extra(ops.flat, "flat.mtx");
   extra(ops.M1, "M1.mtx");
   extra(ops.M_lumped, "M_lumped.mtx");
+  out.commit();
   std::cerr << a.options.method.method << ": " << ops.L.rows() << " x " << ops.L.cols()
             << ", nnz(L) = " << ops.L.nonZeros() << ", nnz(M) = " << ops.M.nonZeros() << " -> " << a.out << " ("
             << written << ")\n";

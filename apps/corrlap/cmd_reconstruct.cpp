@@ -7,13 +7,13 @@
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/regularization/normal_map_reconstruction.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/render/image.hpp>
 #include <corrlap/render/render_mesh.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/mesh_voxelization.hpp>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -56,6 +56,8 @@ void run(const ReconstructArgs& a) {
   };
   check_methods(nullptr);
 
+  // Checked before the computation; written whole at the end or not at all.
+  OutputFolder out(a.out);
   nlohmann::json stages, m;
   Stopwatch t;
   const PolygonMesh fine = read_mesh(a.mesh_file);
@@ -88,11 +90,10 @@ void run(const ReconstructArgs& a) {
   // The positions are wrong by up to a coarse voxel, not a subdivided one: alpha from the coarse h.
   o.alpha_step = report.h;
   check_methods(&mesh);
-  std::filesystem::create_directories(a.out);
   const DistanceToMesh before = distance_to_mesh(mesh, locator);
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
-  write_mesh(a.out + "/input.ply", mesh, input_attr);
+  write_mesh(out.file("input.ply"), mesh, input_attr);
   m["mesh_file"] = a.mesh_file;
   m["fine_vertices"] = fine.positions.rows();
   m["resolution"] = a.resolution;
@@ -108,8 +109,8 @@ void run(const ReconstructArgs& a) {
   m["distance_max_before"] = before.max;
   RenderOptions view;
   if (!a.no_render) {
-    write_png(a.out + "/fine.png", render_mesh(fine, nullptr, view));
-    write_png(a.out + "/before.png", render_mesh(to_polygon_mesh(mesh), nullptr, view));
+    write_png(out.file("fine.png"), render_mesh(fine, nullptr, view));
+    write_png(out.file("before.png"), render_mesh(to_polygon_mesh(mesh), nullptr, view));
   }
   // The curvature does not depend on the method: once for all of them.
   t.restart();
@@ -124,9 +125,9 @@ void run(const ReconstructArgs& a) {
     const DistanceToMesh after = distance_to_mesh(r.mesh, locator);
     MeshAttributes attr;
     attr.vertex_scalars = {{"H", r.H}};
-    write_mesh(a.out + "/reconstructed_" + method + ".ply", r.mesh, attr);
+    write_mesh(out.file("reconstructed_" + method + ".ply"), r.mesh, attr);
     if (!a.no_render)
-      write_png(a.out + "/after_" + method + ".png", render_mesh(to_polygon_mesh(r.mesh), nullptr, view));
+      write_png(out.file("after_" + method + ".png"), render_mesh(to_polygon_mesh(r.mesh), nullptr, view));
     nlohmann::json entry;
     entry["distance_mean_after"] = after.mean;
     entry["distance_max_after"] = after.max;
@@ -137,7 +138,8 @@ void run(const ReconstructArgs& a) {
               << " (max " << before.max << " -> " << after.max << "), " << seconds << " s\n";
   }
   m["time_s"] = stages;
-  std::ofstream(a.out + "/metrics.json") << m.dump(2) << "\n";
+  std::ofstream(out.file("metrics.json")) << m.dump(2) << "\n";
+  out.commit();
   std::cerr << "  wrote " << a.out << "/input.ply, reconstructed_<method>.ply, metrics.json"
             << (a.no_render ? "" : ", fine.png, before.png, after_<method>.png") << "\n";
 }

@@ -7,10 +7,10 @@
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -75,7 +75,6 @@ void add_geometry_metrics(nlohmann::json& m, const LoadedSurface& surface, const
 void write_surfaces(const std::string& dir, const SurfelMesh& input, MeshAttributes input_attr,
                     const SurfelMesh& result, std::map<std::string, Eigen::VectorXd> curvatures,
                     const OutputUnits& units) {
-  std::filesystem::create_directories(dir);
   for (auto& [name, v] : input_attr.vertex_scalars) v = units.curvatures(v);
   write_mesh(dir + "/input.ply", units.mesh(input), input_attr);
   MeshAttributes result_attr;
@@ -94,8 +93,8 @@ void write_metrics(const std::string& dir, const nlohmann::json& m) {
 
 // docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
 // face normals of --normals (the reference's test uses --normals convolved).
-void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, nlohmann::json& stages,
-                            Stopwatch& t) {
+void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, OutputFolder& out,
+                            nlohmann::json& stages, Stopwatch& t) {
   const SurfelMesh& mesh = surface.mesh;
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Face, "regularize --baseline alignment");
   stages["normals_s"] = t.lap();
@@ -113,9 +112,9 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   result.positions = r.positions;
   MeshAttributes input_attr;
   input_attr.face_normals = normals.face;
-  write_surfaces(a.out, mesh, input_attr, result, {}, OutputUnits::parse(a.output_units, surface));
+  write_surfaces(out.path(), mesh, input_attr, result, {}, OutputUnits::parse(a.output_units, surface));
   stages["write_s"] = t.lap();
-  if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, result, "", {}, {});
+  if (!a.no_render) stages["render_s"] = render_before_after(out.path(), mesh, result, "", {}, {});
   t.restart();
   nlohmann::json m;
   m["surface"] = a.source.describe();
@@ -134,7 +133,8 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   m["time_s"] = stages;
   // Measured with the paper's default curvature radius, 0.1 of the object size.
   add_geometry_metrics(m, surface, result, 0.1 * regularization_size(mesh));
-  write_metrics(a.out, m);
+  write_metrics(out.path(), m);
+  out.commit();
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << a.out
             << "/regularized.ply, regularized.obj, input.ply, metrics.json"
@@ -165,6 +165,8 @@ void run(const RegularizeArgs& a) {
   // The options first: a bad name or value fails before the (possibly long) normals.
   check_regularization_options(o);
 
+  // Checked before the (possibly long) computation; written whole at the end or not at all.
+  OutputFolder out(a.out);
   nlohmann::json stages;
   Stopwatch t;
   const LoadedSurface surface = a.source.load();
@@ -175,7 +177,7 @@ void run(const RegularizeArgs& a) {
   std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
             << " faces, h = " << mesh.grid_step() << "\n";
   if (!a.baseline.empty()) {
-    run_alignment_baseline(a, surface, stages, t);
+    run_alignment_baseline(a, surface, out, stages, t);
     return;
   }
   // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
@@ -191,9 +193,9 @@ void run(const RegularizeArgs& a) {
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
   input_attr.vertex_scalars = {{"H", r.H}};
-  write_surfaces(a.out, mesh, input_attr, r.mesh, {{"H", r.H}}, OutputUnits::parse(a.output_units, surface));
+  write_surfaces(out.path(), mesh, input_attr, r.mesh, {{"H", r.H}}, OutputUnits::parse(a.output_units, surface));
   stages["write_s"] = t.lap();
-  if (!a.no_render) stages["render_s"] = render_before_after(a.out, mesh, r.mesh, "H", r.H, r.H);
+  if (!a.no_render) stages["render_s"] = render_before_after(out.path(), mesh, r.mesh, "H", r.H, r.H);
   t.restart();
 
   nlohmann::json m;
@@ -226,7 +228,8 @@ void run(const RegularizeArgs& a) {
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
   add_geometry_metrics(m, surface, r.mesh, r.curvature_radius);
-  write_metrics(a.out, m);
+  write_metrics(out.path(), m);
+  out.commit();
   std::cerr << "regularize: " << a.method.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
             << r.solver << ": max displacement " << m["displacement_max"].get<double>();
   if (surface.shape)

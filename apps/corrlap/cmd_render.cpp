@@ -5,6 +5,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/render/render_mesh.hpp>
 #include <iostream>
 #include <sstream>
@@ -55,13 +56,22 @@ void run(const RenderArgs& a) {
     o.up = Eigen::Vector3d(v[0], v[1], v[2]);
   }
   if (!a.size.empty()) {
+    // Each part judged, the message quoting the whole text the user gave.
+    const auto pixels = [&](const std::string& part) {
+      std::size_t used = 0;
+      double v = 0.0;
+      try {
+        v = std::stod(part, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != part.size() || !std::isfinite(v) || v != std::floor(v))
+        throw InputError("--size '" + a.size + "': expected WIDTHxHEIGHT or WIDTH in whole pixels, e.g. 800x600");
+      return int(std::clamp(v, -1.0, 1e6));
+    };
     const std::size_t x = a.size.find('x');
-    const std::string w = a.size.substr(0, x), h = x == std::string::npos ? w : a.size.substr(x + 1);
-    const auto wv = parse_numbers(w, "--size", 1), hv = parse_numbers(h, "--size", 1);
-    if (wv[0] != std::floor(wv[0]) || hv[0] != std::floor(hv[0]))
-      throw InputError("--size '" + a.size + "': expected W or WxH in whole pixels");
-    o.width = int(std::clamp(wv[0], -1.0, 1e6));
-    o.height = int(std::clamp(hv[0], -1.0, 1e6));
+    o.width = pixels(a.size.substr(0, x));
+    o.height = x == std::string::npos ? o.width : pixels(a.size.substr(x + 1));
   }
   if (!a.range.empty()) {
     const auto r = parse_numbers(a.range, "--range", 2);
@@ -70,6 +80,7 @@ void run(const RenderArgs& a) {
   }
   if (!a.colormap.empty()) o.colormap = parse_colormap(a.colormap);
 
+  StagedFile out(a.out);  // checked before the computation
   const auto t0 = std::chrono::steady_clock::now();
   MeshAttributes attributes;
   const PolygonMesh mesh = read_mesh(a.mesh, &attributes);
@@ -77,7 +88,8 @@ void run(const RenderArgs& a) {
   const auto t1 = std::chrono::steady_clock::now();
   const Image image = render_mesh(mesh, field ? &*field : nullptr, o);
   const auto t2 = std::chrono::steady_clock::now();
-  write_png(a.out, image);
+  write_png(out.path(), image);
+  out.commit();
   std::cerr << "render: " << mesh.faces.size() << " faces" << (field ? ", coloured by '" + field->name + "'" : "")
             << ", " << image.width << " x " << image.height << " in " << std::chrono::duration<double>(t2 - t1).count()
             << " s (read " << std::chrono::duration<double>(t1 - t0).count() << " s)\n  wrote " << a.out << "\n";

@@ -7,6 +7,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/problems/test_functions.hpp>
@@ -47,6 +48,9 @@ void run(const SolveArgs& a) {
   auto method = make_discretization(a.method.method);
   const Config params = a.method.config();
   const TestFunction* analytic = has_test_function(a.rhs) ? &test_function(a.rhs) : nullptr;
+
+  std::optional<StagedFile> out;  // checked before the computation
+  if (!a.out.empty()) out.emplace(a.out);
 
   const Stopwatch watch;
   const LoadedSurface surface = a.source.load();
@@ -108,7 +112,10 @@ void run(const SolveArgs& a) {
     residual = neumann_residual(ops.L, ops.M, from_file, g, 0);
   }
   const SolverReport report = solver->info();
-  if (!a.out.empty()) write_scalars(a.out, g);
+  if (out) {
+    write_scalars(out->path(), g);
+    out->commit();
+  }
 
   if (a.json) {
     nlohmann::json j;

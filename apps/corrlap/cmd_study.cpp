@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/output_folder.hpp>
 #include <corrlap/studies/regularization_study.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_tables.hpp>
@@ -51,6 +52,13 @@ struct StudyArgs {
   CLI::Option *h_option = nullptr, *resolutions_option = nullptr, *diffusion_option = nullptr;
   const CLI::App* command = nullptr;
 };
+
+// A study writes in place, so that the rows of an interrupted run stay for --resume; --overwrite
+// builds the new study beside the old one, which it replaces only when it succeeds. Either way a
+// failing run leaves no new file (OutputFolder).
+OutputFolder::Mode study_output_mode(const StudyArgs& a) {
+  return a.overwrite ? OutputFolder::Mode::Staged : OutputFolder::Mode::InPlace;
+}
 
 // The options a resumed study must share with the one in DIR (methods, h and functions may grow).
 nlohmann::json fixed_options(const StudyOptions& o) {
@@ -146,25 +154,27 @@ void run_regularization(const StudyArgs& a) {
     throw InputError("study: '" + a.out + "' already holds a regularization study (" + table +
                      "); pass --overwrite to start again");
   if (a.resume) throw InputError("study regularization: --resume is not supported (each unit takes seconds)");
-  fs::create_directories(dir);
+  OutputFolder out(a.out, "out", study_output_mode(a));
+  const std::string written = (fs::path(out.path()) / "regularization.csv").string();
   std::vector<RegularizationStudyRow> rows;
   const auto t0 = std::chrono::steady_clock::now();
   run_regularization_study(
       o,
       [&](const RegularizationStudyRow& r) {
         rows.push_back(r);
-        write_regularization_csv(table, rows);  // rewritten after each unit: an interrupted run keeps its rows
+        write_regularization_csv(written, rows);  // rewritten after each unit: an interrupted run keeps its rows
       },
       [&](const RegularizationStudyProgress& p) {
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::cerr << "study regularization " << p.done << "/" << p.total << "  " << p.shape << " h=" << p.h << " "
                   << p.method << "  elapsed " << format_seconds(elapsed) << "\n";
       });
+  if (!a.no_plots) run_plot_script(out.path());
+  out.commit();
   std::cout << "study: " << table << "\n";
   for (const RegularizationStudyRow& r : rows)
     std::cout << "  " << r.shape << " h=" << r.h << " " << r.method << ": distance " << r.distance_before << " -> "
               << r.distance_after << ", |dH| " << r.curvature_error_before << " -> " << r.curvature_error_after << "\n";
-  if (!a.no_plots) run_plot_script(a.out);
 }
 
 // An option of one kind of study given to another is refused rather than silently ignored.
@@ -231,8 +241,8 @@ void run(StudyArgs& a) {
   if (a.resume && a.overwrite) throw InputError("study: --resume and --overwrite exclude each other");
 
   namespace fs = std::filesystem;
-  const fs::path dir(a.out);
-  fs::create_directories(dir);
+  OutputFolder out(a.out, "out", study_output_mode(a));
+  const fs::path dir(out.path());
   const bool eigen = o.kind == StudyKind::Eigen;
   const std::string results = (dir / (eigen ? "eigen.csv" : "results.csv")).string();
   const std::string options_file = (dir / "study.json").string();
@@ -241,10 +251,8 @@ void run(StudyArgs& a) {
   std::set<std::tuple<double, int, std::string>> done;
   // The rows in the file per unit: a unit recomputed for a new function must not repeat them.
   std::map<std::tuple<double, int, std::string>, std::set<std::string>> seen;
-  if (fs::exists(results)) {
-    if (a.overwrite) {
-      fs::remove(results);
-    } else if (!a.resume) {
+  if (!a.overwrite && fs::exists(results)) {
+    if (!a.resume) {
       throw InputError("study: '" + a.out + "' already holds a study (" + results +
                        "); pass --resume to continue it or --overwrite to start again");
     } else {
@@ -321,26 +329,27 @@ void run(StudyArgs& a) {
       std::cerr << line.str() << "\n";
   };
   run_study(o, cb);
-  finish_study(a.out, eigen, !a.no_plots);
+  finish_study(out.path(), a.out, eigen, !a.no_plots);
+  out.commit();
 }
 
 }  // namespace
 
-void finish_study(const std::string& out, bool eigen, bool plots) {
+void finish_study(const std::string& out, const std::string& shown, bool eigen, bool plots) {
   namespace fs = std::filesystem;
-  const fs::path dir(out);
-  const std::string results = (dir / (eigen ? "eigen.csv" : "results.csv")).string();
+  const fs::path dir(out), shown_dir(shown);
+  const std::string results = eigen ? "eigen.csv" : "results.csv";
   // Tables from every row in the file (this run's and the resumed ones).
-  std::cout << "study: " << results << "\n";
+  std::cout << "study: " << (shown_dir / results).string() << "\n";
   if (!eigen) {
-    const std::vector<StudyRow> rows = read_results_csv(results);
-    const std::string summary = (dir / "summary.csv").string(), orders = (dir / "orders.csv").string();
-    write_summary_csv(summary, summarize(rows));
+    const std::vector<StudyRow> rows = read_results_csv((dir / results).string());
+    write_summary_csv((dir / "summary.csv").string(), summarize(rows));
     const std::vector<OrderRow> fitted = fit_orders(rows);
-    write_orders_csv(orders, fitted);
-    std::cout << "study: " << summary << "\nstudy: " << orders << "\n";
+    write_orders_csv((dir / "orders.csv").string(), fitted);
+    std::cout << "study: " << (shown_dir / "summary.csv").string() << "\nstudy: " << (shown_dir / "orders.csv").string()
+              << "\n";
     for (const std::string& shortfall : order_shortfalls(fitted))
-      std::cerr << "warning: study: " << orders << ": " << shortfall << "\n";
+      std::cerr << "warning: study: " << (shown_dir / "orders.csv").string() << ": " << shortfall << "\n";
     for (const OrderRow& r : fitted)
       if (r.norm == std::string("l2") && !std::isnan(r.order))
         std::cout << "  order " << r.study << " " << r.method << " " << r.normals << " " << r.function

@@ -4,6 +4,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/memory_budget.hpp>
 #include <corrlap/core/threads.hpp>
+#include <filesystem>
 #include <iostream>
 #include <new>
 
@@ -101,6 +102,13 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const corrlap::Error& e) {
     cli::report(app, e);
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the user gave cannot be used (a file where a folder is needed, no permission): the
+    // user's to fix, not a bug. The message names the operation, the reason and the path.
+    std::string what = e.what();
+    if (const std::string prefix = "filesystem error: "; what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
+    std::cerr << "corrlap: error: " << what << "; check the path and its permissions\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "corrlap: error: out of memory\n";

@@ -2,6 +2,7 @@
 // Output files that never end up half-written (internal). The data goes to a temporary file beside
 // the destination, which commit() flushes, closes and renames onto it; when anything fails first
 // (an exception, a full disk), the temporary file is removed and the destination is untouched.
+// An existing special file (/dev/null, a pipe) is written directly: nothing can be renamed onto it.
 #include <cmath>
 #include <cstdio>
 #include <string>

@@ -185,6 +185,26 @@ const std::vector<BadCall>& catalogue() {
       {"eigs --method fem --mesh {D}/s.obj --face-normals {D}/fn.txt -k 3 --shift 5", "--shift"},
       // backends.
       {"backends --nosuch", "--nosuch"},
+      // Outputs (docs/cli.md, Outputs): refused before any computation, the path and the flag named.
+      {"regularize --shape sphere1 --h 0.5 --out {D}/s.obj", "output folder '{D}/s.obj' is an existing file"},
+      {"regularize --shape sphere1 --h 0.5 --out {D}/s.obj/sub", "lies under '{D}/s.obj', which is a file"},
+      {"regularize --shape sphere1 --h 0.5 --out /proc/corrlap_x", "output folder '/proc/corrlap_x': cannot create"},
+      {"regularize --shape sphere1 --h 0.5 --out /dev/null", "'/dev/null' is a special file"},
+      {"reconstruct --mesh-file {D}/s.obj --out {D}/s.obj", "is an existing file; the output is a folder"},
+      {"study backward --h 0.5 --out {D}/s.obj", "output folder '{D}/s.obj' is an existing file"},
+      {"operators --method polydec --mesh {D}/s.obj --out {D}/s.obj/o",
+       "which is a file, not a folder; choose a path in a folder (--out)"},
+      {"curvature --shape sphere1 --h 0.5 --normals true --out /proc/corrlap_x", "/proc/corrlap_x"},
+      {"normals --shape sphere1 --h 0.5 --out {D}", "output file '{D}' is an existing folder; name a file (--out)"},
+      {"normals --shape sphere1 --h 0.5 --out {D}/missing/n.txt", "the folder '{D}/missing' does not exist"},
+      {"digitize --shape sphere1 --h 0.5 --volume-out {D}/x.vol --out /dev/null",
+       "mesh file '/dev/null': unsupported extension '' for writing"},
+      {"digitize --shape sphere1 --h 0.5 --volume-out {D}/s.obj/x.vol --out {D}/x.obj", "(--volume-out)"},
+      {"digitize --shape sphere1 --h 0.5 --face-normals {D} --out {D}/x.obj", "is an existing folder"},
+      // render: the size quoted as given.
+      {"render {D}/s.obj --size 10x --out {D}/x.png", "--size '10x': expected WIDTHxHEIGHT or WIDTH in whole pixels"},
+      {"render {D}/s.obj --size x10 --out {D}/x.png", "--size 'x10'"},
+      {"render {D}/s.obj --size 10.5 --out {D}/x.png", "--size '10.5'"},
   };
   return calls;
 }

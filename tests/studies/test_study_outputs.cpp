@@ -67,7 +67,7 @@ bool has_non_finite_token(const std::string& text) {
 
 }  // namespace
 
-TEST_CASE("study tables: undefined values are empty fields, read back as NaN; required fields are checked") {
+TEST_CASE("study tables: undefined values are empty fields, read back as NaN, required fields are checked") {
   // One grid step: no order; two rows at two h: an order without interval.
   std::vector<StudyRow> rows;
   for (double h : {0.2, 0.1}) {
@@ -161,7 +161,7 @@ TEST_CASE("study options: values given twice are refused naming the parameter") 
         "study regularization: shape sphere1 is given twice; give each once");
 }
 
-TEST_CASE("study options: only the unit sphere has a reference; shape does not apply to the cotan study") {
+TEST_CASE("study options: only the unit sphere has a reference, shape does not apply to the cotan study") {
   for (StudyKind kind : {StudyKind::Forward, StudyKind::Backward, StudyKind::Eigen}) {
     StudyOptions o = small(kind);
     CAPTURE(to_string(kind));
