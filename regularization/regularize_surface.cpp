@@ -41,8 +41,8 @@ double object_size(const SurfelMesh& mesh, const RegularizationOptions& o) {
 // A real option: finite and above `min` (or at least `min` when `open` is false).
 void check_real(double value, const char* parameter, const char* what, double min, bool open = true) {
   if (std::isfinite(value) && (open ? value > min : value >= min)) return;
-  throw InputError("regularization: " + std::string(what) + " must be a finite number " + (open ? "> " : ">= ") +
-                       number_text(min) + ", got " + number_text(value),
+  throw InputError("regularization: " + std::string(parameter) + " = " + number_text(value) + ": " + what +
+                       " must be a finite number " + (open ? "> " : ">= ") + number_text(min),
                    parameter);
 }
 
