@@ -1,4 +1,4 @@
-"""The Python catalogue of bad inputs (issue 32; docs/python.md, "Arguments and errors"): every case
+"""The Python catalogue of bad inputs (docs/python.md, Conventions: "Arguments"): every case
 is refused with the documented exception type and a message that names the parameter or the
 problem, never a crash, a RuntimeError for a user mistake, or a default silently taken instead.
 
@@ -365,7 +365,7 @@ def test_solve_with_no_right_hand_side_gives_an_empty_solution(operators):
     assert x.shape == (n, 0)
 
 
-# ---- the regularization's solution check (issue 32; the library side is in regularization/) ----
+# ---- the regularization's solution check (the library side is in regularization/solution_check.hpp) ----
 
 def test_regularize_huge_alpha0(sphere):
     """alpha0 = 1e160 makes alpha overflow the solve: the result must not be zeros returned as success."""
