@@ -41,7 +41,7 @@ static void BM_volume_read_streamed(benchmark::State& state) {
   const std::string path = ball_volume(int(state.range(0)));
   bench::reset_peak_rss();
   VolumeReadOptions o;
-  o.threshold = 127;
+  o.inside = InsideRule::above(127);
   std::int64_t inside = 0;
   for (auto _ : state) inside = read_volume_as_voxels(path, o).count();
   state.counters["inside"] = double(inside);

@@ -6,7 +6,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   corrlap::VolumeReadOptions thresholded;
-  thresholded.threshold = 127.0;
+  thresholded.inside = corrlap::InsideRule::above(127.0);
   thresholded.h = 0.0;
   for (const char* extension : {".vol", ".longvol"}) {
     const std::string path = corrlap::fuzz::write_input(data, size, extension);

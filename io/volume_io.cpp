@@ -2,20 +2,26 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/inside_test.hpp>
 #include <corrlap/io/detail/output_file.hpp>
+#include <corrlap/io/detail/volume_readers.hpp>
+#include <corrlap/io/detail/volume_stream.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
+#include <type_traits>
 
 #ifdef CORRLAP_HAVE_ZLIB
 #include <zlib.h>
@@ -25,203 +31,25 @@ namespace corrlap {
 
 namespace {
 
-// Hard limit for one volume, whatever the memory budget: 2^34 voxels (16 GiB) is beyond any volume this
-// tool is meant for.
-// Sizes are checked against it, and against what the file can hold, before anything is allocated.
-constexpr std::uint64_t kMaxVoxels = std::uint64_t{1} << 34;
-// Deflate cannot expand one compressed byte into more than 1032 bytes (a 258-byte match costs at
-// least two bits); the constant covers the gzip header and a final partial block.
-constexpr std::uint64_t kMaxDeflateRatio = 1032;
+using io_detail::check_holds;
+using io_detail::checked_voxels;
+using io_detail::describe_sizes;
+using io_detail::fail;
+using io_detail::kChunk;
+using io_detail::VolumeHeader;
+using io_detail::VoxelSink;
 
-/// `parameter`: the library name of the read option at fault, if one is (InputError::parameter()).
-[[noreturn]] void fail(const std::string& path, const std::string& what, const std::string& parameter = {}) {
-  throw IoError("volume file '" + path + "': " + what, parameter);
-}
-
-// Voxel count in 64 bits, or nullopt when it does not even fit there.
+// Voxel count in 64 bits, or nullopt when a size is not positive or the count does not fit.
 std::optional<std::uint64_t> voxel_count(const Eigen::Vector3i& s) {
   if ((s.array() <= 0).any()) return std::nullopt;
   const auto xy = io_detail::checked_mul(std::uint64_t(s.x()), std::uint64_t(s.y()));
   return xy ? io_detail::checked_mul(*xy, std::uint64_t(s.z())) : std::nullopt;
 }
 
-// "sizes 65536 x 65537 x 1 = 4 294 967 296 voxels"
-std::string describe(const Eigen::Vector3i& s) {
-  std::ostringstream os;
-  os << "sizes " << s.x() << " x " << s.y() << " x " << s.z();
-  if (const auto n = voxel_count(s)) os << " = " << io_detail::readable_count(*n) << " voxels";
-  return os.str();
-}
-
-// Positive sizes below the hard limit; returns the voxel count (= bytes of uint8 data). The memory
-// budget is checked by the sink, which knows what it will hold (bytes or bits).
-std::size_t checked_voxels(const std::string& path, const Eigen::Vector3i& s) {
-  if ((s.array() <= 0).any()) fail(path, describe(s) + ": dimensions must be positive");
-  const auto n = voxel_count(s);
-  if (!n || *n > kMaxVoxels)
-    fail(path, describe(s) + (n ? " need " + io_detail::readable_bytes(double(*n)) : std::string(" overflow 64 bits")) +
-                   ", more than the " + io_detail::readable_bytes(double(kMaxVoxels)) +
-                   " a volume may hold (dimensions are absurdly large)");
-  return std::size_t(*n);
-}
-
-// Where the readers put the voxel values: begin() once the header gave the sizes, then consume()
-// with the values in file order (x fastest), in chunks of any length. A sink that holds the bytes
-// (read_volume) or one that thresholds them into bits as they come (read_volume_as_voxels: a 1024^3
-// volume is 1 GiB as bytes, 128 MiB as bits).
-class VoxelSink {
- public:
-  virtual ~VoxelSink() = default;
-  /// The memory budget for what the sink will hold (IoError naming the file), before the reader
-  /// checks that the file holds the data and before begin() allocates.
-  virtual void check(const std::string& path, const Eigen::Vector3i& size) const = 0;
-  virtual void begin(const std::string& path, const Eigen::Vector3i& size) = 0;
-  virtual void consume(const std::uint8_t* values, std::size_t n) = 0;
-};
-
-// Chunk of the streamed reads: large enough for fast reads, small enough to be nothing in memory.
-constexpr std::size_t kChunk = std::size_t{1} << 20;
-
-// The announced sizes need `needed` bytes of the file, which holds `available` after the header.
-void check_holds(const std::string& path, const Eigen::Vector3i& s, std::uint64_t needed, std::uint64_t available,
-                 const std::string& what) {
-  if (needed <= available) return;
-  fail(path, "truncated data: " + describe(s) + " need " + what + io_detail::readable_bytes(double(needed)) +
-                 ", more than the " + io_detail::readable_bytes(double(available)) + " the file holds");
-}
-
-// `bytes_per_voxel` bytes for each voxel (8: .longvol), given to the sink as they are.
-void read_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, VoxelSink& sink,
-                  std::size_t bytes_per_voxel = 1) {
-  const std::size_t n = checked_voxels(path, s) * bytes_per_voxel;
-  // Checked before the sink allocates, so that a corrupt header cannot make us allocate gigabytes.
-  sink.check(path, s);
-  check_holds(path, s, n, io_detail::bytes_left(in), "");
-  sink.begin(path, s);
-  std::vector<std::uint8_t> buffer(std::min(n, kChunk));
-  std::size_t done = 0;
-  while (done < n) {
-    const std::size_t k = std::min(kChunk, n - done);
-    in.read(reinterpret_cast<char*>(buffer.data()), std::streamsize(k));
-    const std::size_t got = std::size_t(in.gcount());
-    if (got != k)
-      fail(path, "truncated data: expected " + io_detail::readable_count(n) + " bytes, got " +
-                     io_detail::readable_count(done + got));
-    sink.consume(buffer.data(), k);
-    done += k;
-  }
-}
-
-#ifdef CORRLAP_HAVE_ZLIB
-// Inflates exactly n bytes into the sink, 1 MiB at a time: the announced size alone never allocates
-// memory, and producing more than n bytes is an error as soon as it happens.
-// `format` names the data in messages ("gzip", "zlib").
-void inflate_payload(const std::string& path, const std::string& compressed, std::size_t n, VoxelSink& sink,
-                     const std::string& format) {
-  // RAII so that every fail() below releases zlib's state.
-  struct Stream {
-    z_stream zs{};
-    bool live = false;
-    ~Stream() {
-      if (live) inflateEnd(&zs);
-    }
-  } s;
-  // 15 + 32: accept gzip and zlib headers (NRRD "gzip" files are gzip streams, .vol Version 3 zlib).
-  if (inflateInit2(&s.zs, 15 + 32) != Z_OK) fail(path, "zlib initialisation failed");
-  s.live = true;
-  constexpr std::size_t kMaxIn = std::numeric_limits<uInt>::max();
-  // One byte of room beyond n detects a stream longer than the sizes announce.
-  std::vector<std::uint8_t> buffer(std::min(kChunk, n + 1));
-  std::size_t fed = 0, produced = 0;
-  int rc = Z_OK;
-  while (rc != Z_STREAM_END) {
-    if (s.zs.avail_in == 0 && fed < compressed.size()) {
-      const std::size_t k = std::min(compressed.size() - fed, kMaxIn);
-      s.zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data() + fed));
-      s.zs.avail_in = uInt(k);
-      fed += k;
-    }
-    const std::size_t room = std::min(buffer.size(), n + 1 - produced);
-    s.zs.next_out = buffer.data();
-    s.zs.avail_out = uInt(room);
-    rc = inflate(&s.zs, Z_NO_FLUSH);
-    const std::size_t got = room - s.zs.avail_out;
-    if (produced + got > n)
-      fail(path, format + " data holds more bytes than the sizes announce (" + io_detail::readable_count(n) + ")");
-    if (got > 0) sink.consume(buffer.data(), got);
-    produced += got;
-    if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
-    if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
-      fail(path, "corrupt " + format + " data" + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
-  }
-  if (produced != n)
-    fail(path, "truncated " + format + " data: expected " + io_detail::readable_count(n) + " bytes, got " +
-                   io_detail::readable_count(produced));
-}
-#endif
-
-// The rest of `in` as compressed voxel data: refused before inflating when even the densest deflate
-// stream of that length could not hold n bytes.
-void read_compressed_payload(std::istream& in, const std::string& path, const Eigen::Vector3i& s, std::size_t n,
-                             VoxelSink& sink, const std::string& format) {
-#ifdef CORRLAP_HAVE_ZLIB
-  sink.check(path, s);
-  const std::uint64_t compressed = io_detail::bytes_left(in);
-  const auto most = io_detail::checked_mul(compressed, kMaxDeflateRatio);
-  if (most && n > *most + 1024)
-    fail(path, describe(s) + " need " + io_detail::readable_bytes(double(n)) + ", more than the " +
-                   io_detail::readable_bytes(double(*most + 1024)) + " that " +
-                   io_detail::readable_bytes(double(compressed)) + " of " + format +
-                   " data can hold (deflate expands at most " + std::to_string(kMaxDeflateRatio) + " times)");
-  std::ostringstream ss;
-  ss << in.rdbuf();  // the compressed bytes only: a few MB for a 1024^3 segmentation
-  sink.begin(path, s);
-  inflate_payload(path, ss.str(), n, sink, format);
-#else
-  (void)in;
-  (void)s;
-  (void)n;
-  (void)sink;
-  fail(path, format + "-compressed data needs corrlap built with zlib (zlib1g-dev)");
-#endif
-}
-
-// DGtal .longvol voxels are 64-bit little-endian words: this sink assembles them and gives the
-// next sink one byte per voxel, `to_byte(word)` (which may refuse a value, naming it).
-class WordSink final : public VoxelSink {
- public:
-  using ToByte = std::function<std::uint8_t(std::uint64_t)>;
-  WordSink(VoxelSink& next, ToByte to_byte) : next_(next), to_byte_(std::move(to_byte)) {}
-  void check(const std::string& path, const Eigen::Vector3i& size) const override { next_.check(path, size); }
-  void begin(const std::string& path, const Eigen::Vector3i& size) override { next_.begin(path, size); }
-  void consume(const std::uint8_t* bytes, std::size_t n) override {
-    for (std::size_t i = 0; i < n; ++i) {
-      word_ |= std::uint64_t(bytes[i]) << (8 * filled_);
-      if (++filled_ < 8) continue;
-      out_.push_back(to_byte_(word_));
-      word_ = 0, filled_ = 0;
-      if (out_.size() == kChunk) flush();
-    }
-    flush();  // a chunk may end inside a word: its bytes wait in word_ for the next chunk
-  }
-
- private:
-  void flush() {
-    if (!out_.empty()) next_.consume(out_.data(), out_.size());
-    out_.clear();
-  }
-  VoxelSink& next_;
-  ToByte to_byte_;
-  std::vector<std::uint8_t> out_;
-  std::uint64_t word_ = 0;
-  unsigned filled_ = 0;
-};
-
 // DGtal .vol: "Key: value" lines ended by a line "."; then X*Y*Z bytes, x fastest: raw
 // (Version 2, or no Version field) or one zlib stream (Version 3, DGtal's VolWriter with compression).
-// .longvol: the same header (Lvoxel-* fields for Voxel-*), 8 bytes per voxel, little-endian; the
-// words go through a WordSink made by the caller.
-void read_vol(const std::string& path, VoxelSink& sink, std::size_t bytes_per_voxel = 1) {
+// .longvol: the same header (Lvoxel-* fields for Voxel-*), 8 bytes per voxel, little-endian.
+void read_vol(const std::string& path, VoxelSink& sink, bool longvol) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
   std::map<std::string, std::string> fields;
@@ -253,13 +81,15 @@ void read_vol(const std::string& path, VoxelSink& sink, std::size_t bytes_per_vo
       fail(path, std::string("invalid dimension ") + keys[a] + ": '" + it->second + "'");
     s[a] = int(d);
   }
-  const std::size_t n = checked_voxels(path, s);
+  VolumeHeader header;
+  header.size = s;
+  header.type = longvol ? VoxelValueType::UInt64 : VoxelValueType::UInt8;
   const auto version = fields.find("Version");
   const std::string ver = version == fields.end() ? "2" : version->second;
   if (ver == "2")
-    read_payload(in, path, s, sink, bytes_per_voxel);
+    io_detail::read_payload(in, path, header, sink);
   else if (ver == "3")
-    read_compressed_payload(in, path, s, n * bytes_per_voxel, sink, "zlib");
+    io_detail::read_compressed_payload(in, path, header, sink, "zlib");
   else
     fail(path, "unsupported Version '" + ver.substr(0, 20) + "' (supported: 2 raw, 3 zlib)");
 }
@@ -343,9 +173,11 @@ void read_raw(const std::string& path, const VolumeReadOptions& options, VoxelSi
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open");
   // Checked before reading: the file must be exactly the given dimensions.
-  const std::uint64_t n = *voxel_count(*options.raw_dimensions), bytes = io_detail::bytes_left(in);
-  if (bytes > n) fail(path, "file is larger than the given dimensions");
-  read_payload(in, path, *options.raw_dimensions, sink);
+  VolumeHeader header;
+  header.size = *options.raw_dimensions;
+  if (io_detail::bytes_left(in) > checked_voxels(path, header.size))
+    fail(path, "file is larger than the given dimensions");
+  io_detail::read_payload(in, path, header, sink);
 }
 
 void write_raw(const std::string& path, const Volume& v) {
@@ -353,177 +185,237 @@ void write_raw(const std::string& path, const Volume& v) {
   write_values(out, v);
 }
 
-// ---- NRRD (http://teem.sourceforge.net/nrrd/format.html) ----
-// Attached header "NRRD000N", "field: value" lines, a blank line, then the data. We read 3D uint8
-// volumes (type uint8/uchar/unsigned char/uint8_t, or int8 kept only if non-negative) with raw,
-// ascii/text or gzip encoding (gzip when built with zlib); anything else is a clear error.
-std::string trim(std::string s) {
-  s.erase(0, s.find_first_not_of(" \t"));
-  const auto e = s.find_last_not_of(" \t\r");
-  s.erase(e == std::string::npos ? 0 : e + 1);
-  return s;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
-// Forwards to another sink after checking that int8 data holds no negative values.
-class NonNegativeInt8 final : public VoxelSink {
+// Hands the values to values() whole: a chunk that ends inside a value keeps its bytes for the next.
+class WholeValueSink : public VoxelSink {
  public:
-  explicit NonNegativeInt8(VoxelSink& next) : next_(next) {}
-  void check(const std::string& path, const Eigen::Vector3i& size) const override { next_.check(path, size); }
-  void begin(const std::string& path, const Eigen::Vector3i& size) override {
+  void begin(const std::string& path, const VolumeHeader& header) override {
     path_ = path;
-    next_.begin(path, size);
+    header_ = header;
+    bytes_ = value_bytes(header.type);
+    first_ = 0;
+    start(header);
   }
-  void consume(const std::uint8_t* values, std::size_t n) override {
-    for (std::size_t i = 0; i < n; ++i)
-      if (values[i] > 127) fail(path_, "negative int8 values are not supported (grey levels must be 0..127 for int8)");
-    next_.consume(values, n);
+  void consume(const std::uint8_t* bytes, std::size_t n) override {
+    if (filled_ > 0) {
+      const std::size_t k = std::min(n, bytes_ - filled_);
+      std::copy(bytes, bytes + k, carry_.begin() + std::ptrdiff_t(filled_));
+      filled_ += k, bytes += k, n -= k;
+      if (filled_ < bytes_) return;
+      values(carry_.data(), 1);
+      ++first_;
+      filled_ = 0;
+    }
+    const std::size_t whole = n / bytes_;
+    if (whole > 0) values(bytes, whole);
+    first_ += whole;
+    filled_ = n - whole * bytes_;
+    std::copy(bytes + whole * bytes_, bytes + n, carry_.begin());
+  }
+
+ protected:
+  /// Once the header is known.
+  virtual void start(const VolumeHeader& header) = 0;
+  /// `count` whole values in the stream's byte order, the next ones in stream order (the first is
+  /// the stream's value number first()).
+  virtual void values(const std::uint8_t* bytes, std::size_t count) = 0;
+  const std::string& path() const { return path_; }
+  const VolumeHeader& header() const { return header_; }
+  /// True when the stream is i fastest, then j, then k: value number n is voxel n.
+  bool in_index_order() const { return header_.order == std::array<int, 3>{0, 1, 2}; }
+  std::uint64_t first() const { return first_; }
+  /// The voxel (i, j, k) of the stream's value number n.
+  Eigen::Vector3i voxel_of(std::uint64_t n) const {
+    Eigen::Vector3i v;
+    for (int a : header_.order) {
+      const auto m = std::uint64_t(header_.size[a]);
+      v[a] = int(n % m);
+      n /= m;
+    }
+    return v;
+  }
+  /// The position of voxel v in i-fastest order.
+  std::size_t linear_index(const Eigen::Vector3i& v) const {
+    const Eigen::Vector3i& s = header_.size;
+    return (std::size_t(v.z()) * std::size_t(s.y()) + std::size_t(v.y())) * std::size_t(s.x()) + std::size_t(v.x());
   }
 
  private:
-  VoxelSink& next_;
   std::string path_;
+  VolumeHeader header_;
+  std::size_t bytes_ = 1, filled_ = 0;
+  std::uint64_t first_ = 0;
+  std::array<std::uint8_t, 8> carry_{};
 };
 
-void read_nrrd(const std::string& path, VoxelSink& destination) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, "cannot open");
-  std::string line;
-  if (!std::getline(in, line)) fail(path, "empty file");
-  if (line.rfind("NRRD000", 0) != 0) fail(path, "not a NRRD file (missing NRRD000x magic)");
-  std::map<std::string, std::string> fields;
-  bool ended = false;
-  int lines = 0;
-  while (std::getline(in, line)) {
-    if (++lines > 1024) fail(path, "header too long");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) {
-      ended = true;
-      break;
-    }
-    if (line[0] == '#') continue;
-    if (line.find(":=") != std::string::npos) continue;  // key/value pairs: free-form metadata
-    const auto colon = line.find(": ");
-    if (colon == std::string::npos) fail(path, "malformed header line '" + line.substr(0, 60) + "'");
-    fields[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 2));
-  }
-  auto field = [&](const char* key) -> std::string {
-    auto it = fields.find(key);
-    if (it == fields.end()) fail(path, std::string("header has no '") + key + "' field");
-    return it->second;
-  };
-  if (fields.count("data file") || fields.count("datafile"))
-    fail(path, "detached data ('data file' field) is not supported; use an attached-header .nrrd");
-  const std::string type = lower(field("type"));
-  const bool u8 = type == "uint8" || type == "uchar" || type == "unsigned char" || type == "uint8_t";
-  const bool s8 = type == "int8" || type == "signed char" || type == "int8_t";
-  if (!u8 && !s8) fail(path, "unsupported type '" + type + "' (supported: uint8/uchar, int8)");
-  const std::string dim = field("dimension");
-  if (dim != "3") fail(path, "dimension must be 3, got '" + dim + "'");
-  Eigen::Vector3i s;
-  {
-    std::istringstream ss(field("sizes"));
-    long long d[3];
-    std::string extra;
-    if (!(ss >> d[0] >> d[1] >> d[2]) || (ss >> extra)) fail(path, "malformed 'sizes' field (expected three integers)");
-    for (int a = 0; a < 3; ++a) {
-      if (d[a] <= 0 || d[a] > 1000000)
-        fail(path, "invalid size " + std::to_string(d[a]) + " on axis " + std::to_string(a));
-      s[a] = int(d[a]);
-    }
-  }
-  const std::size_t n = checked_voxels(path, s);
-  if (auto it = fields.find("endian");
-      it != fields.end() && lower(it->second) != "little" && lower(it->second) != "big")
-    fail(path, "invalid endian '" + it->second + "' (little or big)");  // irrelevant for 1-byte types
-  const std::string encoding = lower(field("encoding"));
-  if (!ended) fail(path, "header not terminated by a blank line (truncated file?)");
-  NonNegativeInt8 checked(destination);
-  VoxelSink& sink = s8 ? static_cast<VoxelSink&>(checked) : destination;
-  if (encoding == "raw") {
-    if (io_detail::bytes_left(in) > n) fail(path, "file is larger than the announced sizes");
-    read_payload(in, path, s, sink);
-  } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
-    // n values need at least n digits and n - 1 separators.
-    sink.check(path, s);
-    check_holds(path, s, 2 * std::uint64_t(n) - 1, io_detail::bytes_left(in), "at least ");
-    sink.begin(path, s);
-    std::vector<std::uint8_t> buffer;
-    buffer.reserve(std::min(n, kChunk));
-    for (std::size_t i = 0; i < n; ++i) {
-      long long x = 0;
-      if (!(in >> x)) fail(path, "truncated or malformed ascii data at value " + std::to_string(i));
-      if (x < (s8 ? -128 : 0) || x > (s8 ? 127 : 255))
-        fail(path, "ascii value " + std::to_string(x) + " out of range for " + type);
-      buffer.push_back(std::uint8_t(x));
-      if (buffer.size() == kChunk || i + 1 == n) {
-        sink.consume(buffer.data(), buffer.size());
-        buffer.clear();
-      }
-    }
-    std::string extra;
-    if (in >> extra) fail(path, "more ascii values than the announced sizes");
-  } else if (encoding == "gzip" || encoding == "gz") {
-    read_compressed_payload(in, path, s, n, sink, "gzip");
-  } else {
-    fail(path, "unsupported encoding '" + encoding + "' (supported: raw, ascii, gzip)");
-  }
+// Calls f(T{}, swapped) with the value type of the header and whether its bytes need reversing.
+template <class F>
+void visit_stream_type(const VolumeHeader& header, F&& f) {
+  const bool swap = header.big_endian != (std::endian::native == std::endian::big) && value_bytes(header.type) > 1;
+  io_detail::visit_value_type(header.type, [&](auto t) {
+    if (swap)
+      f(t, std::true_type{});
+    else
+      f(t, std::false_type{});
+  });
 }
 
-// The values as bytes (read_volume).
-class VolumeSink final : public VoxelSink {
+// The values as uint8 bytes (read_volume's Volume): other types are converted when every value is
+// an integer in 0..255, and refused naming the first that is not.
+class VolumeSink final : public WholeValueSink {
  public:
-  void check(const std::string& path, const Eigen::Vector3i& size) const override {
-    io_detail::check_budget("volume file '" + path + "'", double(checked_voxels(path, size)), describe(size));
-  }
-  void begin(const std::string& path, const Eigen::Vector3i& size) override {
-    const std::size_t n = checked_voxels(path, size);
-    volume.size = size;
-    volume.values.reserve(n);
-  }
-  void consume(const std::uint8_t* values, std::size_t n) override {
-    volume.values.insert(volume.values.end(), values, values + n);
+  void check(const std::string& path, const VolumeHeader& header) const override {
+    io_detail::check_budget("volume file '" + path + "'", double(checked_voxels(path, header.size)),
+                            describe_sizes(header.size));
   }
   Volume volume;
+
+ private:
+  void start(const VolumeHeader& header) override {
+    volume.size = header.size;
+    // Another stream order puts each value at its place; i fastest appends.
+    if (in_index_order())
+      volume.values.reserve(checked_voxels(path(), header.size));
+    else
+      volume.values.assign(checked_voxels(path(), header.size), 0);
+  }
+  void put(std::size_t i, std::uint8_t v) {
+    if (in_index_order())
+      volume.values.push_back(v);
+    else
+      volume.values[linear_index(voxel_of(first() + i))] = v;
+  }
+  void values(const std::uint8_t* bytes, std::size_t count) override {
+    if (header().type == VoxelValueType::UInt8 && in_index_order()) {
+      volume.values.insert(volume.values.end(), bytes, bytes + count);
+      return;
+    }
+    visit_stream_type(header(), [&](auto t, auto swapped) {
+      using T = decltype(t);
+      const std::size_t size = value_bytes(header().type);
+      for (std::size_t i = 0; i < count; ++i) {
+        const T v = io_detail::read_value<T, decltype(swapped)::value>(bytes + i * size);
+        if (!(double(v) >= 0.0 && double(v) <= 255.0 && double(v) == std::floor(double(v))))
+          fail(path(),
+               value_type_name(header().type) + " value " +
+                   (std::is_integral_v<T> ? std::to_string(v) : io_detail::readable_number(double(v))) +
+                   " does not fit a uint8 volume; read the file thresholded (read_volume_as_voxels) or in its own "
+                   "type (read_volume_data)",
+               "threshold");
+        put(i, std::uint8_t(v));
+      }
+    });
+  }
 };
 
-// The values thresholded into a voxel grid as they arrive, one (y, z) row of 64-bit words at a
-// time (read_volume_as_voxels, threshold_volume): the bytes are never held. The box is
-// [0, size - 1] - shift padded by one empty voxel on every side; h (0: unit_size_grid_step) and the
-// shift (volume_centering_shift when centred) follow from the sizes, known at begin().
-class ThresholdSink final : public VoxelSink {
+// The values in their own type, in native byte order (read_volume_data).
+class VolumeDataSink final : public WholeValueSink {
  public:
-  ThresholdSink(double threshold, double h, bool centered) : h_(h), centered_(centered) {
-    for (int v = 0; v < 256; ++v) inside_[std::size_t(v)] = double(v) > threshold;
+  void check(const std::string& path, const VolumeHeader& header) const override {
+    io_detail::check_budget("volume file '" + path + "'",
+                            double(checked_voxels(path, header.size)) * double(value_bytes(header.type)),
+                            describe_sizes(header.size) + " of " + value_type_name(header.type));
   }
-  void check(const std::string& path, const Eigen::Vector3i& size) const override {
+  VolumeData data;
+
+ private:
+  void start(const VolumeHeader& header) override {
+    data.size = header.size;
+    data.type = header.type;
+    data.geometry = header.geometry;
+    // Another stream order puts each value at its place; i fastest appends.
+    const std::size_t n = checked_voxels(path(), header.size) * value_bytes(header.type);
+    if (in_index_order())
+      data.bytes.reserve(n);
+    else
+      data.bytes.assign(n, 0);
+  }
+  void values(const std::uint8_t* bytes, std::size_t count) override {
+    const std::size_t size = value_bytes(header().type);
+    const bool swap = size > 1 && header().big_endian != (std::endian::native == std::endian::big);
+    for (std::size_t i = 0; i < count; ++i) {
+      std::size_t at = data.bytes.size();
+      if (in_index_order()) {
+        data.bytes.insert(data.bytes.end(), bytes + i * size, bytes + (i + 1) * size);
+      } else {
+        at = linear_index(voxel_of(first() + i)) * size;
+        std::copy(bytes + i * size, bytes + (i + 1) * size, data.bytes.begin() + std::ptrdiff_t(at));
+      }
+      if (swap) std::reverse(data.bytes.begin() + std::ptrdiff_t(at), data.bytes.begin() + std::ptrdiff_t(at + size));
+    }
+  }
+};
+
+// The values made inside or outside by the rule into a voxel grid as they arrive, one (y, z) row of
+// 64-bit words at a time (read_volume_as_voxels, threshold_volume): the values are never held. The
+// box is [0, size - 1] - shift padded by one empty voxel on every side; h (0: unit_size_grid_step)
+// and the shift (volume_centering_shift when centred) follow from the sizes, known at begin().
+class ThresholdSink final : public WholeValueSink {
+ public:
+  ThresholdSink(const InsideRule& rule, double h, bool centered) : rule_(rule), h_(h), centered_(centered) {}
+  void check(const std::string& path, const VolumeHeader& header) const override {
     // The grid's rows of 64-bit words over the padded box (core/voxel_grid.hpp).
+    const Eigen::Vector3i size = header.size;
     const double words = std::ceil(double(size.x() + 2) / 64.0) * double(size.y() + 2) * double(size.z() + 2);
-    io_detail::check_budget("volume file '" + path + "'", 8.0 * words, describe(size) + " as a bit grid");
+    io_detail::check_budget("volume file '" + path + "'", 8.0 * words, describe_sizes(size) + " as a bit grid");
   }
-  void begin(const std::string&, const Eigen::Vector3i& size) override {
-    size_ = size;
-    shift_ = centered_ ? volume_centering_shift(size) : Eigen::Vector3i::Zero();
-    const double h = h_ == 0.0 ? unit_size_grid_step(size) : h_;
-    grid = VoxelGrid(Eigen::Vector3i::Constant(-1) - shift_, size - shift_, h);  // checks the budget
+  VoxelGrid grid;
+  VolumeGeometry geometry;
+  std::uint64_t inside = 0;
+
+ private:
+  void start(const VolumeHeader& header) override {
+    size_ = header.size;
+    geometry = header.geometry;
+    shift_ = centered_ ? volume_centering_shift(size_) : Eigen::Vector3i::Zero();
+    const double h = h_ == 0.0 ? unit_size_grid_step(size_) : h_;
+    grid = VoxelGrid(Eigen::Vector3i::Constant(-1) - shift_, size_ - shift_, h);  // checks the budget
+    if (header.type == VoxelValueType::UInt8) {
+      const io_detail::InsideTest<std::uint8_t> test(rule_);
+      for (int v = 0; v < 256; ++v) byte_inside_[std::size_t(v)] = !test.none && test.inside(std::uint8_t(v));
+    }
   }
-  void consume(const std::uint8_t* values, std::size_t n) override {
-    while (n > 0) {
+  void values(const std::uint8_t* bytes, std::size_t count) override {
+    if (header().type == VoxelValueType::UInt8)
+      return set_bits(count, [&](std::size_t i, int) { return byte_inside_[bytes[i]]; });
+    visit_stream_type(header(), [&](auto t, auto swapped) {
+      using T = decltype(t);
+      const io_detail::InsideTest<T> test(rule_);
+      const std::size_t size = value_bytes(header().type);
+      set_bits(count, [&](std::size_t i, int x) {
+        const T v = io_detail::read_value<T, decltype(swapped)::value>(bytes + i * size);
+        if (io_detail::InsideTest<T>::is_nan(v))
+          fail(path(), "value at voxel [" + std::to_string(x) + ", " + std::to_string(y_) + ", " + std::to_string(z_) +
+                           "] is NaN");
+        return !test.none && test.inside(v);
+      });
+    });
+  }
+  // is_inside(i, x) for the next `count` voxels, i = 0 .. count - 1; x: its index along the row.
+  template <class Inside>
+  void set_bits(std::size_t count, Inside&& is_inside) {
+    if (!in_index_order()) {
+      for (std::size_t i = 0; i < count; ++i) {
+        const Eigen::Vector3i v = voxel_of(first() + i);
+        x_ = v.x(), y_ = v.y(), z_ = v.z();  // for messages
+        if (!is_inside(i, v.x())) continue;
+        const int b = v.x() + 1;
+        grid.row(v.y() - shift_.y(), v.z() - shift_.z())[b >> 6] |= std::uint64_t{1} << (b & 63);
+        ++inside;
+      }
+      return;
+    }
+    std::size_t i = 0;
+    while (i < count) {
       // Voxel x_ of row (y_, z_) is bit x_ + 1 of the grid row (the box starts one voxel before).
-      const std::size_t k = std::min(n, std::size_t(size_.x() - x_));
+      const std::size_t k = std::min(count - i, std::size_t(size_.x() - x_));
       std::uint64_t* words = grid.row(y_ - shift_.y(), z_ - shift_.z());
-      for (std::size_t i = 0; i < k; ++i) {
-        const std::uint64_t bit = inside_[values[i]];
-        const std::size_t b = std::size_t(x_) + i + 1;
+      for (std::size_t j = 0; j < k; ++j) {
+        const std::uint64_t bit = is_inside(i + j, x_ + int(j)) ? 1 : 0;
+        const std::size_t b = std::size_t(x_) + j + 1;
         words[b >> 6] |= bit << (b & 63);
         inside += bit;
       }
-      values += k;
-      n -= k;
+      i += k;
       x_ += int(k);
       if (x_ == size_.x()) {
         x_ = 0;
@@ -534,61 +426,60 @@ class ThresholdSink final : public VoxelSink {
       }
     }
   }
-  VoxelGrid grid;
-  std::uint64_t inside = 0;
-
- private:
+  InsideRule rule_;
   double h_;
   bool centered_;
   Eigen::Vector3i shift_ = Eigen::Vector3i::Zero(), size_ = Eigen::Vector3i::Zero();
   int x_ = 0, y_ = 0, z_ = 0;
-  std::array<bool, 256> inside_{};
+  std::array<bool, 256> byte_inside_{};
 };
 
-// `word_to_byte`: what a .longvol voxel becomes for the sink.
-void read_into(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink,
-               const WordSink::ToByte& word_to_byte) {
-  const std::string ext = file_extension(path);
-  if (ext == "vol") return read_vol(path, sink);
-  if (ext == "longvol") {
-    WordSink words(sink, word_to_byte);
-    return read_vol(path, words, 8);
-  }
-  if (ext == "raw") return read_raw(path, options, sink);
-  if (ext == "nrrd") return read_nrrd(path, sink);
-  fail(path, "unsupported extension '" + ext + "' (supported: .vol, .longvol, .raw, .nrrd)");
+// The format of a file by its extension (".nii.gz" counts as one), or a folder of TIFF slices.
+std::string volume_format(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return "tiff";
+  std::string ext = file_extension(path);
+  if (ext == "gz" && file_extension(path.substr(0, path.size() - 3)) == "nii") return "nii";
+  if (ext == "tif") return "tiff";
+  if (ext == "mhd") return "mha";
+  if (ext == "nhdr") return "nrrd";
+  return ext;
 }
 
-void write_nrrd(const std::string& path, const Volume& v) {
-  io_detail::OutputFile out(path, "volume", true);
-  std::fprintf(
-      out.get(),
-      "NRRD0004\n# written by corrlap\ntype: uint8\ndimension: 3\nsizes: %d %d %d\nencoding: raw\nendian: little\n\n",
-      v.size.x(), v.size.y(), v.size.z());
-  write_values(out, v);
+constexpr const char* kReadable =
+    "supported: .vol, .longvol, .raw, .nrrd/.nhdr, .nii/.nii.gz, .mha/.mhd, .binvox, .vox, .npy, .tif/.tiff or a "
+    "folder "
+    "of .tif slices";
+
+void read_into(const std::string& path, const VolumeReadOptions& options, VoxelSink& sink) {
+  const std::string format = volume_format(path);
+  if (format == "vol") return read_vol(path, sink, false);
+  if (format == "longvol") return read_vol(path, sink, true);
+  if (format == "raw") return read_raw(path, options, sink);
+  if (format == "nrrd") return io_detail::read_nrrd(path, sink);
+  if (format == "nii") return io_detail::read_nifti(path, sink);
+  if (format == "mha") return io_detail::read_metaimage(path, sink);
+  if (format == "binvox") return io_detail::read_binvox(path, sink);
+  if (format == "vox") return io_detail::read_magicavoxel(path, sink);
+  if (format == "npy") return io_detail::read_npy(path, sink);
+  if (format == "tiff") return io_detail::read_tiff(path, sink);
+  fail(path, "unsupported extension '" + file_extension(path) + "' (" + kReadable + ")");
 }
 
 }  // namespace
 
-bool nrrd_gzip_supported() {
-#ifdef CORRLAP_HAVE_ZLIB
-  return true;
-#else
-  return false;
-#endif
-}
+bool nrrd_gzip_supported() { return io_detail::have_zlib(); }
 
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   VolumeSink sink;
-  read_into(path, options, sink, [&path](std::uint64_t word) {
-    if (word > 255)
-      fail(path,
-           "longvol value " + std::to_string(word) +
-               " does not fit the uint8 volume; read it thresholded (read_volume_as_voxels with a threshold)",
-           "threshold");
-    return std::uint8_t(word);
-  });
+  read_into(path, options, sink);
   return std::move(sink.volume);
+}
+
+VolumeData read_volume_data(const std::string& path, const VolumeReadOptions& options) {
+  VolumeDataSink sink;
+  read_into(path, options, sink);
+  return std::move(sink.data);
 }
 
 void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options) {
@@ -596,13 +487,16 @@ void write_volume(const std::string& path, const Volume& volume, const VolumeWri
   const auto n = voxel_count(volume.size);
   if (!n || volume.values.size() != *n)
     fail(path, "volume data (" + io_detail::readable_count(volume.values.size()) + " values) does not match its " +
-                   describe(volume.size));
+                   describe_sizes(volume.size));
   if (options.compressed && ext != "vol" && ext != "longvol")
     fail(path, "compressed writing is for .vol and .longvol files (Version 3); ." + ext + " is written uncompressed");
   if (ext == "vol" || ext == "longvol") return write_vol(path, volume, options.compressed, ext == "longvol");
   if (ext == "raw") return write_raw(path, volume);
-  if (ext == "nrrd") return write_nrrd(path, volume);
-  fail(path, "unsupported extension '" + ext + "' for writing (supported: .vol, .longvol, .raw, .nrrd)");
+  if (ext == "vol" || ext == "longvol" || ext == "raw") fail(path, "unreachable");
+  VolumeData data;
+  data.size = volume.size;
+  data.bytes = volume.values;
+  write_volume_data(path, data);
 }
 
 VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
@@ -611,10 +505,12 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
   const auto n = voxel_count(s);
   if (!n || volume.values.size() != *n)
     throw InputError("volume: " + io_detail::readable_count(volume.values.size()) + " values do not match its " +
-                     describe(s));
+                     describe_sizes(s));
   if (!(h > 0.0)) throw InputError("volume: h must be positive");
-  ThresholdSink sink(threshold, h, false);  // the same thresholding as the streamed read
-  sink.begin("", s);
+  ThresholdSink sink(InsideRule::above(threshold), h, false);  // the same thresholding as the streamed read
+  VolumeHeader header;
+  header.size = s;
+  sink.begin("", header);
   sink.consume(volume.values.data(), volume.values.size());
   if (sink.inside == 0)
     throw InputError("volume: no voxel above the threshold " + io_detail::readable_number(threshold) +
@@ -626,18 +522,32 @@ double unit_size_grid_step(const Eigen::Vector3i& size) { return size.maxCoeff()
 
 Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size) { return (size - Eigen::Vector3i::Ones()) / 2; }
 
-VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options) {
+VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options, VolumeGeometry* geometry) {
   if (options.h < 0.0 || !std::isfinite(options.h))
     throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
-  // A .longvol word is compared with the threshold itself (labels may exceed 255): 1 inside, 0 out.
-  const bool words = file_extension(path) == "longvol";
-  ThresholdSink sink(words ? 0.5 : options.threshold, options.h, options.centered);
-  read_into(path, options, sink,
-            [&options](std::uint64_t word) { return std::uint8_t(double(word) > options.threshold); });
+  ThresholdSink sink(options.inside, options.h, options.centered);
+  read_into(path, options, sink);
   if (sink.inside == 0)
-    throw InputError("volume '" + path + "': no voxel above the threshold " +
-                     io_detail::readable_number(options.threshold) + " (empty volume)");
+    throw InputError("volume '" + path + "': no voxel " + options.inside.describe() + " (empty volume)");
+  if (geometry) *geometry = sink.geometry;
   return std::move(sink.grid);
+}
+
+void write_volume_data(const std::string& path, const VolumeData& volume) {
+  const auto n = voxel_count(volume.size);
+  if (!n || volume.bytes.size() != *n * value_bytes(volume.type))
+    fail(path, "volume data (" + io_detail::readable_count(volume.bytes.size()) + " bytes) does not match its " +
+                   describe_sizes(volume.size) + " of " + value_type_name(volume.type));
+  const std::string format = volume_format(path);
+  if (format == "nrrd") return io_detail::write_nrrd(path, volume);
+  if (format == "nii") return io_detail::write_nifti(path, volume);
+  if (format == "mha") return io_detail::write_metaimage(path, volume);
+  if (format == "binvox") return io_detail::write_binvox(path, volume);
+  if (format == "npy") return io_detail::write_npy(path, volume);
+  if (format == "tiff") return io_detail::write_tiff(path, volume);
+  fail(path, "unsupported extension '" + file_extension(path) +
+                 "' for writing typed volumes (supported: .nrrd, .nii/.nii.gz, .mha/.mhd, .binvox, .npy, .tif/.tiff; "
+                 "uint8 volumes also .vol, .longvol, .raw)");
 }
 
 Volume voxels_to_volume(const VoxelGrid& grid) {

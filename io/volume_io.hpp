@@ -1,10 +1,11 @@
 #pragma once
-// Grey-level volumes (uint8 voxels) and their conversion to voxel sets by a threshold.
-// Formats: DGtal .vol and .longvol (64-bit voxels) (read/write; Version 2 raw and Version 3 zlib), raw uint8 with given
-// dimensions (.raw), NRRD
-// (.nrrd: 3D uint8 with an attached header, encodings raw, ascii and gzip (with zlib); see docs/io.md).
+// Volumes and their conversion to voxel sets by an inside rule (io/voxel_values.hpp).
+// Formats: DGtal .vol and .longvol (64-bit voxels) (read/write; Version 2 raw and Version 3 zlib),
+// raw uint8 with given dimensions (.raw), NRRD (.nrrd: attached header, encodings raw, ascii and
+// gzip (with zlib)); see docs/io.md. Every reader streams (io/detail/volume_stream.hpp).
 #include <Eigen/Core>
 #include <corrlap/core/voxel_grid.hpp>
+#include <corrlap/io/voxel_values.hpp>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -21,8 +22,18 @@ struct Volume {
   }
 };
 
+/// A volume as its file holds it: the values in their own type (native byte order), i fastest,
+/// and the file's voxel-to-physical map.
+struct VolumeData {
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+  VoxelValueType type = VoxelValueType::UInt8;
+  std::vector<std::uint8_t> bytes;  ///< size.prod() * value_bytes(type)
+  VolumeGeometry geometry;
+};
+
 struct VolumeReadOptions {
-  double threshold = 0.0;  ///< inside iff value > threshold
+  /// read_volume_as_voxels: which values are inside (default: every nonzero value).
+  InsideRule inside;
   /// Grid step given to the voxel grid; 0: unit_size_grid_step (the longest side spans 2).
   double h = 1.0;
   std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
@@ -33,8 +44,10 @@ struct VolumeReadOptions {
 };
 
 /// Reads by extension. Throws IoError naming the file and the problem (missing header field,
-/// truncated data, absurd dimensions, a .longvol value above 255...).
+/// truncated data, absurd dimensions, a value that is not an integer in 0..255...).
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
+/// Reads by extension, the values in their own type, with the file's geometry. Throws as read_volume.
+VolumeData read_volume_data(const std::string& path, const VolumeReadOptions& options = {});
 struct VolumeWriteOptions {
   /// .vol and .longvol only: Version 3, the voxels as one zlib stream (DGtal's VolWriter with compression);
   /// needs zlib. Otherwise Version 2, raw bytes.
@@ -43,6 +56,10 @@ struct VolumeWriteOptions {
 
 /// Writes by extension (.vol, .longvol, .raw, .nrrd). NRRD is written as uint8, raw encoding.
 void write_volume(const std::string& path, const Volume& volume, const VolumeWriteOptions& options = {});
+/// Writes by extension, the values in their own type, with the geometry where the format has one
+/// (.nrrd, .nii/.nii.gz, .mha/.mhd, .npy, .tif/.tiff; .binvox for 0/1 values). IoError naming the
+/// file otherwise.
+void write_volume_data(const std::string& path, const VolumeData& volume);
 /// True when corrlap was built with zlib: NRRD files with "encoding: gzip" and .vol Version 3 files
 /// can be read (and .vol Version 3 written).
 bool nrrd_gzip_supported();
@@ -55,12 +72,15 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h);
 double unit_size_grid_step(const Eigen::Vector3i& size);
 /// (size - 1) / 2 per axis (integer division): the digital point of the volume's middle voxel.
 Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size);
-/// The same voxels as threshold_volume(read_volume(path), threshold, h) (options.h = 0:
-/// unit_size_grid_step of the volume), shifted by volume_centering_shift when options.centered,
-/// but streamed: the values are thresholded into the grid as they are read or inflated, so memory
-/// is the bit grid (1 bit per voxel) plus the compressed bytes of a .vol Version 3 / gzip NRRD file,
-/// never the 1 byte per voxel of the volume. Throws as read_volume, and InputError when no voxel is inside.
-VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options);
+/// The voxels whose values are inside by options.inside (for a uint8 volume and the rule
+/// InsideRule::above(t): the same voxels as threshold_volume(read_volume(path), t, h)), with
+/// options.h (0: unit_size_grid_step of the volume), shifted by volume_centering_shift when
+/// options.centered; streamed: the values are decided into the grid as they are read or inflated,
+/// so memory is the bit grid (1 bit per voxel) plus the compressed bytes of a compressed file,
+/// never the volume's values. `geometry`, when given, receives the file's voxel-to-physical map.
+/// Throws as read_volume (and IoError for a NaN value), and InputError when no voxel is inside.
+VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options,
+                                VolumeGeometry* geometry = nullptr);
 /// 255 inside, 0 outside, over the grid's box.
 Volume voxels_to_volume(const VoxelGrid& grid);
 

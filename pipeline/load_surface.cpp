@@ -4,6 +4,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/io/detail/inside_test.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
@@ -30,50 +31,8 @@ bool is_named_shape(const std::string& name) {
   return false;
 }
 
-// Inside iff value > threshold, decided in the array's own type, so that no value is converted to
-// a type that cannot hold it: an integer is inside iff it is >= the smallest integer above the
-// threshold (exact for 64-bit values, which a double cannot all represent); float32 and float64
-// compare as doubles (exact); bool is 0 or 1.
-template <class T>
-struct InsideTest {
-  T lowest_inside{};
-  bool none = false;  // no value of T is above the threshold
-  double threshold = 0.0;
-
-  explicit InsideTest(double t) : threshold(t) {
-    if constexpr (std::is_integral_v<T>) {
-      const double f = std::floor(t);
-      if (f < double(std::numeric_limits<T>::lowest()))
-        lowest_inside = std::numeric_limits<T>::lowest();
-      else if (f >= double(std::numeric_limits<T>::max()))
-        none = true;
-      else
-        lowest_inside = T(T(f) + 1);  // f is in range here, so the conversion is exact
-    }
-  }
-  bool inside(T v) const {
-    if constexpr (std::is_integral_v<T>)
-      return v >= lowest_inside;
-    else
-      return double(v) > threshold;
-  }
-  static bool is_nan(T v) {
-    if constexpr (std::is_floating_point_v<T>)
-      return std::isnan(v);
-    else
-      return false;
-  }
-};
-
-template <class T, bool Swapped>
-T read_value(const char* p) {
-  unsigned char bytes[sizeof(T)];
-  std::memcpy(bytes, p, sizeof(T));
-  if constexpr (Swapped) std::reverse(bytes, bytes + sizeof(T));
-  T v;
-  std::memcpy(&v, bytes, sizeof(T));
-  return v;
-}
+using io_detail::InsideTest;
+using io_detail::read_value;
 
 // Calls inside(index) for every inside voxel of the box [0, n) of the array, walking the memory in
 // its own order (the axis of smallest stride innermost); returns the index of the first NaN met
@@ -97,11 +56,7 @@ std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eige
     for (i[a1] = 0; i[a1] < n[a1]; ++i[a1]) {
       const char* row = base + std::ptrdiff_t(i[a0]) * s0 + std::ptrdiff_t(i[a1]) * s1;
       for (i[a2] = 0; i[a2] < n[a2]; ++i[a2]) {
-        T v;
-        if constexpr (std::is_same_v<T, bool>)
-          v = *reinterpret_cast<const unsigned char*>(row + std::ptrdiff_t(i[a2]) * s2) != 0;
-        else
-          v = read_value<T, Swapped>(row + std::ptrdiff_t(i[a2]) * s2);
+        const T v = read_value<T, Swapped>(row + std::ptrdiff_t(i[a2]) * s2);
         if (InsideTest<T>::is_nan(v)) return i;
         if (test.inside(v)) inside(i);
       }
@@ -125,7 +80,7 @@ std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eige
 // The box of read_volume_as_voxels(centered): one voxel of padding, the volume's centre at the origin.
 template <class T, bool Swapped>
 VoxelGrid threshold_typed(const VolumeArrayInput& in) {
-  const InsideTest<T> test(in.threshold);
+  const InsideTest<T> test(InsideRule::above(in.threshold));
   if (test.none) empty_volume(in.threshold);
   const Eigen::Vector3i size = in.size;
   // A broadcast axis (stride 0) repeats its values: the distinct values are checked first, so that
@@ -172,31 +127,7 @@ VoxelGrid threshold_array(const VolumeArrayInput& in) {
     throw InputError(os.str(), "threshold");
   }
   if (in.h) check_grid_step(*in.h, "volume");
-  switch (in.type) {
-    case VoxelValueType::Bool:
-      return threshold_as<bool>(in);
-    case VoxelValueType::Int8:
-      return threshold_as<std::int8_t>(in);
-    case VoxelValueType::Int16:
-      return threshold_as<std::int16_t>(in);
-    case VoxelValueType::Int32:
-      return threshold_as<std::int32_t>(in);
-    case VoxelValueType::Int64:
-      return threshold_as<std::int64_t>(in);
-    case VoxelValueType::UInt8:
-      return threshold_as<std::uint8_t>(in);
-    case VoxelValueType::UInt16:
-      return threshold_as<std::uint16_t>(in);
-    case VoxelValueType::UInt32:
-      return threshold_as<std::uint32_t>(in);
-    case VoxelValueType::UInt64:
-      return threshold_as<std::uint64_t>(in);
-    case VoxelValueType::Float32:
-      return threshold_as<float>(in);
-    case VoxelValueType::Float64:
-      return threshold_as<double>(in);
-  }
-  throw std::logic_error("threshold_array: unknown VoxelValueType");
+  return io_detail::visit_value_type(in.type, [&](auto t) { return threshold_as<decltype(t)>(in); });
 }
 
 VoxelGrid voxelize_file(const MeshFileInput& in, const LoadMessages& messages) {
@@ -284,7 +215,7 @@ VoxelGrid load_voxels(const SurfaceInput& input, const LoadMessages& messages) {
                         },
                         [&](const VolumeFileInput& v) {
                           VolumeReadOptions opt;
-                          opt.threshold = v.threshold;
+                          opt.inside = InsideRule::above(v.threshold);
                           // World units by default (docs/io.md): the longest side spans 2, h = 2 / N.
                           if (v.h) check_grid_step(*v.h, "volume file '" + v.path + "'");
                           opt.h = v.h.value_or(0.0);

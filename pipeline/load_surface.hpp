@@ -8,6 +8,7 @@
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/io/voxel_values.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
 #include <cstddef>
 #include <functional>
@@ -33,9 +34,6 @@ struct VolumeFileInput {
   std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
   std::optional<double> h;                        ///< default: 2 / the longest side in voxels
 };
-
-/// The element type of a volume in memory (numpy's bool, int8 ... uint64, float32, float64).
-enum class VoxelValueType { Bool, Int8, Int16, Int32, Int64, UInt8, UInt16, UInt32, UInt64, Float32, Float64 };
 
 /// A volume in memory, read where it is, in its own element type and layout (no copy): value
 /// (x, y, z) at the bytes data + x * strides[0] + y * strides[1] + z * strides[2]. Any strides

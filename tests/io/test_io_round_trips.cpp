@@ -224,7 +224,7 @@ TEST_CASE(".longvol: 64-bit little-endian voxels (DGtal's LongvolWriter layout),
   o.h = 1.0;
   for (const double threshold : {100.0, 1000.0, 1e12}) {
     CAPTURE(threshold);
-    o.threshold = threshold;
+    o.inside = InsideRule::above(threshold);
     const VoxelGrid g = read_volume_as_voxels(p, o);
     int differ = 0;
     for (int i = 0; i < 12; ++i)
@@ -232,7 +232,7 @@ TEST_CASE(".longvol: 64-bit little-endian voxels (DGtal's LongvolWriter layout),
     CHECK(differ == 0);
   }
   // As uint8 bytes, values above 255 are named, not wrapped.
-  CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("longvol value 1099511627776"), IoError);
+  CHECK_THROWS_WITH_AS(read_volume(p), doctest::Contains("uint64 value 1099511627776"), IoError);
   // A word short: truncated, named.
   write_text(p, header + payload.substr(0, payload.size() - 3));
   CHECK_THROWS_WITH_AS(read_volume_as_voxels(p, o), doctest::Contains("truncated data"), IoError);
@@ -445,7 +445,7 @@ TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 
   const std::string vol = corrlap::test::reference_dir() + "/volumes/pattern_6x5x4_v3.vol";
   if (!nrrd_gzip_supported()) return;
   VolumeReadOptions o;
-  o.threshold = 100;
+  o.inside = InsideRule::above(100);
   o.h = 0.0;
   const SurfelMesh unit = extract_surface(read_volume_as_voxels(vol, o));
   o.h = 1.0;
@@ -478,9 +478,9 @@ TEST_CASE("read_volume_as_voxels streams every format into the same voxels as th
       write_volume(p, v, w);
       VolumeReadOptions o;
       o.raw_dimensions = v.size;
-      o.threshold = 127.5;
+      o.inside = InsideRule::above(127.5);
       o.h = 0.5;
-      const VoxelGrid expected = threshold_volume(read_volume(p, o), o.threshold, o.h);
+      const VoxelGrid expected = threshold_volume(read_volume(p, o), o.inside.value, o.h);
       const VoxelGrid streamed = read_volume_as_voxels(p, o);
       REQUIRE(streamed.lower() == expected.lower());
       REQUIRE(streamed.upper() == expected.upper());
@@ -492,7 +492,7 @@ TEST_CASE("read_volume_as_voxels streams every format into the same voxels as th
           for (int x = -1; x <= v.size.x(); ++x) {
             // The readable rule: inside iff the file's value is strictly above the threshold.
             const bool in_file = x >= 0 && y >= 0 && z >= 0 && x < v.size.x() && y < v.size.y() && z < v.size.z();
-            const bool inside = in_file && double(v.at(x, y, z)) > o.threshold;
+            const bool inside = in_file && double(v.at(x, y, z)) > o.inside.value;
             differ += streamed.get(x, y, z) != expected.get(x, y, z);
             differ += streamed.get(x, y, z) != inside;
           }
@@ -515,13 +515,13 @@ TEST_CASE("read_volume_as_voxels streams every format into the same voxels as th
   const std::string ascii = tmp_path("stream_ascii.nrrd");
   write_text(ascii, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 1 2\nencoding: ascii\n\n0 200\n255 3\n");
   VolumeReadOptions o;
-  o.threshold = 100;
+  o.inside = InsideRule::above(100);
   const VoxelGrid g = read_volume_as_voxels(ascii, o);
   CHECK(g.count() == 2);
   CHECK(g.get(1, 0, 0));
   CHECK(g.get(0, 0, 1));
   CHECK(g.h() == 1.0);
   // Nothing above the threshold: named.
-  o.threshold = 255;
+  o.inside = InsideRule::above(255);
   CHECK_THROWS_WITH_AS(read_volume_as_voxels(ascii, o), doctest::Contains("empty volume"), InputError);
 }

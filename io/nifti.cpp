@@ -1,0 +1,9 @@
+// NIfTI volumes (io/detail/volume_readers.hpp). Not written yet: every call is a named error.
+#include <corrlap/io/detail/volume_readers.hpp>
+
+namespace corrlap::io_detail {
+
+void read_nifti(const std::string& path, VoxelSink&) { fail(path, "NIfTI files cannot be read yet"); }
+void write_nifti(const std::string& path, const VolumeData&) { fail(path, "NIfTI files cannot be written yet"); }
+
+}  // namespace corrlap::io_detail

@@ -1,0 +1,9 @@
+// TIFF volumes (io/detail/volume_readers.hpp). Not written yet: every call is a named error.
+#include <corrlap/io/detail/volume_readers.hpp>
+
+namespace corrlap::io_detail {
+
+void read_tiff(const std::string& path, VoxelSink&) { fail(path, "TIFF files cannot be read yet"); }
+void write_tiff(const std::string& path, const VolumeData&) { fail(path, "TIFF files cannot be written yet"); }
+
+}  // namespace corrlap::io_detail
