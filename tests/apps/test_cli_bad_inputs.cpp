@@ -46,7 +46,7 @@ std::string make_inputs(const std::string& folder) {
   write_text(dir + "/trunc.vol", "X: 2\n");
   write_text(dir + "/trunc.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n0\n");
   write_text(dir + "/trunc.off", "OFF\n3 1 0\n0 0 0\n");
-  write_text(dir + "/float.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n");
+  write_text(dir + "/float.nrrd", "NRRD0004\ntype: block\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n");
   write_text(dir + "/short.raw", std::string(7, '\0'));
   write_text(dir + "/model.stl", "solid x\n");
   write_text(dir + "/three_values.txt", "1\n2\n3\n");
@@ -96,7 +96,7 @@ const std::vector<BadCall>& catalogue() {
       {"digitize --volume {D}/trunc.vol --threshold 0 --out {D}/x.obj", "trunc.vol'"},
       {"digitize --volume {D}/short.raw --threshold 0 --out {D}/x.obj", "need their dimensions (raw_dimensions"},
       {"digitize --volume {D}/short.raw --raw-dimensions 2 2 2 --threshold 0 --out {D}/x.obj", "short.raw'"},
-      {"digitize --volume {D}/float.nrrd --threshold 0 --out {D}/x.obj", "unsupported type 'float'"},
+      {"digitize --volume {D}/float.nrrd --threshold 0 --out {D}/x.obj", "unsupported type 'block'"},
       {"digitize --volume {D}/model.stl --threshold 0 --out {D}/x.obj", "unsupported extension 'stl'"},
       {"digitize --volume {D}/no_end.vol --threshold 0 --out {D}/x.obj", "no_end.vol'"},
       {"digitize --volume {D}/big.vol --threshold 0 --out {D}/x.obj", "the file holds"},
