@@ -3,10 +3,10 @@
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config python3
           libeigen3-dev libsuitesparse-dev libopenblas-dev libspectra-dev libtbb-dev
-          doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev zlib1g-dev libpng-dev clang-format
+          doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev zlib1g-dev libpng-dev libtiff-dev clang-format
           clang-14 libclang-rt-14-dev python3-numpy python3-matplotlib python3-pytest
           python3-dev python3-scipy pybind11-dev
-          python3-nibabel python3-vtk9)
+          python3-nibabel python3-tifffile python3-vtk9)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
