@@ -130,5 +130,4 @@ void write_nrrd(const std::string& path, const VolumeData& v) {
   out.commit();
 }
 
-
 }  // namespace corrlap::io_detail

@@ -65,7 +65,8 @@ void inflate_payload(const std::string& path, const std::string& compressed, std
     s.zs.avail_out = uInt(room);
     rc = inflate(&s.zs, Z_NO_FLUSH);
     const std::size_t got = room - s.zs.avail_out;
-    if (produced + got > n) fail(path, format + " data holds more bytes than the sizes announce (" + readable_count(n) + ")");
+    if (produced + got > n)
+      fail(path, format + " data holds more bytes than the sizes announce (" + readable_count(n) + ")");
     if (got > 0) sink.consume(buffer.data(), got);
     produced += got;
     if (rc == Z_BUF_ERROR && s.zs.avail_in == 0 && fed == compressed.size()) break;  // input exhausted
@@ -73,7 +74,8 @@ void inflate_payload(const std::string& path, const std::string& compressed, std
       fail(path, "corrupt " + format + " data" + (s.zs.msg ? std::string(": ") + s.zs.msg : std::string()));
   }
   if (produced != n)
-    fail(path, "truncated " + format + " data: expected " + readable_count(n) + " bytes, got " + readable_count(produced));
+    fail(path,
+         "truncated " + format + " data: expected " + readable_count(n) + " bytes, got " + readable_count(produced));
 }
 #endif
 
