@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/detail/inside_test.hpp>
 #include <corrlap/io/mesh_io.hpp>
@@ -12,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <type_traits>
 
@@ -64,11 +66,13 @@ std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eige
   return std::nullopt;
 }
 
-[[noreturn]] void empty_volume(double threshold) {
-  std::ostringstream os;
-  os << "volume: no voxel above the threshold " << threshold
-     << " (empty volume); lower the threshold or check the array";
-  throw InputError(os.str(), "threshold");
+[[noreturn]] void empty_volume(const InsideRule& rule) {
+  const bool label = rule.kind == InsideRule::Kind::Label;
+  throw InputError("volume: no voxel " + rule.describe() + " (empty volume); " +
+                       (label                                  ? "check the label"
+                        : rule.kind == InsideRule::Kind::Above ? "lower the threshold"
+                                                               : "check the array"),
+                   label ? "label" : "threshold");
 }
 
 [[noreturn]] void nan_value(const Eigen::Vector3i& at) {
@@ -77,11 +81,29 @@ std::optional<Eigen::Vector3i> scan_array(const VolumeArrayInput& in, const Eige
                    "volume");
 }
 
+void check_inside_rule(const InsideRule& rule, const std::string& what) {
+  if (std::isfinite(rule.value)) return;
+  std::ostringstream os;
+  const bool label = rule.kind == InsideRule::Kind::Label;
+  os << what << ": " << (label ? "label" : "threshold") << " = " << rule.value << " must be a finite number";
+  throw InputError(os.str(), label ? "label" : "threshold");
+}
+
+void check_geometry(const VolumeGeometry& g, const std::string& what) {
+  const bool finite = g.spacing.allFinite() && g.origin.allFinite() && g.direction.allFinite();
+  if (finite && g.spacing.minCoeff() > 0.0 && std::abs(g.direction.determinant()) > 1e-12) return;
+  std::ostringstream os;
+  os << what << ": the voxel-to-physical map is degenerate (spacing " << g.spacing.transpose()
+     << ", direction determinant " << g.direction.determinant()
+     << "): spacings must be positive and the direction matrix invertible";
+  throw InputError(os.str(), "affine");
+}
+
 // The box of read_volume_as_voxels(centered): one voxel of padding, the volume's centre at the origin.
 template <class T, bool Swapped>
 VoxelGrid threshold_typed(const VolumeArrayInput& in) {
-  const InsideTest<T> test(InsideRule::above(in.threshold));
-  if (test.none) empty_volume(in.threshold);
+  const InsideTest<T> test(in.inside);
+  if (test.none) empty_volume(in.inside);
   const Eigen::Vector3i size = in.size;
   // A broadcast axis (stride 0) repeats its values: the distinct values are checked first, so that
   // an empty or NaN volume of any announced size is refused before the grid is allocated.
@@ -92,7 +114,7 @@ VoxelGrid threshold_typed(const VolumeArrayInput& in) {
     bool any_inside = false;
     if (const auto nan = scan_array<T, Swapped>(in, distinct, test, [&](const Eigen::Vector3i&) { any_inside = true; }))
       nan_value(*nan);
-    if (!any_inside) empty_volume(in.threshold);
+    if (!any_inside) empty_volume(in.inside);
   }
   const Eigen::Vector3i shift = volume_centering_shift(size);
   // The constructor checks the grid against the memory budget before allocating it.
@@ -105,7 +127,7 @@ VoxelGrid threshold_typed(const VolumeArrayInput& in) {
     ++inside;
   });
   if (nan) nan_value(*nan);
-  if (inside == 0) empty_volume(in.threshold);
+  if (inside == 0) empty_volume(in.inside);
   return grid;
 }
 
@@ -121,13 +143,81 @@ VoxelGrid threshold_array(const VolumeArrayInput& in) {
                          std::to_string(size.z()) + " voxels)",
                      "volume");
   if (!in.data) throw InputError("volume: no values", "volume");
-  if (!std::isfinite(in.threshold)) {
-    std::ostringstream os;
-    os << "volume: threshold = " << in.threshold << " must be a finite number";
-    throw InputError(os.str(), "threshold");
-  }
+  check_inside_rule(in.inside, "volume");
   if (in.h) check_grid_step(*in.h, "volume");
+  check_geometry(in.geometry, "volume");
   return io_detail::visit_value_type(in.type, [&](auto t) { return threshold_as<decltype(t)>(in); });
+}
+
+// Anisotropic voxels become cubes of the finest spacing, each taking the value of the file voxel
+// whose centre is nearest: the digitization and the paper's defaults need cubic voxels, nearest
+// neighbour invents no value, and a part one voxel thick stays at least one voxel thick. File voxel
+// i is at grid point grid.lower() + 1 + i (the padded box of read_volume_as_voxels); the result is
+// laid out the same way and centred, and `geometry` becomes the resampled voxels' map.
+VoxelGrid resample_isotropic(const VoxelGrid& grid, VolumeGeometry& geometry, std::optional<double> h) {
+  const Eigen::Vector3i size = grid.size() - Eigen::Vector3i::Constant(2);
+  const double fine = geometry.spacing.minCoeff();
+  Eigen::Vector3i m;
+  std::array<std::vector<int>, 3> source;
+  for (int a = 0; a < 3; ++a) {
+    const double ratio = geometry.spacing[a] / fine;
+    const double n = std::round(double(size[a]) * ratio);
+    if (!(n < double(std::numeric_limits<int>::max() - 2))) {
+      std::ostringstream os;
+      os << "volume: resampling the voxels to cubes of " << fine << " gives " << n << " voxels along axis " << a
+         << ", more than a voxel grid holds";
+      throw InputError(os.str(), "volume");
+    }
+    m[a] = std::max(1, int(n));
+    auto& s = source[std::size_t(a)];
+    s.resize(std::size_t(m[a]));
+    // Resampled voxel r covers [r, r + 1) / ratio - 1/2 in file indices; its centre's nearest voxel:
+    for (int r = 0; r < m[a]; ++r) s[std::size_t(r)] = std::min(size[a] - 1, int(std::floor((r + 0.5) / ratio)));
+  }
+  const Eigen::Vector3i shift = volume_centering_shift(m);
+  // The constructor checks the grid against the memory budget before allocating it.
+  VoxelGrid out(Eigen::Vector3i::Constant(-1) - shift, m - shift, h ? *h : unit_size_grid_step(m));
+  const Eigen::Vector3i in0 = grid.lower() + Eigen::Vector3i::Ones();
+  for (int z = 0; z < m.z(); ++z)
+    for (int y = 0; y < m.y(); ++y) {
+      const std::uint64_t* in = grid.row(in0.y() + source[1][std::size_t(y)], in0.z() + source[2][std::size_t(z)]);
+      std::uint64_t* row = out.row(y - shift.y(), z - shift.z());
+      for (int x = 0; x < m.x(); ++x) {
+        const int from = source[0][std::size_t(x)] + 1, to = x + 1;
+        if ((in[from >> 6] >> (from & 63)) & 1u) row[to >> 6] |= std::uint64_t{1} << (to & 63);
+      }
+    }
+  // Resampled voxel r's centre is at file index (r + 1/2) / ratio - 1/2.
+  const Eigen::Vector3d half_offset = 0.5 * (Eigen::Vector3d::Constant(fine) - geometry.spacing);
+  geometry.origin += geometry.direction * half_offset;
+  geometry.spacing = Eigen::Vector3d::Constant(fine);
+  return out;
+}
+
+// The voxels of a volume input, centred, cubic, with their index -> physical map.
+VoxelGrid volume_voxels(const SurfaceInput& input, VolumeGeometry& geometry) {
+  VoxelGrid grid;
+  std::optional<double> h;
+  if (const auto* v = std::get_if<VolumeFileInput>(&input)) {
+    VolumeReadOptions opt;
+    check_inside_rule(v->inside, "volume file '" + v->path + "'");
+    opt.inside = v->inside;
+    // World units by default (docs/io.md): the longest side spans 2, h = 2 / N.
+    if (v->h) check_grid_step(*v->h, "volume file '" + v->path + "'");
+    opt.h = v->h.value_or(0.0);
+    opt.centered = true;  // the volume's centre at the origin (docs/io.md)
+    opt.raw_dimensions = v->raw_dimensions;
+    grid = read_volume_as_voxels(v->path, opt, &geometry);
+    check_geometry(geometry, "volume file '" + v->path + "'");
+    h = v->h;
+  } else {
+    const auto& a = std::get<VolumeArrayInput>(input);
+    grid = threshold_array(a);
+    geometry = a.geometry;
+    h = a.h;
+  }
+  if (geometry.isotropic()) return grid;
+  return resample_isotropic(grid, geometry, h);
 }
 
 VoxelGrid voxelize_file(const MeshFileInput& in, const LoadMessages& messages) {
@@ -186,10 +276,10 @@ std::string describe(const SurfaceInput& input) {
                    else
                      os << "\"" << s.shape << "\", h=" << s.digitization.h;
                  },
-                 [&](const VolumeFileInput& v) { os << v.path << ", threshold " << v.threshold; },
+                 [&](const VolumeFileInput& v) { os << v.path << ", inside: " << v.inside.describe(); },
                  [&](const VolumeArrayInput& v) {
-                   os << "volume array " << v.size.x() << "x" << v.size.y() << "x" << v.size.z() << ", threshold "
-                      << v.threshold;
+                   os << "volume array " << v.size.x() << "x" << v.size.y() << "x" << v.size.z()
+                      << ", inside: " << v.inside.describe();
                  },
                  [&](const MeshFileInput& m) {
                    os << m.path
@@ -213,17 +303,14 @@ VoxelGrid load_voxels(const SurfaceInput& input, const LoadMessages& messages) {
                           check_grid_step(s.digitization.h, "shape '" + s.shape + "'");
                           return digitize(make_implicit_shape(s.shape, s.center), s.digitization);
                         },
-                        [&](const VolumeFileInput& v) {
-                          VolumeReadOptions opt;
-                          opt.inside = InsideRule::above(v.threshold);
-                          // World units by default (docs/io.md): the longest side spans 2, h = 2 / N.
-                          if (v.h) check_grid_step(*v.h, "volume file '" + v.path + "'");
-                          opt.h = v.h.value_or(0.0);
-                          opt.centered = true;  // the volume's centre at the origin (docs/io.md)
-                          opt.raw_dimensions = v.raw_dimensions;
-                          return read_volume_as_voxels(v.path, opt);
+                        [&](const VolumeFileInput&) {
+                          VolumeGeometry geometry;
+                          return volume_voxels(input, geometry);
                         },
-                        [&](const VolumeArrayInput& v) { return threshold_array(v); },
+                        [&](const VolumeArrayInput&) {
+                          VolumeGeometry geometry;
+                          return volume_voxels(input, geometry);
+                        },
                         [&](const MeshFileInput& m) { return voxelize_file(m, messages); },
                         [&](const QuadMeshInput&) -> VoxelGrid {
                           throw InputError(
@@ -245,17 +332,96 @@ LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messag
   }
   if (const auto* shape = std::get_if<ImplicitShapeInput>(&input))
     s.shape = make_implicit_shape(shape->shape, shape->center);
-  s.grid = load_voxels(input, messages);
+  const bool volume = std::holds_alternative<VolumeFileInput>(input) || std::holds_alternative<VolumeArrayInput>(input);
+  VolumeGeometry geometry;
+  s.grid = volume ? volume_voxels(input, geometry) : load_voxels(input, messages);
   if (s.grid->count() == 0)
     throw InputError("the volume is empty: no voxel is inside, so the surface has no surfel (" + s.description + ")");
   // A volume's box is its voxels [0, size - 1] - shift, padded by one voxel (read_volume_as_voxels).
   Eigen::Vector3i shift = Eigen::Vector3i::Zero();
-  if (std::holds_alternative<VolumeFileInput>(input) || std::holds_alternative<VolumeArrayInput>(input))
-    shift = -s.grid->lower() - Eigen::Vector3i::Ones();
+  if (volume) shift = -s.grid->lower() - Eigen::Vector3i::Ones();
   s.mesh = extract_surface(*s.grid);
   s.h = s.mesh.grid_step();
-  s.frame = VoxelFrame(s.h, shift.cast<double>());
+  s.frame = VoxelFrame(s.h, shift.cast<double>(), volume ? std::optional<VolumeGeometry>(geometry) : std::nullopt);
+  face_components(s.mesh, s.components);
   return s;
+}
+
+Eigen::MatrixX3d VoxelFrame::to_physical(const Eigen::MatrixX3d& world) const {
+  if (!geometry_) return world;
+  const Eigen::MatrixX3d index = to_index(world);
+  const Eigen::Matrix3d linear = geometry_->direction * geometry_->spacing.asDiagonal();
+  return Eigen::MatrixX3d((index * linear.transpose()).rowwise() + geometry_->origin.transpose());
+}
+
+double VoxelFrame::length_to_physical(double length) const {
+  if (!geometry_) return length;
+  // Cubic voxels (load_surface resamples anisotropic ones) along unit axes: one scale.
+  return length / h_ * geometry_->spacing.x();
+}
+
+Eigen::MatrixX3d VoxelFrame::normals_to_physical(const Eigen::MatrixX3d& normals) const {
+  if (!geometry_) return normals;
+  // Normals map by the inverse transpose of the linear part (the identity up to scale for axes
+  // that are orthonormal, a rotation).
+  const Eigen::Matrix3d linear = geometry_->direction * geometry_->spacing.asDiagonal();
+  Eigen::MatrixX3d out = normals * linear.inverse();
+  for (Eigen::Index i = 0; i < out.rows(); ++i) {
+    const double n = out.row(i).norm();
+    if (n > 0) out.row(i) /= n;
+  }
+  return out;
+}
+
+bool VoxelFrame::mirrors() const { return geometry_ && geometry_->direction.determinant() < 0.0; }
+
+std::vector<double> volume_labels(const VolumeData& volume) {
+  std::set<double> labels;
+  const std::size_t n = std::size_t(volume.size.x()) * std::size_t(volume.size.y()) * std::size_t(volume.size.z());
+  io_detail::visit_value_type(volume.type, [&](auto t) {
+    using T = decltype(t);
+    const std::size_t bytes = value_bytes(volume.type);
+    if (volume.bytes.size() < n * bytes) throw InputError("volume: fewer values than voxels", "volume");
+    for (std::size_t i = 0; i < n; ++i) {
+      const T v = read_value<T, false>(volume.bytes.data() + i * bytes);
+      if (InsideTest<T>::is_nan(v)) {
+        const std::size_t x = i % std::size_t(volume.size.x()), yz = i / std::size_t(volume.size.x());
+        nan_value(
+            Eigen::Vector3i(int(x), int(yz % std::size_t(volume.size.y())), int(yz / std::size_t(volume.size.y()))));
+      }
+      if (v == T(0)) continue;
+      labels.insert(double(v));
+      if (labels.size() > kMaxVolumeLabels)
+        throw InputError("volume: more than " + std::to_string(kMaxVolumeLabels) +
+                             " distinct nonzero values: this looks like a grey-level image, not a segmentation; "
+                             "give --threshold T (inside: value > T) instead of --labels all",
+                         "labels");
+    }
+  });
+  if (labels.empty()) throw InputError("volume: no nonzero value, so no label (empty segmentation)", "labels");
+  return {labels.begin(), labels.end()};
+}
+
+std::vector<double> volume_labels(const std::string& path) {
+  try {
+    return volume_labels(read_volume_data(path));
+  } catch (const InputError& e) {
+    if (dynamic_cast<const IoError*>(&e)) throw;
+    throw InputError("'" + path + "': " + std::string(e.what()), "labels");
+  }
+}
+
+VolumeArrayInput volume_array(const VolumeData& volume, const InsideRule& inside, std::optional<double> h) {
+  VolumeArrayInput in;
+  in.size = volume.size;
+  in.data = volume.bytes.data();
+  in.type = volume.type;
+  const auto b = std::ptrdiff_t(value_bytes(volume.type));
+  in.strides = {b, b * volume.size.x(), b * volume.size.x() * volume.size.y()};  // i fastest
+  in.inside = inside;
+  in.geometry = volume.geometry;
+  in.h = h;
+  return in;
 }
 
 }  // namespace corrlap

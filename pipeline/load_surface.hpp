@@ -8,6 +8,7 @@
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/io/volume_io.hpp>
 #include <corrlap/io/voxel_values.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
 #include <cstddef>
@@ -16,6 +17,7 @@
 #include <span>
 #include <string>
 #include <variant>
+#include <vector>
 
 namespace corrlap {
 
@@ -26,11 +28,12 @@ struct ImplicitShapeInput {
   DigitizationParams digitization;
 };
 
-/// A volume file (.vol, .longvol, .raw, .nrrd), inside = value > threshold, centred at the origin
-/// (docs/io.md).
+/// A volume file (every format of docs/io.md), its voxels inside by `inside` (default: every
+/// nonzero value), centred at the origin. Anisotropic voxels are resampled to cubes of the finest
+/// spacing first (load_surface; docs/io.md, "Physical coordinates").
 struct VolumeFileInput {
   std::string path;
-  double threshold = 0.0;
+  InsideRule inside;
   std::optional<Eigen::Vector3i> raw_dimensions;  ///< required for .raw
   std::optional<double> h;                        ///< default: 2 / the longest side in voxels
 };
@@ -38,15 +41,16 @@ struct VolumeFileInput {
 /// A volume in memory, read where it is, in its own element type and layout (no copy): value
 /// (x, y, z) at the bytes data + x * strides[0] + y * strides[1] + z * strides[2]. Any strides
 /// work: C or Fortran order, views with steps, negative strides, and 0 along an axis (a broadcast
-/// array, whose values repeat). Inside = value > threshold (bool: true > threshold, true = 1);
-/// centred like a volume file. The values are read during load_surface only; NaN is refused.
+/// array, whose values repeat). Inside by `inside` (bool: true = 1); centred and resampled like a
+/// volume file. The values are read during load_surface only; NaN is refused.
 struct VolumeArrayInput {
   Eigen::Vector3i size = Eigen::Vector3i::Zero();
   const void* data = nullptr;
   VoxelValueType type = VoxelValueType::Float64;
   std::array<std::ptrdiff_t, 3> strides = {0, 0, 0};  ///< in bytes
   bool byte_swapped = false;                          ///< the values are in the other byte order
-  double threshold = 0.0;
+  InsideRule inside;
+  VolumeGeometry geometry;  ///< voxel (x, y, z) -> physical coordinates (default: the identity)
   std::optional<double> h;  ///< default: 2 / the longest side in voxels
 
   /// A C-ordered array of doubles indexed [x][y][z]: value (x, y, z) at values[(x * size.y() + y)
@@ -69,14 +73,17 @@ struct QuadMeshInput {
 
 using SurfaceInput = std::variant<ImplicitShapeInput, VolumeFileInput, VolumeArrayInput, MeshFileInput, QuadMeshInput>;
 
-/// The map from the input's voxel indices to the world coordinates of the mesh: world = h (index -
-/// shift). Index: a volume file's voxel (i, j, k) (pointels at half-integers), or the digital
-/// point for the other inputs (shift 0). Callers convert through it only, so that anisotropic
-/// spacing, a direction matrix or an origin (NIfTI, NRRD headers) can join it without changing them.
+/// The map from the input's voxel indices to the world coordinates of the mesh, world = h (index -
+/// shift), and from them to physical coordinates. Index: a volume's voxel (i, j, k) (pointels at
+/// half-integers; for anisotropic voxels, the voxel of the isotropic resampling), or the digital
+/// point for the other inputs (shift 0). Physical: the volume's geometry applied to the index
+/// (millimetres for medical formats, the index itself for a volume without geometry); the world
+/// coordinates themselves for the other inputs (a shape's or a mesh file's own units).
 class VoxelFrame {
  public:
   VoxelFrame() = default;
-  VoxelFrame(double h, const Eigen::Vector3d& shift) : h_(h), shift_(shift) {}
+  VoxelFrame(double h, const Eigen::Vector3d& shift, std::optional<VolumeGeometry> geometry = std::nullopt)
+      : h_(h), shift_(shift), geometry_(std::move(geometry)) {}
   /// World length of a voxel side (the grid step).
   double h() const { return h_; }
   /// The index of the world origin.
@@ -89,9 +96,22 @@ class VoxelFrame {
   /// Lengths scale by 1 / h into index units, curvatures by h.
   double length_to_index(double length) const { return length / h_; }
 
+  /// The volume's index -> physical map (isotropic voxels); none for the other inputs.
+  const std::optional<VolumeGeometry>& geometry() const { return geometry_; }
+  /// Positions (rows) in world units -> physical coordinates.
+  Eigen::MatrixX3d to_physical(const Eigen::MatrixX3d& world) const;
+  /// The physical length of a world length: h times the physical side of a voxel (1 without geometry).
+  double length_to_physical(double length) const;
+  /// Unit normals (rows) in world coordinates -> unit normals of the physical surface.
+  Eigen::MatrixX3d normals_to_physical(const Eigen::MatrixX3d& normals) const;
+  /// True when world -> physical reverses orientation (a direction matrix of determinant < 0):
+  /// faces are then written in the other order, so that they keep facing outwards.
+  bool mirrors() const;
+
  private:
   double h_ = 1.0;
   Eigen::Vector3d shift_ = Eigen::Vector3d::Zero();
+  std::optional<VolumeGeometry> geometry_;
 };
 
 /// A digital surface with what it came from.
@@ -100,7 +120,8 @@ struct LoadedSurface {
   std::optional<VoxelGrid> grid;       ///< the voxels (all inputs but quad meshes)
   std::optional<ImplicitShape> shape;  ///< implicit shapes only (true and exact normals)
   double h = 0.0;                      ///< grid step (a quad mesh: its mean edge length, SurfelMesh::grid_step)
-  VoxelFrame frame;                    ///< voxel indices -> world coordinates
+  VoxelFrame frame;                    ///< voxel indices -> world coordinates -> physical coordinates
+  int components = 0;                  ///< connected components of the surface (all kept)
   std::string description;             ///< provenance for logs and metrics ("sphere1, h=0.1")
 
   const ImplicitShape* shape_ptr() const { return shape ? &*shape : nullptr; }
@@ -119,6 +140,21 @@ struct LoadMessages {
 /// "threshold": Error::parameter) or the file, IoError for unreadable files, and InputError when no
 /// voxel is inside.
 LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messages = {});
+
+/// At most this many distinct labels in volume_labels: more looks like a grey-level image.
+inline constexpr std::size_t kMaxVolumeLabels = 65535;
+
+/// The distinct nonzero values of a volume, ascending (the labels of a segmentation). InputError
+/// tagged "labels" when there are more than kMaxVolumeLabels (a grey-level image: a threshold is
+/// meant) or none; NaN values are refused.
+std::vector<double> volume_labels(const VolumeData& volume);
+/// volume_labels of the file (read whole, in its own type).
+std::vector<double> volume_labels(const std::string& path);
+
+/// A view of a volume read whole (read_volume_data) as an in-memory volume with its geometry, so
+/// that several rules (one label each) digitize it without reading the file again. `volume` must
+/// outlive the result.
+VolumeArrayInput volume_array(const VolumeData& volume, const InsideRule& inside, std::optional<double> h = {});
 
 /// Refuses (InputError tagged "h", `what` first) a grid step that is not positive and finite.
 void check_grid_step(double h, const std::string& what);

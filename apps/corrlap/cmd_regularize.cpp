@@ -1,6 +1,7 @@
 // corrlap regularize: the paper's Laplacian regularization (paper §4.1, docs/math.md §9.2). From a
 // staircased digital surface, new vertex positions whose corrected Laplacian matches -2 H n, with
 // n the estimated (II) normals and H the corrected mean curvature.
+#include <cmath>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
@@ -8,16 +9,20 @@
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/output_folder.hpp>
+#include <corrlap/io/volume_io.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 
 #include "command.hpp"
+#include "library_errors.hpp"
 #include "method_options.hpp"
 #include "normal_options.hpp"
 #include "render_output.hpp"
@@ -40,7 +45,7 @@ struct RegularizeArgs {
   double normal_attachment = 1.0;
   SolverOptions solver;
   std::string out;
-  std::string output_units = "world";
+  std::string output_units = OutputUnits::kDefault;
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
   bool allow_nonmanifold = false;
@@ -52,12 +57,16 @@ struct RegularizeArgs {
 
 // The geometry part of metrics.json, the same for both regularizations: the largest move, the
 // areas and, for implicit shapes, the quality before and after (docs/regularization.md).
+// The displacement and areas describe the meshes written: in their units; the rest is measured in
+// the computation's world units against the shape.
 void add_geometry_metrics(nlohmann::json& m, const LoadedSurface& surface, const SurfelMesh& result,
-                          double curvature_radius) {
+                          double curvature_radius, const OutputUnits& units) {
   const SurfelMesh& mesh = surface.mesh;
-  m["displacement_max"] = (result.positions - mesh.positions).rowwise().norm().maxCoeff();
-  m["area_before"] = surface_area(mesh);
-  m["area_after"] = surface_area(result);
+  const double scale = units.length_scale();
+  m["components"] = surface.components;
+  m["displacement_max"] = (result.positions - mesh.positions).rowwise().norm().maxCoeff() * scale;
+  m["area_before"] = surface_area(mesh) * scale * scale;
+  m["area_after"] = surface_area(result) * scale * scale;
   if (!surface.shape) return;
   const SurfaceQuality qb = measure_against_shape(mesh, *surface.shape, curvature_radius);
   const SurfaceQuality qa = measure_against_shape(result, *surface.shape, curvature_radius);
@@ -76,13 +85,15 @@ void write_surfaces(const std::string& dir, const SurfelMesh& input, MeshAttribu
                     const SurfelMesh& result, std::map<std::string, Eigen::VectorXd> curvatures,
                     const OutputUnits& units) {
   for (auto& [name, v] : input_attr.vertex_scalars) v = units.curvatures(v);
+  if (input_attr.vertex_normals.rows() > 0) input_attr.vertex_normals = units.normals(input_attr.vertex_normals);
+  if (input_attr.face_normals.rows() > 0) input_attr.face_normals = units.normals(input_attr.face_normals);
   write_mesh(dir + "/input.ply", units.mesh(input), input_attr);
   MeshAttributes result_attr;
-  result_attr.vertex_normals = geometric_vertex_normals(result);
   for (auto& [name, v] : curvatures) v = units.curvatures(v);
   curvatures["displacement"] = units.lengths((result.positions - input.positions).rowwise().norm());
   result_attr.vertex_scalars = std::move(curvatures);
   const SurfelMesh out = units.mesh(result);
+  result_attr.vertex_normals = geometric_vertex_normals(out);
   write_mesh(dir + "/regularized.ply", out, result_attr);
   write_mesh(dir + "/regularized.obj", out);
 }
@@ -93,8 +104,9 @@ void write_metrics(const std::string& dir, const nlohmann::json& m) {
 
 // docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
 // face normals of --normals (the reference's test uses --normals convolved).
-void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, OutputFolder& out,
-                            nlohmann::json& stages, Stopwatch& t) {
+void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, const std::string& dir,
+                            const std::string& shown, const std::string& description, nlohmann::json& stages,
+                            Stopwatch& t) {
   const SurfelMesh& mesh = surface.mesh;
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Face, "regularize --baseline alignment");
   stages["normals_s"] = t.lap();
@@ -112,12 +124,14 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   result.positions = r.positions;
   MeshAttributes input_attr;
   input_attr.face_normals = normals.face;
-  write_surfaces(out.path(), mesh, input_attr, result, {}, OutputUnits::parse(a.output_units, surface));
+  const OutputUnits units = OutputUnits::parse(a.output_units, surface);
+  write_surfaces(dir, mesh, input_attr, result, {}, units);
   stages["write_s"] = t.lap();
-  if (!a.no_render) stages["render_s"] = render_before_after(out.path(), mesh, result, "", {}, {});
+  if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, result, "", {}, {});
   t.restart();
   nlohmann::json m;
-  m["surface"] = a.source.describe();
+  m["surface"] = description;
+  m["output_units"] = units.name();
   m["vertices"] = mesh.num_vertices();
   m["faces"] = mesh.num_faces();
   m["h"] = mesh.grid_step();
@@ -132,13 +146,95 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   m["energy_final"] = r.energy_final;
   m["time_s"] = stages;
   // Measured with the paper's default curvature radius, 0.1 of the object size.
-  add_geometry_metrics(m, surface, result, 0.1 * regularization_size(mesh));
-  write_metrics(out.path(), m);
-  out.commit();
+  add_geometry_metrics(m, surface, result, 0.1 * regularization_size(mesh), units);
+  write_metrics(dir, m);
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
-            << " in " << r.iterations << " iterations\n  wrote " << a.out
+            << " in " << r.iterations << " iterations\n  wrote " << shown
             << "/regularized.ply, regularized.obj, input.ply, metrics.json"
             << (a.no_render ? "" : ", before.png, after.png") << "\n";
+}
+
+// One surface regularized into `dir` (`shown`: the folder as the user names it).
+void regularize_one(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
+                    const std::string& description, const std::string& dir, const std::string& shown, Stopwatch& t) {
+  nlohmann::json stages;
+  const SurfelMesh& mesh = surface.mesh;
+  check_regularizable(mesh, a.allow_nonmanifold, "regularize");
+  if (a.baseline.empty()) check_regularization_options(mesh, o);
+  stages["surface_s"] = t.lap();
+  std::cerr << "regularize: " << description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
+            << " faces, " << surface.components << " component" << (surface.components == 1 ? "" : "s")
+            << ", h = " << mesh.grid_step() << "\n";
+  if (!a.baseline.empty()) {
+    run_alignment_baseline(a, surface, dir, shown, description, stages, t);
+    return;
+  }
+  // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
+  const NormalFields normals = a.normals.resolve(surface, NormalKind::Vertex, "regularize");
+  stages["normals_s"] = t.lap();
+  const RegularizedSurface r = regularize_surface(mesh, normals, o);
+  for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
+  stages["curvature_s"] = r.curvature_seconds;
+  stages["operators_s"] = r.operators_seconds;
+  stages["solve_s"] = r.solve_seconds;
+  t.restart();
+
+  MeshAttributes input_attr;
+  input_attr.vertex_normals = normals.vertex;
+  input_attr.vertex_scalars = {{"H", r.H}};
+  const OutputUnits units = OutputUnits::parse(a.output_units, surface);
+  write_surfaces(dir, mesh, input_attr, r.mesh, {{"H", r.H}}, units);
+  stages["write_s"] = t.lap();
+  if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, r.mesh, "H", r.H, r.H);
+  t.restart();
+
+  nlohmann::json m;
+  m["surface"] = description;
+  m["vertices"] = mesh.num_vertices();
+  m["faces"] = mesh.num_faces();
+  m["h"] = r.h;
+  m["method"] = a.method.method;
+  m["normals"] = a.normals.describe(surface);
+  m["size"] = r.size;
+  m["curvature_radius"] = r.curvature_radius;
+  m["alpha0"] = a.alpha0;
+  m["alpha"] = r.alpha;
+  m["h_scale"] = a.h_scale;
+  m["h_clamp"] = a.h_clamp ? nlohmann::json(*a.h_clamp) : nlohmann::json(nullptr);
+  m["output_units"] = units.name();
+  m["k1_edit"] = o.k1_edit.describe();
+  m["k2_edit"] = o.k2_edit.describe();
+  if (o.k1_edit.active() || o.k2_edit.active()) {
+    m["normal_attachment"] = o.normal_attachment;
+    m["normal_angle_change_deg"] = r.normal_angle_change_deg;
+  }
+  m["solver"] = r.solver;
+  m["solve_scheme"] = r.solve_scheme;
+  if (r.solve_scheme == "preconditioned-cg") m["solve_iterations"] = r.solve_iterations;
+  m["solve_residual"] = *r.check.residual;
+  m["area_ratio"] = r.check.area_ratio;
+  m["extent_ratio"] = r.check.extent_ratio;
+  m["time_s"] = stages;
+  m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
+  m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
+  add_geometry_metrics(m, surface, r.mesh, r.curvature_radius, units);
+  write_metrics(dir, m);
+  std::cerr << "regularize: " << a.method.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
+            << r.solver << ": max displacement " << m["displacement_max"].get<double>();
+  if (surface.shape)
+    std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
+              << m["distance_l1_after"].get<double>();
+  std::cerr << "\n  wrote " << shown << "/regularized.ply, regularized.obj, input.ply, metrics.json"
+            << (a.no_render ? "" : ", before.png, after.png") << "\n";
+}
+
+// "3" for an integer label, else its shortest exact decimal.
+std::string label_name(double label) {
+  if (label == std::floor(label) && std::abs(label) < 1e15) return std::to_string(std::int64_t(label));
+  std::ostringstream os;
+  os.precision(17);
+  os << label;
+  return os.str();
 }
 
 void run(const RegularizeArgs& a) {
@@ -167,76 +263,38 @@ void run(const RegularizeArgs& a) {
 
   // Checked before the (possibly long) computation; written whole at the end or not at all.
   OutputFolder out(a.out);
-  nlohmann::json stages;
-  Stopwatch t;
-  const LoadedSurface surface = a.source.load();
-  const SurfelMesh& mesh = surface.mesh;
-  check_regularizable(mesh, a.allow_nonmanifold, "regularize");
-  if (a.baseline.empty()) check_regularization_options(mesh, o);
-  stages["surface_s"] = t.lap();
-  std::cerr << "regularize: " << a.source.describe() << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
-            << " faces, h = " << mesh.grid_step() << "\n";
-  if (!a.baseline.empty()) {
-    run_alignment_baseline(a, surface, out, stages, t);
+  if (!a.source.all_labels()) {
+    Stopwatch t;
+    const LoadedSurface surface = a.source.load();
+    regularize_one(a, o, surface, a.source.describe(), out.path(), a.out, t);
+    out.commit();
     return;
   }
-  // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
-  const NormalFields normals = a.normals.resolve(surface, NormalKind::Vertex, "regularize");
-  stages["normals_s"] = t.lap();
-  const RegularizedSurface r = regularize_surface(mesh, normals, o);
-  for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
-  stages["curvature_s"] = r.curvature_seconds;
-  stages["operators_s"] = r.operators_seconds;
-  stages["solve_s"] = r.solve_seconds;
-  t.restart();
-
-  MeshAttributes input_attr;
-  input_attr.vertex_normals = normals.vertex;
-  input_attr.vertex_scalars = {{"H", r.H}};
-  write_surfaces(out.path(), mesh, input_attr, r.mesh, {{"H", r.H}}, OutputUnits::parse(a.output_units, surface));
-  stages["write_s"] = t.lap();
-  if (!a.no_render) stages["render_s"] = render_before_after(out.path(), mesh, r.mesh, "H", r.H, r.H);
-  t.restart();
-
-  nlohmann::json m;
-  m["surface"] = a.source.describe();
-  m["vertices"] = mesh.num_vertices();
-  m["faces"] = mesh.num_faces();
-  m["h"] = r.h;
-  m["method"] = a.method.method;
-  m["normals"] = a.normals.describe(surface);
-  m["size"] = r.size;
-  m["curvature_radius"] = r.curvature_radius;
-  m["alpha0"] = a.alpha0;
-  m["alpha"] = r.alpha;
-  m["h_scale"] = a.h_scale;
-  m["h_clamp"] = a.h_clamp ? nlohmann::json(*a.h_clamp) : nlohmann::json(nullptr);
-  m["output_units"] = a.output_units;
-  m["k1_edit"] = o.k1_edit.describe();
-  m["k2_edit"] = o.k2_edit.describe();
-  if (o.k1_edit.active() || o.k2_edit.active()) {
-    m["normal_attachment"] = o.normal_attachment;
-    m["normal_angle_change_deg"] = r.normal_angle_change_deg;
+  // --labels all: the file read once, one surface per label in OUT/label-N/ (docs/io.md).
+  Stopwatch t;
+  VolumeReadOptions read;
+  if (a.source.raw_dimensions.size() == 3)
+    read.raw_dimensions =
+        Eigen::Vector3i(a.source.raw_dimensions[0], a.source.raw_dimensions[1], a.source.raw_dimensions[2]);
+  const VolumeData data = in_cli_terms([&] { return read_volume_data(a.source.volume, read); });
+  const std::vector<double> labels = in_cli_terms([&] { return volume_labels(data); });
+  std::cerr << "regularize: " << a.source.volume << ": " << labels.size() << " label" << (labels.size() == 1 ? "" : "s")
+            << "\n";
+  std::optional<double> h;
+  if (a.source.h_option && a.source.h_option->count() > 0) h = a.source.h;
+  nlohmann::json index = nlohmann::json::array();
+  for (const double label : labels) {
+    const std::string name = "label-" + label_name(label);
+    const std::string description = a.source.volume + ", label " + label_name(label);
+    const std::string dir = out.file(name);
+    std::filesystem::create_directories(dir);
+    const LoadedSurface surface =
+        in_cli_terms([&] { return load_surface(volume_array(data, InsideRule::label(label), h)); }, description);
+    regularize_one(a, o, surface, description, dir, a.out + "/" + name, t);
+    index.push_back({{"label", label}, {"folder", name}});
   }
-  m["solver"] = r.solver;
-  m["solve_scheme"] = r.solve_scheme;
-  if (r.solve_scheme == "preconditioned-cg") m["solve_iterations"] = r.solve_iterations;
-  m["solve_residual"] = *r.check.residual;
-  m["area_ratio"] = r.check.area_ratio;
-  m["extent_ratio"] = r.check.extent_ratio;
-  m["time_s"] = stages;
-  m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
-  m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
-  add_geometry_metrics(m, surface, r.mesh, r.curvature_radius);
-  write_metrics(out.path(), m);
+  std::ofstream(out.file("labels.json")) << index.dump(2) << "\n";
   out.commit();
-  std::cerr << "regularize: " << a.method.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
-            << r.solver << ": max displacement " << m["displacement_max"].get<double>();
-  if (surface.shape)
-    std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
-              << m["distance_l1_after"].get<double>();
-  std::cerr << "\n  wrote " << a.out << "/regularized.ply, regularized.obj, input.ply, metrics.json"
-            << (a.no_render ? "" : ", before.png, after.png") << "\n";
 }
 
 RegisterCommand reg(42, "regularize", [](CLI::App& app) {
@@ -287,10 +345,8 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");
-  cmd->add_option("--output-units", args->output_units,
-                  "world: positions as computed; voxels: in the input's voxel units (a volume file's voxel "
-                  "indices), H and the displacement with them (metrics.json stays in world units)")
-      ->check(CLI::IsMember({"world", "voxels"}))
+  cmd->add_option("--output-units", args->output_units, OutputUnits::kHelp)
+      ->check(CLI::IsMember({"physical", "world", "voxels"}))
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png)")

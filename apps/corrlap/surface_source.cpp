@@ -13,7 +13,10 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   auto* g = cmd.add_option_group("surface", "where the digital surface comes from (one of)");
   auto* s = g->add_option("--shape", shape, "named implicit shape (sphere1, torus, goursat, ...)");
   auto* p = g->add_option("--polynomial", polynomial, "implicit shape P(x,y,z) <= 0, e.g. \"x^2+y^2+z^2-1\"");
-  auto* v = g->add_option("--volume", volume, "volume file (.vol, .longvol, .nrrd, .raw) digitized by --threshold");
+  auto* v =
+      g->add_option("--volume", volume,
+                    "volume file (docs/io.md: .nii/.nii.gz, .nrrd, .mha/.mhd, .vol, .longvol, .raw, .binvox, .vox, "
+                    ".npy, .tif): inside = every nonzero voxel, or --label N, --labels all, --threshold T");
   auto* mf = g->add_option("--mesh-file", mesh_file,
                            "closed triangle mesh (.obj, .ply, .off) voxelized at --resolution N or grid step --h");
   CLI::Option* m = nullptr;
@@ -33,13 +36,27 @@ void SurfaceSource::add_options(CLI::App& cmd, bool with_mesh) {
   cmd.add_option("--center", center, "shape centre X Y Z")->expected(3);
   cmd.add_option("--bbox", bbox, "digitization box MIN MAX (reference default -10 10)")->expected(2);
   cmd.add_option("--offset", offset, "extra voxels around the box (reference default 5)")->check(non_negative_number());
-  cmd.add_option("--threshold", threshold, "volumes: a voxel is inside when its value > threshold");
+  auto* t =
+      cmd.add_option("--threshold", threshold, "volumes: a voxel is inside when its value > T (grey-level images)");
+  auto* l =
+      cmd.add_option("--label", label, "volumes: a voxel is inside when its value == N (one label of a segmentation)");
+  labels_option = cmd.add_option("--labels", labels,
+                                 "volumes: all: one surface per distinct nonzero value, each in its own output "
+                                 "(regularize: OUT/label-N/)")
+                      ->check(CLI::IsMember({"all"}));
+  t->excludes(l)->excludes(labels_option);
+  l->excludes(labels_option);
   cmd.add_option("--raw-dimensions", raw_dimensions, "raw volumes: NX NY NZ")->expected(3);
 }
 
 SurfaceInput SurfaceSource::input() const {
   const bool h_given = h_option && h_option->count() > 0;
   if (resolution > 0 && mesh_file.empty()) throw InputError("--resolution applies to --mesh-file only");
+  if (volume.empty() && (threshold || label || !labels.empty()))
+    throw InputError(std::string(threshold ? "--threshold"
+                                 : label   ? "--label"
+                                           : "--labels") +
+                     " applies to --volume only");
   if (!shape.empty() || !polynomial.empty()) {
     ImplicitShapeInput in;
     in.shape = !shape.empty() ? shape : polynomial;
@@ -51,9 +68,11 @@ SurfaceInput SurfaceSource::input() const {
     return in;
   }
   if (!volume.empty()) {
+    if (all_labels())
+      throw InputError("--labels all gives one surface per label: the command writes one output only (give --label N)");
     VolumeFileInput in;
     in.path = volume;
-    in.threshold = threshold;
+    in.inside = inside();
     if (h_given) in.h = h;  // else world units (docs/io.md): the longest side spans 2
     if (raw_dimensions.size() == 3)
       in.raw_dimensions = Eigen::Vector3i(raw_dimensions[0], raw_dimensions[1], raw_dimensions[2]);
@@ -85,22 +104,63 @@ LoadedSurface SurfaceSource::load() const {
   return in_cli_terms([&] { return load_surface(in, messages); });
 }
 
+InsideRule SurfaceSource::inside() const {
+  if (threshold) return InsideRule::above(*threshold);
+  if (label) return InsideRule::label(*label);
+  return InsideRule::nonzero();
+}
+
 OutputUnits OutputUnits::parse(const std::string& name, const LoadedSurface& surface) {
   OutputUnits u;
-  if (name == "world") return u;
-  if (name != "voxels") throw InputError("--output-units '" + name + "': expected world or voxels");
-  u.voxels = true;
   u.frame = surface.frame;
-  if (!(u.frame.h() > 0.0)) throw InputError("--output-units voxels: the surface has no grid step");
+  if (name == "physical")
+    u.kind = Kind::Physical;
+  else if (name == "world")
+    u.kind = Kind::World;
+  else if (name == "voxels")
+    u.kind = Kind::Voxels;
+  else
+    throw InputError("--output-units '" + name + "': expected physical, world or voxels");
+  if (u.kind != Kind::World && !(u.frame.h() > 0.0))
+    throw InputError("--output-units " + name + ": the surface has no grid step");
   return u;
 }
 
+const char* OutputUnits::name() const {
+  switch (kind) {
+    case Kind::Physical:
+      return "physical";
+    case Kind::World:
+      return "world";
+    case Kind::Voxels:
+      return "voxels";
+  }
+  return "physical";
+}
+
+double OutputUnits::length_scale() const {
+  switch (kind) {
+    case Kind::Physical:
+      return frame.length_to_physical(1.0);
+    case Kind::World:
+      return 1.0;
+    case Kind::Voxels:
+      return frame.length_to_index(1.0);
+  }
+  return 1.0;
+}
+
 SurfelMesh OutputUnits::mesh(const SurfelMesh& m) const {
-  if (!voxels) return m;
+  if (kind == Kind::World) return m;
   SurfelMesh out = m;
-  out.positions = frame.to_index(m.positions);
-  if (out.h > 0) out.h = frame.length_to_index(m.h);
+  out.positions = kind == Kind::Voxels ? frame.to_index(m.positions) : frame.to_physical(m.positions);
+  if (out.h > 0) out.h = m.h * length_scale();
+  if (kind == Kind::Physical && frame.mirrors()) out.faces = out.faces.rowwise().reverse().eval();
   return out;
+}
+
+Eigen::MatrixX3d OutputUnits::normals(const Eigen::MatrixX3d& n) const {
+  return kind == Kind::Physical ? frame.normals_to_physical(n) : n;
 }
 
 std::string SurfaceSource::describe() const { return corrlap::describe(input()); }

@@ -4,6 +4,7 @@
 // into a SurfaceInput and loaded by the library's load_surface (pipeline/load_surface.hpp).
 #include <CLI/CLI.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/io/voxel_values.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <corrlap/pipeline/surface_checks.hpp>
 #include <optional>
@@ -12,19 +13,33 @@
 
 namespace corrlap::cli {
 
-/// --output-units: positions written in world units (default) or in the input's voxel units (the
-/// volume file's voxel indices, pointels at half-integers; digital coordinates for other sources),
-/// through the surface's VoxelFrame. Lengths scale by 1/h and curvatures by h with them.
+/// --output-units: the coordinates of the meshes written, through the surface's VoxelFrame:
+/// physical (default): a volume's physical coordinates (its file's geometry, millimetres for medical
+///   formats; voxel indices for a volume without geometry), a shape's or mesh file's own units;
+/// world: the normalized coordinates of the computation (a volume centred, its longest side spanning 2);
+/// voxels: the voxel indices (pointels at half-integers; digital coordinates for other sources).
+/// Lengths and curvatures (H, displacement) scale with the positions; normals follow them.
 struct OutputUnits {
-  bool voxels = false;
+  enum class Kind { Physical, World, Voxels };
+  Kind kind = Kind::Physical;
   VoxelFrame frame;
 
-  /// "world" or "voxels"; anything else is an InputError.
+  static constexpr const char* kDefault = "physical";
+  static constexpr const char* kHelp =
+      "coordinates of the meshes written: physical (the volume file's physical coordinates, e.g. millimetres; "
+      "voxel indices for a volume without geometry; a shape's or mesh file's own units), world (the normalized "
+      "coordinates of the computation: volumes centred, the longest side spanning 2) or voxels (voxel indices, "
+      "pointels at half-integers); lengths and curvatures scale with them (docs/io.md)";
+  /// "physical", "world" or "voxels"; anything else is an InputError.
   static OutputUnits parse(const std::string& name, const LoadedSurface& surface);
-  const char* name() const { return voxels ? "voxels" : "world"; }
+  const char* name() const;
+  /// Positions (and h) in these units; faces reversed where the map mirrors, to keep facing outwards.
   SurfelMesh mesh(const SurfelMesh& m) const;
-  Eigen::VectorXd lengths(const Eigen::VectorXd& v) const { return voxels ? Eigen::VectorXd(v / frame.h()) : v; }
-  Eigen::VectorXd curvatures(const Eigen::VectorXd& v) const { return voxels ? Eigen::VectorXd(v * frame.h()) : v; }
+  /// One world length in these units.
+  double length_scale() const;
+  Eigen::VectorXd lengths(const Eigen::VectorXd& v) const { return v * length_scale(); }
+  Eigen::VectorXd curvatures(const Eigen::VectorXd& v) const { return v / length_scale(); }
+  Eigen::MatrixX3d normals(const Eigen::MatrixX3d& n) const;
 };
 
 struct SurfaceSource {
@@ -35,7 +50,10 @@ struct SurfaceSource {
   std::vector<double> center = {0.0, 0.0, 0.0};
   std::vector<double> bbox = {-10.0, 10.0};
   int offset = 5;
-  double threshold = 0.0;           ///< volumes: voxels with value > threshold are inside
+  std::optional<double> threshold;  ///< volumes: voxels with value > threshold are inside
+  std::optional<double> label;      ///< volumes: voxels with value == label are inside
+  std::string labels;               ///< volumes: "all": one surface per distinct nonzero value
+  CLI::Option* labels_option = nullptr;
   std::vector<int> raw_dimensions;  ///< raw volumes: NX NY NZ
   bool allow_mesh = true;
   CLI::Option* h_option = nullptr;  ///< to know whether --h was given explicitly
@@ -50,6 +68,11 @@ struct SurfaceSource {
   LoadedSurface load() const;
   /// Short description for logs ("sphere1, h=0.1").
   std::string describe() const;
+  /// True for --labels all (commands that write one output per label handle it; the others refuse
+  /// it through input()).
+  bool all_labels() const { return labels == "all"; }
+  /// The inside rule of --threshold / --label (default: every nonzero voxel).
+  InsideRule inside() const;
 };
 
 /// The library's check_regularizable, its error naming `command` and the CLI flag.

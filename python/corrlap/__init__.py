@@ -30,7 +30,7 @@ import scipy.sparse as _sparse
 from . import _core
 
 __all__ = [
-    "digitize", "digitize_volume", "read_mesh", "write_mesh", "true_normals", "ii_normals", "curvature",
+    "digitize", "digitize_volume", "read_volume", "write_volume", "regularize_volume", "read_mesh", "write_mesh", "true_normals", "ii_normals", "curvature",
     "laplacian", "solve", "eigs", "regularize", "set_threads", "get_threads", "set_max_memory", "get_max_memory",
     "methods", "backends",
 ]
@@ -130,6 +130,57 @@ def digitize_volume(volume, h=None, threshold=0.0):
     ValueError naming it.
     """
     return _core.digitize_volume(volume, _real(h, "h"), _real(threshold, "threshold", required=True))
+
+
+def read_volume(path):
+    """Reads a volume file (every format of docs/io.md) as it is. Returns (array, affine): array is
+    indexed [i, j, k] in the file's own dtype (bool, int8 ... uint64, float32, float64; Fortran
+    order, i fastest, as the file stores it), affine the 4 by 4 map from (i, j, k, 1) to physical
+    coordinates (millimetres for NIfTI, NRRD, MetaImage; nibabel's affine for NIfTI; the identity
+    for files without geometry). An unreadable file raises ValueError naming it."""
+    return _core.read_volume(str(path))
+
+
+def write_volume(path, array, affine=None):
+    """Writes a 3D array indexed [i, j, k] as a volume file chosen by extension (docs/io.md), in
+    its own dtype where the format has it, with the 4 by 4 affine (index -> physical; None: the
+    identity) where the format has a geometry."""
+    a = _np.asarray(array)
+    if a.ndim != 3:
+        raise ValueError(f"array: expected a 3D array, got {a.ndim} dimensions")
+    # The C++ side takes the bytes as they are: native byte order, i fastest.
+    a = _np.asfortranarray(a.astype(a.dtype.newbyteorder("="), copy=False))
+    _core.write_volume(str(path), a, None if affine is None else _np.asarray(affine, dtype=_np.float64))
+
+
+def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0=10.0,
+                      curvature_radius=None, size=None, solver="cholmod", solver_options=None,
+                      allow_nonmanifold=False, **params):
+    """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
+    from the voxels, docs/regularization.md), in physical coordinates.
+
+    volume     a volume file's path (its geometry is used) or a 3D array indexed [i, j, k] (as
+               digitize_volume reads it)
+    label      inside iff value == label; threshold: inside iff value > threshold; neither: every
+               nonzero value is inside (give at most one)
+    affine     arrays only: 4 by 4 map from (i, j, k, 1) to physical coordinates (read_volume's,
+               nibabel's img.affine); None: voxel indices. Anisotropic voxels are resampled to
+               cubes of the finest spacing first (docs/io.md)
+    h, method, alpha0, curvature_radius, size, solver, solver_options, allow_nonmanifold, params:
+               as regularize, in the normalized units of the computation (the longest side spans 2)
+
+    Returns V (#V, 3) in physical coordinates and F (#F, 4) int64 quads facing outwards.
+    """
+    if isinstance(volume, (str, bytes)) or hasattr(volume, "__fspath__"):
+        import os
+        volume = os.fsdecode(volume)
+    V, F, warnings = _core.regularize_volume(
+        volume, _real(label, "label"), _real(threshold, "threshold"),
+        None if affine is None else _np.asarray(affine, dtype=_np.float64), _real(h, "h"), str(method), params,
+        _real(alpha0, "alpha0", required=True), _real(curvature_radius, "curvature_radius"), _real(size, "size"),
+        str(solver), dict(solver_options or {}), bool(allow_nonmanifold))
+    _warn(warnings)
+    return V, F
 
 
 def read_mesh(path):

@@ -6,7 +6,10 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/volume_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
+#include <corrlap/pipeline/surface_checks.hpp>
+#include <corrlap/regularization/regularize_surface.hpp>
 #include <limits>
 #include <optional>
 #include <span>
@@ -38,7 +41,7 @@ ImplicitShapeInput shape_input(const std::string& shape, double h, double bbox_m
 
 // The array as the library's in-memory volume, read where it is: its own dtype, strides and byte
 // order (no converted copy, whatever its size). `keep` holds the array alive while it is read.
-VolumeArrayInput array_input(py::handle volume, std::optional<double> h, double threshold, py::array& keep) {
+VolumeArrayInput array_input(py::handle volume, std::optional<double> h, const InsideRule& inside, py::array& keep) {
   keep = numeric_array(volume, "volume", /*allow_bool=*/true);
   if (keep.ndim() != 3)
     throw py::value_error("volume: expected a 3D array, got " + std::to_string(keep.ndim()) + " dimensions");
@@ -54,9 +57,44 @@ VolumeArrayInput array_input(py::handle volume, std::optional<double> h, double 
   }
   in.data = keep.data();
   in.byte_swapped = !keep.dtype().attr("isnative").cast<bool>();
-  in.threshold = threshold;
+  in.inside = inside;
   in.h = h;
   return in;
+}
+
+// A 4 by 4 affine (nibabel's, index -> physical) as spacing, unit direction columns and origin.
+VolumeGeometry geometry_arg(py::handle affine) {
+  bool was_vector = false;
+  const Eigen::MatrixXd a = matrix_arg(affine, "affine", 4, was_vector);
+  if (was_vector || a.cols() != 4) throw py::value_error("affine: expected a 4 by 4 array");
+  if (!a.allFinite()) throw py::value_error("affine: the values must be finite");
+  VolumeGeometry g;
+  for (int c = 0; c < 3; ++c) {
+    g.spacing[c] = a.block<3, 1>(0, c).norm();
+    if (!(g.spacing[c] > 0.0))
+      throw py::value_error("affine: column " + std::to_string(c) + " is zero (a voxel side of length 0)");
+    g.direction.col(c) = a.block<3, 1>(0, c) / g.spacing[c];
+  }
+  g.origin = a.block<3, 1>(0, 3);
+  return g;
+}
+
+InsideRule inside_arg(std::optional<double> label, std::optional<double> threshold) {
+  if (label && threshold) throw py::value_error("label, threshold: give one of them (or neither: every nonzero voxel)");
+  if (label) return InsideRule::label(*label);
+  if (threshold) return InsideRule::above(*threshold);
+  return InsideRule::nonzero();
+}
+
+py::array volume_to_numpy(VolumeData&& volume) {
+  // The file's i fastest is numpy's Fortran order of an array indexed [i, j, k].
+  const py::dtype dtype(value_type_name(volume.type));
+  const auto b = py::ssize_t(value_bytes(volume.type));
+  const std::vector<py::ssize_t> shape = {volume.size.x(), volume.size.y(), volume.size.z()};
+  const std::vector<py::ssize_t> strides = {b, b * volume.size.x(), b * volume.size.x() * volume.size.y()};
+  auto* owner = new VolumeData(std::move(volume));
+  py::capsule free(owner, [](void* p) { delete static_cast<VolumeData*>(p); });
+  return py::array(dtype, shape, strides, owner->bytes.data(), free);
 }
 
 }  // namespace
@@ -70,7 +108,7 @@ VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, doub
 
 VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double threshold) {
   py::array values;
-  const VolumeArrayInput in = array_input(volume, h, threshold, values);
+  const VolumeArrayInput in = array_input(volume, h, InsideRule::above(threshold), values);
   py::gil_scoped_release release;
   return load_voxels(in);
 }
@@ -86,9 +124,96 @@ void bind_surface(py::module_& m) {
       "digitize_volume",
       [](py::handle volume, std::optional<double> h, double threshold) {
         py::array values;
-        return surface_of(array_input(volume, h, threshold, values));
+        return surface_of(array_input(volume, h, InsideRule::above(threshold), values));
       },
       py::arg("volume"), py::arg("h"), py::arg("threshold"));
+  m.def(
+      "read_volume",
+      [](const std::string& path) {
+        VolumeData volume;
+        {
+          py::gil_scoped_release release;
+          volume = read_volume_data(path);
+        }
+        const Eigen::Matrix4d affine = volume.geometry.affine();
+        return py::make_tuple(volume_to_numpy(std::move(volume)), to_numpy(Eigen::MatrixXd(affine)));
+      },
+      py::arg("path"));
+  m.def(
+      "write_volume",
+      [](const std::string& path, py::handle array, py::handle affine) {
+        // The Python side passes a native-order Fortran array: its bytes are the file's order.
+        py::array values = numeric_array(array, "array", /*allow_bool=*/true);
+        if (values.ndim() != 3)
+          throw py::value_error("array: expected a 3D array, got " + std::to_string(values.ndim()) + " dimensions");
+        VolumeData volume;
+        volume.type = voxel_value_type(values.dtype(), "array");
+        for (int a = 0; a < 3; ++a) {
+          if (values.shape(a) > std::numeric_limits<int>::max())
+            throw py::value_error("array: axis " + std::to_string(a) + " is too long for a volume file");
+          volume.size[a] = int(values.shape(a));
+        }
+        const auto* begin = static_cast<const std::uint8_t*>(values.data());
+        volume.bytes.assign(begin, begin + values.nbytes());
+        if (!affine.is_none()) volume.geometry = geometry_arg(affine);
+        py::gil_scoped_release release;
+        write_volume_data(path, volume);
+      },
+      py::arg("path"), py::arg("array"), py::arg("affine"));
+  m.def(
+      "regularize_volume",
+      [](py::handle volume, std::optional<double> label, std::optional<double> threshold, py::handle affine,
+         std::optional<double> h, const std::string& method, const py::dict& params, double alpha0,
+         std::optional<double> curvature_radius, std::optional<double> size, const std::string& solver,
+         const py::dict& solver_options, bool allow_nonmanifold) {
+        const InsideRule inside = inside_arg(label, threshold);
+        py::array values;
+        SurfaceInput input;
+        if (py::isinstance<py::str>(volume)) {
+          if (!affine.is_none())
+            throw py::value_error("affine: a volume file has its own geometry; give affine with an array only");
+          VolumeFileInput in;
+          in.path = volume.cast<std::string>();
+          in.inside = inside;
+          in.h = h;
+          input = in;
+        } else {
+          VolumeArrayInput in = array_input(volume, h, inside, values);
+          if (!affine.is_none()) in.geometry = geometry_arg(affine);
+          input = in;
+        }
+        RegularizationOptions o;
+        o.method = method;
+        o.method_params = config_arg(params, method);
+        o.alpha0 = alpha0;
+        o.curvature_radius = curvature_radius;
+        o.size = size;
+        o.solver = config_arg(solver_options, solver);
+        o.solver.set("solver", solver);
+        std::vector<std::string> warnings;
+        SurfelMesh out;
+        {
+          py::gil_scoped_release release;
+          check_regularization_options(o);
+          // As `corrlap regularize --volume`: II normals from the voxels, outputs in physical coordinates.
+          const LoadedSurface surface = load_surface(input);
+          check_regularizable(surface.mesh, allow_nonmanifold);
+          check_regularization_options(surface.mesh, o);
+          const NormalFields normals =
+              resolve_normals(surface, NormalKind::Vertex, NormalRequest{}, "regularize_volume");
+          const RegularizedSurface r = regularize_surface(surface.mesh, normals, o);
+          warnings = r.warnings;
+          out = r.mesh;
+          out.positions = surface.frame.to_physical(r.mesh.positions);
+          if (surface.frame.mirrors()) out.faces = out.faces.rowwise().reverse().eval();
+        }
+        py::list w;
+        for (const auto& s : warnings) w.append(s);
+        return py::make_tuple(to_numpy(out.positions), faces_to_numpy(out.faces), w);
+      },
+      py::arg("volume"), py::arg("label"), py::arg("threshold"), py::arg("affine"), py::arg("h"), py::arg("method"),
+      py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("size"), py::arg("solver"),
+      py::arg("solver_options"), py::arg("allow_nonmanifold"));
   m.def(
       "read_mesh",
       [](const std::string& path) {

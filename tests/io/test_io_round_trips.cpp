@@ -452,12 +452,14 @@ TEST_CASE("volumes are in world units by default: the longest side spans 2 (h = 
   const SurfelMesh voxels = extract_surface(read_volume_as_voxels(vol, o));
   REQUIRE(unit.num_vertices() == voxels.num_vertices());
   CHECK((unit.positions - voxels.positions / 3.0).cwiseAbs().maxCoeff() < 1e-12);
-  // The CLI: no --h gives the same h = 1/3, the volume's centre at the origin (docs/io.md).
+  // The CLI: no --h gives the same h = 1/3, the volume's centre at the origin (docs/io.md); its
+  // output is in physical coordinates unless --output-units world.
   o.h = 0.0;
   o.centered = true;
   const SurfelMesh centered = extract_surface(read_volume_as_voxels(vol, o));
   const std::string out = corrlap::test::tmp_path("unit_volume.obj");
-  REQUIRE(corrlap::test::run_cli("digitize --volume " + vol + " --threshold 100 --out " + out) == 0);
+  REQUIRE(corrlap::test::run_cli("digitize --volume " + vol + " --threshold 100 --output-units world --out " + out) ==
+          0);
   CHECK((read_mesh(out).positions - centered.positions).cwiseAbs().maxCoeff() < 1e-12);
   o.h = -1.0;
   CHECK_THROWS_AS(read_volume_as_voxels(vol, o), InputError);

@@ -75,21 +75,21 @@ TEST_CASE("load_surface of a volume array equals the volume file, and its frame 
   VolumeFileInput file;
   file.path = path;
   VolumeArrayInput array = VolumeArrayInput::c_order(values, {6, 6, 4});
-  array.threshold = 0.5;
+  array.inside = InsideRule::above(0.5);
   const LoadedSurface a = load_surface(file), b = load_surface(array);
   CHECK(a.mesh.positions == b.mesh.positions);
   CHECK(a.mesh.faces == b.mesh.faces);
   CHECK(a.h == 2.0 / 6.0);  // the longest side spans 2
   CHECK(a.frame.shift() == b.frame.shift());
   CHECK(!a.shape);
-  CHECK(a.description == path + ", threshold 0");
+  CHECK(a.description == path + ", inside: nonzero");
   // The lowest pointel of the first block, voxel (0, 0, 1) of the file, is at index (-0.5, -0.5, 0.5).
   const Eigen::MatrixX3d index = a.frame.to_index(a.mesh.positions);
   CHECK(index.colwise().minCoeff().isApprox(Eigen::RowVector3d(-0.5, -0.5, 0.5)));
   CHECK(a.frame.to_world(Eigen::Vector3d(-0.5, -0.5, 0.5)).isApprox(a.mesh.positions.colwise().minCoeff().transpose()));
   array.h = 0.1;
   CHECK(load_surface(array).h == 0.1);
-  array.threshold = 2.0;
+  array.inside = InsideRule::above(2.0);
   CHECK_THROWS_WITH_AS(load_surface(array), doctest::Contains("empty volume"), InputError);
   CHECK_THROWS_WITH_AS(VolumeArrayInput::c_order(std::span<const double>(values.data(), 5), {6, 6, 4}),
                        doctest::Contains("5 values for 6x6x4 voxels"), InputError);
@@ -115,7 +115,7 @@ TEST_CASE("a volume array is read in its own type and strides: any order, broadc
   f.data = fortran.data();
   f.type = VoxelValueType::UInt8;
   f.strides = {1, 6, 36};
-  f.threshold = 100.0;
+  f.inside = InsideRule::above(100.0);
   const LoadedSurface a = load_surface(f);
   CHECK(a.mesh.positions == reference.mesh.positions);
   CHECK(a.mesh.faces == reference.mesh.faces);
@@ -125,7 +125,7 @@ TEST_CASE("a volume array is read in its own type and strides: any order, broadc
   s.type = VoxelValueType::Int32;
   s.byte_swapped = true;
   s.strides = {4 * 24, 4 * 4, 4};
-  s.threshold = 6.5;
+  s.inside = InsideRule::above(6.5);
   const LoadedSurface b = load_surface(s);
   CHECK(b.mesh.faces == reference.mesh.faces);
   // Integers are compared as integers: 2^62 + 1 > 2^62, though both are 2^62 as doubles.
@@ -133,7 +133,7 @@ TEST_CASE("a volume array is read in its own type and strides: any order, broadc
   VolumeArrayInput one;
   one.size = {1, 1, 1};
   one.type = VoxelValueType::Int64;
-  one.threshold = std::ldexp(1.0, 62);
+  one.inside = InsideRule::above(std::ldexp(1.0, 62));
   one.data = &big[1];
   CHECK(load_surface(one).grid->count() == 1);
   one.data = &big[0];
@@ -147,13 +147,13 @@ TEST_CASE("a volume array is read in its own type and strides: any order, broadc
     (void)load_surface(broadcast);
     FAIL("an empty volume was accepted");
   } catch (const InputError& e) {
-    CHECK(std::string(e.what()).find("no voxel above the threshold 0 (empty volume)") != std::string::npos);
+    CHECK(std::string(e.what()).find("no voxel nonzero (empty volume)") != std::string::npos);
     CHECK(e.parameter() == "threshold");
   }
   broadcast.data = &nan;
   CHECK_THROWS_WITH_AS(load_surface(broadcast), doctest::Contains("value at [0, 0, 0] is NaN"), InputError);
   broadcast.data = &zero;
-  broadcast.threshold = std::numeric_limits<double>::infinity();
+  broadcast.inside = InsideRule::above(std::numeric_limits<double>::infinity());
   CHECK_THROWS_WITH_AS(load_surface(broadcast), doctest::Contains("threshold = inf must be a finite number"),
                        InputError);
 }
@@ -190,7 +190,7 @@ TEST_CASE("load_surface of a mesh to voxelize reports its warnings and note thro
 TEST_CASE("surface checks: one policy for open and non-manifold surfaces, the boundary from MeshInfo") {
   const std::vector<double> values = edge_touching_blocks();
   VolumeArrayInput array = VolumeArrayInput::c_order(values, {6, 6, 4});
-  array.threshold = 0.5;
+  array.inside = InsideRule::above(0.5);
   const LoadedSurface s = load_surface(array);
   CHECK_THROWS_WITH_AS(check_regularizable(s.mesh, false), doctest::Contains("not manifold (2 non-manifold edges"),
                        InputError);

@@ -314,7 +314,9 @@ def test_digitize_volume_equals_cli_on_the_same_raw_volume(tmp_path):
     volume = (x - 9.5) ** 2 / 64 + (y - 7) ** 2 / 36 + (z - 6) ** 2 / 16 <= 1  # volume[x, y, z], not symmetric
     # A raw file has x fastest: the array indexed [z, y, x] in C order.
     (tmp_path / "v.raw").write_bytes((volume.transpose(2, 1, 0) * 255).astype(np.uint8).tobytes())
-    run_cli("digitize", "--volume", tmp_path / "v.raw", "--raw-dimensions", 20, 16, 12, "--out", tmp_path / "v.obj")
+    # digitize_volume gives the computation's (world) coordinates; the CLI writes physical ones by default.
+    run_cli("digitize", "--volume", tmp_path / "v.raw", "--raw-dimensions", 20, 16, 12, "--output-units", "world",
+            "--out", tmp_path / "v.obj")
     V, F = corrlap.digitize_volume(volume)
     V2, F2 = corrlap.read_mesh(tmp_path / "v.obj")
     assert np.array_equal(V, V2) and np.array_equal(F, F2)

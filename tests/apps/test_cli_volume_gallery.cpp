@@ -1,0 +1,199 @@
+// A gallery of volumes a user would bring (docs/io.md, docs/regularization.md): `corrlap regularize
+// --volume F --out D` with no other flag must succeed on each, write finite positions, and write
+// them in the volume's physical coordinates (voxel indices for a .vol file, which has no geometry).
+// Also the volume flags shared by every command: --label, --labels all, --threshold.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/volume_io.hpp>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "test_support.hpp"
+
+#ifdef CORRLAP_CLI
+
+namespace {
+
+namespace fs = std::filesystem;
+using corrlap::test::run_cli;
+using corrlap::test::tmp_path;
+
+using Inside = std::function<bool(int, int, int)>;
+
+corrlap::Volume make_volume(const Eigen::Vector3i& size, const Inside& inside, std::uint8_t value = 1) {
+  corrlap::Volume v;
+  v.size = size;
+  v.values.assign(std::size_t(size.prod()), 0);
+  for (int z = 0; z < size.z(); ++z)
+    for (int y = 0; y < size.y(); ++y)
+      for (int x = 0; x < size.x(); ++x)
+        if (inside(x, y, z))
+          v.values[(std::size_t(z) * std::size_t(size.y()) + std::size_t(y)) * std::size_t(size.x()) +
+                   std::size_t(x)] = value;
+  return v;
+}
+
+// The box of the inside voxels' pointels, in voxel indices: [min - 1/2, max + 1/2].
+std::pair<Eigen::RowVector3d, Eigen::RowVector3d> labelled_box(const corrlap::Volume& v) {
+  Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(1e300), hi = -lo;
+  for (int z = 0; z < v.size.z(); ++z)
+    for (int y = 0; y < v.size.y(); ++y)
+      for (int x = 0; x < v.size.x(); ++x)
+        if (v.at(x, y, z)) {
+          lo = lo.cwiseMin(Eigen::RowVector3d(x, y, z));
+          hi = hi.cwiseMax(Eigen::RowVector3d(x, y, z));
+        }
+  return {lo.array() - 0.5, hi.array() + 0.5};
+}
+
+// regularize with no flag but --volume and --out: exit 0, finite positions, in voxel indices
+// (the .vol file's physical coordinates) within a voxel of the labelled box.
+void check_gallery(const std::string& name, const corrlap::Volume& volume) {
+  const std::string dir = tmp_path("gallery_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string file = dir + "/" + name + ".vol";
+  corrlap::write_volume(file, volume);
+  std::string out, err;
+  const int rc = run_cli("regularize --volume " + file + " --out " + dir + "/out", &out, &err);
+  INFO(name << ": " << err);
+  REQUIRE(rc == 0);
+  const corrlap::PolygonMesh m = corrlap::read_mesh(dir + "/out/regularized.obj");
+  REQUIRE(m.positions.rows() > 0);
+  CHECK(m.positions.allFinite());
+  const auto [lo, hi] = labelled_box(volume);
+  const Eigen::RowVector3d min = m.positions.colwise().minCoeff(), max = m.positions.colwise().maxCoeff();
+  INFO("output box " << min << " .. " << max << ", labelled box " << lo << " .. " << hi);
+  CHECK(((min - lo).cwiseAbs().maxCoeff()) <= 1.0);
+  CHECK(((max - hi).cwiseAbs().maxCoeff()) <= 1.0);
+  std::ifstream metrics(dir + "/out/metrics.json");
+  const nlohmann::json j = nlohmann::json::parse(metrics);
+  CHECK(j["output_units"] == "physical");
+  MESSAGE(name << ": " << j["vertices"] << " vertices, " << j["components"] << " components, time "
+               << j["time_s"].dump());
+}
+
+}  // namespace
+
+TEST_CASE("gallery: an L-bracket with a plate two voxels thin regularizes with the defaults" *
+          doctest::skip()) {
+  // Waits for the volume defaults (II and curvature radii in voxels): the default radius spans the
+  // thin plate.
+  check_gallery("l_bracket", make_volume({48, 40, 40}, [](int x, int y, int z) {
+                  const bool plate = x >= 4 && x < 44 && y >= 4 && y < 36 && z >= 4 && z < 6;
+                  const bool wall = x >= 4 && x < 10 && y >= 4 && y < 36 && z >= 4 && z < 36;
+                  return plate || wall;
+                }));
+}
+
+TEST_CASE("gallery: a CAD-like block with a drilled hole regularizes with the defaults") {
+  check_gallery("drilled_block", make_volume({40, 40, 32}, [](int x, int y, int z) {
+                  const double dx = x - 19.5, dy = y - 19.5;
+                  return x >= 4 && x < 36 && y >= 4 && y < 36 && z >= 4 && z < 28 && dx * dx + dy * dy > 36.0;
+                }));
+}
+
+TEST_CASE("gallery: two components are both kept and reported") {
+  const corrlap::Volume v = make_volume({48, 32, 32}, [](int x, int y, int z) {
+    const auto ball = [&](double cx) { return (x - cx) * (x - cx) + (y - 15.5) * (y - 15.5) + (z - 15.5) * (z - 15.5); };
+    return ball(12.0) <= 64.0 || ball(35.0) <= 64.0;
+  });
+  check_gallery("two_components", v);
+  std::ifstream metrics(tmp_path("gallery_two_components") + "/out/metrics.json");
+  CHECK(nlohmann::json::parse(metrics)["components"] == 2);
+}
+
+TEST_CASE("gallery: a torus (a hole through the shape) regularizes with the defaults") {
+  check_gallery("torus", make_volume({44, 44, 20}, [](int x, int y, int z) {
+                  const double q = std::hypot(x - 21.5, y - 21.5) - 13.0, dz = z - 9.5;
+                  return q * q + dz * dz <= 25.0;
+                }));
+}
+
+TEST_CASE("gallery: a checkerboard corner (non-manifold edges and vertices) regularizes with the defaults" *
+          doctest::skip()) {
+  // Waits for the non-manifold handling (surfel adjacency splitting the pinches into sheets):
+  // refused today without --allow-nonmanifold.
+  check_gallery("checkerboard", make_volume({28, 28, 28}, [](int x, int y, int z) {
+                  if (x < 4 || y < 4 || z < 4 || x >= 24 || y >= 24 || z >= 24) return false;
+                  return ((x - 4) / 10 + (y - 4) / 10 + (z - 4) / 10) % 2 == 0;
+                }));
+}
+
+TEST_CASE("gallery: a scan-like ellipsoid of 1 x 1 x 2.5 mm voxels comes out in millimetres" * doctest::skip()) {
+  // Waits for the NRRD space fields (io/nrrd.cpp reads `space directions` / `space origin`): today
+  // the file's geometry is dropped on reading.
+  const std::string dir = tmp_path("gallery_ellipsoid");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  corrlap::VolumeData data;
+  data.size = {40, 32, 12};
+  data.type = corrlap::VoxelValueType::UInt8;
+  data.geometry.spacing = {1.0, 1.0, 2.5};
+  data.geometry.origin = {-19.5, -15.5, -13.75};
+  data.bytes.assign(std::size_t(data.size.prod()), 0);
+  for (int k = 0; k < 12; ++k)
+    for (int j = 0; j < 32; ++j)
+      for (int i = 0; i < 40; ++i) {
+        const Eigen::Vector3d p = data.geometry.to_physical(Eigen::Vector3d(i, j, k));
+        if (std::pow(p.x() / 16.0, 2) + std::pow(p.y() / 12.0, 2) + std::pow(p.z() / 10.0, 2) <= 1.0)
+          data.bytes[std::size_t((k * 32 + j) * 40 + i)] = 1;
+      }
+  corrlap::write_volume_data(dir + "/scan.nrrd", data);
+  std::string err;
+  REQUIRE(run_cli("regularize --volume " + dir + "/scan.nrrd --out " + dir + "/out", nullptr, &err) == 0);
+  const corrlap::PolygonMesh m = corrlap::read_mesh(dir + "/out/regularized.obj");
+  CHECK(m.positions.allFinite());
+  // Millimetres, centred on the ellipsoid: within a voxel of its semi-axes.
+  const Eigen::RowVector3d max = m.positions.colwise().maxCoeff(), min = m.positions.colwise().minCoeff();
+  CHECK(max.x() == doctest::Approx(16.0).epsilon(0.1));
+  CHECK(min.z() == doctest::Approx(-10.0).epsilon(0.25));
+}
+
+TEST_CASE("volume flags: --label, --labels all writes one folder per label, --threshold excludes them") {
+  const std::string dir = tmp_path("cli_volume_labels");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // Two boxes labelled 3 and 7.
+  corrlap::Volume v = make_volume({24, 14, 14}, [](int x, int y, int z) {
+    return x >= 2 && x < 10 && y >= 3 && y < 11 && z >= 3 && z < 11;
+  }, 3);
+  for (int z = 3; z < 11; ++z)
+    for (int y = 3; y < 11; ++y)
+      for (int x = 13; x < 21; ++x) v.values[std::size_t((z * 14 + y) * 24 + x)] = 7;
+  const std::string file = dir + "/seg.vol";
+  corrlap::write_volume(file, v);
+  std::string err;
+  REQUIRE(run_cli("regularize --volume " + file + " --labels all --no-render --out " + dir + "/all", nullptr, &err) ==
+          0);
+  CHECK(fs::exists(dir + "/all/label-3/regularized.obj"));
+  CHECK(fs::exists(dir + "/all/label-7/regularized.obj"));
+  CHECK(fs::exists(dir + "/all/labels.json"));
+  // Label 7 alone: its box in voxel indices (physical for a .vol), x in [12.5, 20.5].
+  const corrlap::PolygonMesh seven = corrlap::read_mesh(dir + "/all/label-7/input.ply");
+  CHECK(seven.positions.col(0).minCoeff() == doctest::Approx(12.5));
+  CHECK(seven.positions.col(0).maxCoeff() == doctest::Approx(20.5));
+  REQUIRE(run_cli("digitize --volume " + file + " --label 3 --out " + dir + "/three.obj", nullptr, &err) == 0);
+  const corrlap::PolygonMesh three = corrlap::read_mesh(dir + "/three.obj");
+  CHECK(three.positions.col(0).maxCoeff() == doctest::Approx(9.5));
+  // --output-units world: the computation's centred coordinates, the longest side spanning 2.
+  REQUIRE(run_cli("digitize --volume " + file + " --out " + dir + "/world.obj --output-units world", nullptr, &err) ==
+          0);
+  const corrlap::PolygonMesh world = corrlap::read_mesh(dir + "/world.obj");
+  CHECK(world.positions.col(0).maxCoeff() < 1.0);
+  CHECK(world.positions.col(0).minCoeff() > -1.0);
+  CHECK(run_cli("digitize --volume " + file + " --label 3 --threshold 1 --out " + dir + "/x.obj", nullptr, &err) != 0);
+  CHECK(err.find("excludes") != std::string::npos);
+  CHECK(run_cli("digitize --volume " + file + " --label 4 --out " + dir + "/x.obj", nullptr, &err) == 1);
+  CHECK(err.find("no voxel equal to the label 4") != std::string::npos);
+  CHECK(run_cli("digitize --volume " + file + " --labels all --out " + dir + "/x.obj", nullptr, &err) == 1);
+  CHECK(err.find("--labels all") != std::string::npos);
+  CHECK(run_cli("digitize --shape sphere1 --label 3 --out " + dir + "/x.obj", nullptr, &err) == 1);
+  CHECK(err.find("--label applies to --volume only") != std::string::npos);
+}
+
+#endif

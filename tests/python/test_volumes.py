@@ -1,0 +1,92 @@
+"""Volumes from Python (docs/python.md, docs/io.md "Coordinates"): read_volume / write_volume keep
+the values in their dtype with the affine, and regularize_volume returns vertices in physical
+coordinates, as `corrlap regularize --volume` writes them.
+
+Run by ctest (python_volumes) with PYTHONPATH=<build>/python.
+"""
+import numpy as np
+import pytest
+
+import corrlap
+
+
+def ellipsoid(spacing, axes=(16.0, 12.0, 10.0)):
+    """An ellipsoid sampled at voxel centres origin + spacing * index (uint8 0/1) and its affine."""
+    spacing = np.asarray(spacing, dtype=float)
+    axes = np.asarray(axes)
+    n = 2 * np.ceil((axes + 2 * spacing) / spacing).astype(int) + 1
+    origin = -spacing * (n // 2)
+    i, j, k = np.meshgrid(*(np.arange(m) for m in n), indexing="ij")
+    p = np.stack([i, j, k], axis=-1) * spacing + origin
+    inside = ((p / axes) ** 2).sum(axis=-1) <= 1.0
+    affine = np.eye(4)
+    affine[:3, :3] = np.diag(spacing)
+    affine[:3, 3] = origin
+    return inside.astype(np.uint8), affine
+
+
+def test_write_then_read_keeps_values_shape_and_order(tmp_path):
+    values = np.zeros((5, 4, 3), dtype=np.uint8)
+    values[1, 2, 0] = 7
+    values[4, 0, 2] = 200
+    path = tmp_path / "v.nrrd"
+    corrlap.write_volume(path, values)
+    back, affine = corrlap.read_volume(path)
+    assert back.shape == (5, 4, 3)
+    assert back.dtype == np.uint8
+    np.testing.assert_array_equal(back, values)
+    np.testing.assert_array_equal(affine, np.eye(4))
+    # A C-ordered array and a strided view are written as the same voxels.
+    corrlap.write_volume(path, np.ascontiguousarray(values))
+    np.testing.assert_array_equal(corrlap.read_volume(path)[0], values)
+    corrlap.write_volume(path, values[::2, :, :])
+    np.testing.assert_array_equal(corrlap.read_volume(path)[0], values[::2, :, :])
+
+
+@pytest.mark.skip(reason="waits for the NRRD space fields (io/nrrd.cpp writes and reads space directions)")
+def test_the_affine_round_trips(tmp_path):
+    values, affine = ellipsoid((1.0, 1.0, 2.5))
+    corrlap.write_volume(tmp_path / "e.nrrd", values, affine)
+    back, back_affine = corrlap.read_volume(tmp_path / "e.nrrd")
+    np.testing.assert_array_equal(back, values)
+    np.testing.assert_allclose(back_affine, affine)
+
+
+def test_regularize_volume_returns_millimetres_for_anisotropic_voxels():
+    values, affine = ellipsoid((1.0, 1.0, 2.5))
+    V, F = corrlap.regularize_volume(values, affine=affine)
+    assert F.shape[1] == 4 and V.shape[1] == 3
+    assert np.isfinite(V).all()
+    # Millimetres around the true ellipsoid (semi-axes 16, 12, 10): within the coarse voxel.
+    np.testing.assert_allclose(V.max(axis=0), [16.0, 12.0, 10.0], atol=1.25)
+    np.testing.assert_allclose(V.min(axis=0), [-16.0, -12.0, -10.0], atol=1.25)
+    r = np.sqrt(((V / [16.0, 12.0, 10.0]) ** 2).sum(axis=1))
+    assert np.abs(r - 1).max() < 0.15
+    # Without an affine: voxel indices (the ellipsoid's centre voxel index).
+    W, _ = corrlap.regularize_volume(values)
+    centre = -affine[:3, 3] / np.diag(affine)[:3]
+    np.testing.assert_allclose((W.max(axis=0) + W.min(axis=0)) / 2, centre, atol=1.0)
+
+
+def test_regularize_volume_labels_and_paths(tmp_path):
+    seg = np.zeros((24, 14, 14), dtype=np.int16)
+    seg[2:10, 3:11, 3:11] = 3
+    seg[13:21, 3:11, 3:11] = 7
+    V, _ = corrlap.regularize_volume(seg, label=7)
+    assert 12.0 < V[:, 0].min() and V[:, 0].max() < 21.0
+    V, _ = corrlap.regularize_volume(seg, threshold=5)
+    assert V[:, 0].min() > 12.0
+    both, _ = corrlap.regularize_volume(seg)  # every nonzero voxel: both boxes
+    assert both[:, 0].min() < 3.0 and both[:, 0].max() > 20.0
+    with pytest.raises(ValueError, match="label, threshold: give one of them"):
+        corrlap.regularize_volume(seg, label=3, threshold=1)
+    with pytest.raises(ValueError, match="no voxel equal to the label 4"):
+        corrlap.regularize_volume(seg, label=4)
+    with pytest.raises(ValueError, match="affine: expected a 4 by 4 array"):
+        corrlap.regularize_volume(seg, affine=np.eye(3))
+    path = tmp_path / "seg.nrrd"
+    corrlap.write_volume(path, seg.astype(np.uint8))
+    P, _ = corrlap.regularize_volume(path, label=3)
+    assert P[:, 0].max() < 10.0
+    with pytest.raises(ValueError, match="a volume file has its own geometry"):
+        corrlap.regularize_volume(str(path), affine=np.eye(4))
