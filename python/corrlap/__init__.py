@@ -313,18 +313,18 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
     curvature_radius, size: as `corrlap regularize` (defaults 0.1 size and half the bounding box).
     solver, solver_options: the linear solver and its options.
-    allow_nonmanifold: the surface must be closed (ValueError otherwise) and, unless
-    allow_nonmanifold=True, manifold: voxels touching along an edge or at a corner only pinch the
-    surface, its normals and curvature are unreliable there and the result moves by several voxels,
-    so such a surface raises ValueError naming the counts, as `corrlap regularize` refuses it
-    (--allow-nonmanifold).
+    The surface must be closed and manifold (ValueError naming the counts otherwise). Surfaces from
+    voxels (digitize_volume, digitize) always are: pointels where voxels touch along an edge or at a
+    corner are split into one vertex per sheet (docs/math.md 1.4). A mesh from elsewhere is taken as
+    it is. allow_nonmanifold: accepted and ignored (it let pinched digital surfaces through before
+    they were split).
 
     Returns P (#V, 3), and H (#V,) too when return_curvature.
     """
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
                                       _real(alpha0, "alpha0", required=True),
                                       _real(curvature_radius, "curvature_radius"), _real(size, "size"), str(solver),
-                                      dict(solver_options or {}), bool(allow_nonmanifold))
+                                      dict(solver_options or {}))
     _warn(warnings)
     return (P, H) if return_curvature else P
 
