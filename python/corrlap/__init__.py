@@ -157,7 +157,7 @@ def true_normals(shape, V, F, at="faces", center=(0.0, 0.0, 0.0)):
     return _core.true_normals(str(shape), V, F, at, _np.reshape(center, (1, 3)))
 
 
-def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbox=(-10.0, 10.0), offset=5,
+def ii_normals(volume_or_shape, V, F, h=None, alpha=None, k=None, at="faces", bbox=(-10.0, 10.0), offset=5,
                center=(0.0, 0.0, 0.0), threshold=0.0):
     """Integral-invariant normals (docs/math.md 7): covariance of the voxels in a ball of radius
     k h^alpha around each surfel.
@@ -166,7 +166,9 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbo
                      a 3D array (digitized as digitize_volume with h, threshold); V, F must be the
                      surface digitize / digitize_volume returned for it
     h                grid step (required for shapes; volumes: None means 2 / longest side)
-    alpha, k         radius exponent and factor (defaults 0.33 and 3, the CLI's; the paper says 1/3)
+    alpha, k         radius exponent and factor, the CLI's defaults: for a shape the paper's 0.33 and 3
+                     (the paper says 1/3); for a volume 1 and 4, a radius of 4 voxels (docs/regularization.md,
+                     "Default radii")
     at               "faces": (#F, 3); "vertices": normalized sums of face normals, (#V, 3)
     """
     if isinstance(volume_or_shape, str):
@@ -174,10 +176,9 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbo
             raise ValueError("h: required with a shape")
         lo, hi = _bbox(bbox)
         return _core.ii_normals_shape(volume_or_shape, V, F, _real(h, "h"), lo, hi, _integer(offset, "offset"),
-                                      _np.reshape(center, (1, 3)), _real(k, "k", required=True),
-                                      _real(alpha, "alpha", required=True), str(at))
+                                      _np.reshape(center, (1, 3)), _real(k, "k"), _real(alpha, "alpha"), str(at))
     return _core.ii_normals_volume(volume_or_shape, V, F, _real(h, "h"), _real(threshold, "threshold", required=True),
-                                   _real(k, "k", required=True), _real(alpha, "alpha", required=True), str(at))
+                                   _real(k, "k"), _real(alpha, "alpha"), str(at))
 
 
 def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vertices", constant=False):

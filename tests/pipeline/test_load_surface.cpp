@@ -267,12 +267,11 @@ TEST_CASE("resolve_normals takes normals in memory like files, and names the par
   CHECK(parameter_of([] { (void)parse_normal_source("sideways"); }) == "normals");
   NormalRequest ii;
   ii.source = NormalSource::II;
-  ii.ii.k = -1.0;
+  ii.ii = IIParams{.k = -1.0, .alpha = 0.33};
   CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, ii); }) == "ii_radius");
-  ii.ii.k = 3.0;
-  ii.ii.alpha = std::nan("");
+  ii.ii = IIParams{.k = 3.0, .alpha = std::nan("")};
   CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, ii); }) == "ii_alpha");
-  ii.ii.alpha = 0.33;
+  ii.ii = IIParams{.k = 3.0, .alpha = 0.33};
   QuadMeshInput quad;
   quad.mesh = s.mesh;
   quad.mesh.surfels.clear();
