@@ -31,6 +31,14 @@ Eigen::Matrix3d BallMoments::covariance() const {
   return c;
 }
 
+IIParams default_ii_params(bool implicit_shape, std::optional<double> k, std::optional<double> alpha) {
+  IIParams p;
+  if (!implicit_shape) p = IIParams{.k = kVoxelIIRadius, .alpha = 1.0};
+  if (k) p.k = *k;
+  if (alpha) p.alpha = *alpha;
+  return p;
+}
+
 double ii_digital_radius(double h, const IIParams& params) {
   // docs/math.md §7 step 1: r_d = k * h^(alpha - 1); R = r_d * h.
   return params.k * std::pow(h, params.alpha - 1.0);
@@ -72,7 +80,9 @@ void check_radius(const VoxelGrid& grid, double digital_radius) {
   const int extent = grid.size().maxCoeff();
   if (digital_radius > double(extent))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
-                     " is larger than the volume (" + std::to_string(extent) + " voxels)");
+                         " is larger than the volume (" + std::to_string(extent) +
+                         " voxels); give a smaller ii_radius (while r/h stays at least 1)",
+                     "ii_radius");
 }
 
 // A ball that covers the whole object from every surfel sees the same voxels everywhere: the

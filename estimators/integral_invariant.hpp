@@ -7,15 +7,27 @@
 #include <corrlap/core/voxel_grid.hpp>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace corrlap {
 
 /// Parameters of docs/math.md §7. Euclidean radius R = k h^alpha, digital radius r_d = k h^(alpha-1).
+/// These defaults are the paper's, for implicit shapes in their unit-size world (R = 3 h^0.33).
 struct IIParams {
   double k = 3.0;       ///< "r-radius"
   double alpha = 0.33;  ///< reference Shortcuts default (the paper says 1/3)
 };
+
+/// The II radius, in voxels, for voxels that come from a file (a volume, a voxelized mesh):
+/// R = 4 h. The paper's 3 h^0.33 assumes a unit-size shape and grows to tens of voxels on fine
+/// volumes, wider than thin parts; a radius in voxels also gives the same result for a mesh whatever
+/// its units. Chosen by measurement (docs/regularization.md, "Default radii").
+inline constexpr double kVoxelIIRadius = 4.0;
+
+/// The II parameters of an input: for an implicit shape the paper's (IIParams{}), for voxels from a
+/// file k = kVoxelIIRadius voxels with alpha = 1. A given k or alpha replaces its default.
+IIParams default_ii_params(bool implicit_shape, std::optional<double> k = {}, std::optional<double> alpha = {});
 
 /// Digital radius r_d = k * h^(alpha - 1) computed as the reference does (docs/math.md §7 step 1).
 double ii_digital_radius(double h, const IIParams& params);

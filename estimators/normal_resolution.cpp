@@ -2,8 +2,11 @@
 
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <limits>
+#include <sstream>
 
 namespace corrlap {
 
@@ -31,6 +34,42 @@ Eigen::MatrixX3d given_normals(const std::string& path, const Eigen::MatrixX3d& 
   return n;
 }
 
+// A vertex whose II face normals cancel out has no normal: the II ball is wider than the part the
+// vertex lies on (it sees the whole part, whose covariance has no preferred direction). Names the
+// radius in voxels and the part's size so that the user knows which radius to give.
+void check_ii_vertex_normals(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals, const IIParams& ii) {
+  Eigen::Index bad = -1;
+  for (Eigen::Index v = 0; v < vertex_normals.rows() && bad < 0; ++v)
+    if (!(vertex_normals.row(v).squaredNorm() > 0.0)) bad = v;
+  if (bad < 0) return;
+  int count = 0;
+  for (Eigen::Index v = 0; v < vertex_normals.rows(); ++v) count += !(vertex_normals.row(v).squaredNorm() > 0.0);
+  // The component (faces joined by vertices) of the first such vertex, and its bounding box.
+  int components = 0;
+  const std::vector<int> component = face_components(mesh, components);
+  int c = -1;
+  for (int f = 0; f < mesh.num_faces() && c < 0; ++f)
+    for (int j = 0; j < 4; ++j)
+      if (mesh.faces(f, j) == int(bad)) c = component[std::size_t(f)];
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (component[std::size_t(f)] == c)
+      for (int j = 0; j < 4; ++j) {
+        lo = lo.cwiseMin(mesh.positions.row(mesh.faces(f, j)).transpose());
+        hi = hi.cwiseMax(mesh.positions.row(mesh.faces(f, j)).transpose());
+      }
+  const double h = mesh.grid_step();
+  const Eigen::Vector3d extent = (hi - lo) / h;
+  const double radius = ii_digital_radius(h, ii);
+  std::ostringstream os;
+  os << "II normals: the normal of vertex " << bad << " (and of " << count - 1
+     << " other vertices) is the zero vector: the II normals of its faces cancel out because the II radius, " << radius
+     << " voxels, exceeds the part it lies on (" << extent.x() << " x " << extent.y() << " x " << extent.z()
+     << " voxels, " << extent.minCoeff() << " across at its thinnest); give a smaller ii_radius (a radius below "
+     << 0.5 * extent.minCoeff() << " voxels; with alpha = " << ii.alpha << ", k is the radius in units of h^alpha)";
+  throw InputError(os.str(), "ii_radius");
+}
+
 }  // namespace
 
 NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const NormalRequest& request,
@@ -47,22 +86,26 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
                                   ? NormalSource::Given
                                   : effective_normal_source(request.source, shape, grid);
   const bool estimates = source != NormalSource::Auto && source != NormalSource::Given;
+  const IIParams ii = request.ii ? *request.ii : default_ii_params(shape != nullptr);
+  bool ii_estimated = false;
   if (!have_all && !n.has_face() && estimates) {
-    if (source == NormalSource::II && !(request.ii.k > 0.0 && std::isfinite(request.ii.k)))
-      throw InputError(
-          "II normals: the radius factor k = " + std::to_string(request.ii.k) + " must be positive and finite",
-          "ii_radius");
-    if (source == NormalSource::II && !std::isfinite(request.ii.alpha))
+    if (source == NormalSource::II && !(ii.k > 0.0 && std::isfinite(ii.k)))
+      throw InputError("II normals: the radius factor k = " + std::to_string(ii.k) + " must be positive and finite",
+                       "ii_radius");
+    if (source == NormalSource::II && !std::isfinite(ii.alpha))
       throw InputError("II normals: the radius exponent alpha must be finite", "ii_alpha");
-    n.face = estimate_face_normals(source, mesh, grid, shape, request.ii, request.progress);
+    n.face = estimate_face_normals(source, mesh, grid, shape, ii, request.progress);
+    ii_estimated = source == NormalSource::II;
   }
   if (need_vertex && !n.has_vertex() && source == NormalSource::Exact) {
     if (!shape) throw InputError("exact normals need an implicit shape", "normals");
     n.vertex = exact_vertex_normals(*shape, mesh);
   }
   // docs/math.md §1.5: vertex normals = normalized sum of the incident face normals (one definition).
-  if (need_vertex && !n.has_vertex() && n.has_face())
+  if (need_vertex && !n.has_vertex() && n.has_face()) {
     n.vertex = vertex_normals_from_face_normals(n.face, mesh.faces, mesh.num_vertices());
+    if (ii_estimated) check_ii_vertex_normals(mesh, n.vertex, ii);
+  }
   if (need == NormalKind::Face && !n.has_face())
     throw InputError(what + " needs face normals: give face_normals or a normals source (true, ii, trivial)" +
                          (n.has_vertex() ? " (vertex normals do not give face normals)" : ""),

@@ -11,6 +11,7 @@
 #include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/estimators/normal_estimation.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <optional>
 #include <string>
 
 namespace corrlap {
@@ -23,8 +24,10 @@ struct NormalRequest {
   std::string vertex_normals_file;  ///< one "nx ny nz" per vertex; empty: none
   Eigen::MatrixX3d face_normals;    ///< in memory, #F x 3 (e.g. from Python); 0 rows: none
   Eigen::MatrixX3d vertex_normals;  ///< in memory, #V x 3; 0 rows: none
-  IIParams ii;                      ///< II radius parameters (source II)
-  ProgressFn progress;              ///< II progress (may be called from worker threads)
+  /// II radius parameters (source II); unset: default_ii_params for the input (the paper's for an
+  /// implicit shape, kVoxelIIRadius voxels for voxels without one).
+  std::optional<IIParams> ii;
+  ProgressFn progress;  ///< II progress (may be called from worker threads)
 };
 
 /// The normals a consumer needs (`need`, e.g. Discretization::required_normals()):

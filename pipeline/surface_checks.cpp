@@ -5,18 +5,18 @@
 
 namespace corrlap {
 
-void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold) {
+void check_regularizable(const SurfelMesh& mesh) {
   const MeshInfo info = compute_mesh_info(mesh);
   if (!info.closed())
     throw InputError("the surface is open (" + std::to_string(info.boundary_edges) +
                      " boundary edges); the regularization is defined for closed surfaces");
-  if (!info.manifold() && !allow_nonmanifold)
+  // Surfaces from voxels are split into manifold sheets at extraction; only a given mesh gets here.
+  if (!info.manifold())
     throw InputError("the surface is not manifold (" + std::to_string(info.nonmanifold_edges) +
-                         " non-manifold edges, " + std::to_string(info.nonmanifold_vertices) +
-                         " non-manifold vertices: voxels touching along an edge or a corner); clean the volume (e.g. "
-                         "a morphological opening; for a voxelized mesh, another resolution) or allow non-manifold "
-                         "surfaces (allow_nonmanifold) to go on anyway",
-                     "allow_nonmanifold");
+                     " non-manifold edges, " + std::to_string(info.nonmanifold_vertices) +
+                     " non-manifold vertices); a quad mesh given as it is must be a closed 2-manifold: give each "
+                     "sheet its own vertices at those edges and vertices (surfaces extracted from voxels are split "
+                     "this way by corrlap itself)");
 }
 
 BoundaryCondition boundary_condition(const SurfelMesh& mesh) {

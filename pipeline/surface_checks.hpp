@@ -8,11 +8,11 @@
 namespace corrlap {
 
 /// The surfaces the regularization and the normal-map reconstruction accept (docs/regularization.md):
-/// closed (InputError naming the boundary edges otherwise) and, unless `allow_nonmanifold`,
-/// manifold. Voxels that touch along an edge or at a corner only pinch the surface: its normals
-/// and curvature are unreliable nearby and the solve moves it by several voxels, so that is
-/// refused by default (InputError with parameter "allow_nonmanifold", naming the counts).
-void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold);
+/// closed and manifold (InputError naming the boundary edges, or the non-manifold edges and
+/// vertices). Surfaces extracted from voxels always are manifold (extract_surface splits pinched
+/// pointels into sheets, docs/math.md §1.4); a quad mesh given as it is may not be, and no sheet
+/// rule applies to it, so the error asks to split it.
+void check_regularizable(const SurfelMesh& mesh);
 
 /// The boundary condition the solvers' problems get on this surface: none on a closed surface;
 /// on an open one, natural (zero Neumann) conditions on its boundary edges, because every

@@ -92,7 +92,7 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       LoadedSurface surface;
       try {
         surface = load_surface(input);
-        check_regularizable(surface.mesh, o.allow_nonmanifold);
+        check_regularizable(surface.mesh);
       } catch (const InputError& e) {
         std::ostringstream os;
         os << "study regularization: " << name << " at h = " << h << ": " << e.what();

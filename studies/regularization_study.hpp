@@ -24,10 +24,6 @@ struct RegularizationStudyOptions {
   double min_aabb = -10.0, max_aabb = 10.0;  ///< digitization box of every shape
   int offset = 5;
   std::string linear_solver = "cholmod";
-  /// Go on with surfaces that are not manifold (check_regularizable): refused by default, as by
-  /// `corrlap regularize` and Python's regularize.
-  bool allow_nonmanifold = false;
-
   /// InputError naming the first invalid option (unknown shape or method, no resolution...).
   void validate() const;
 };

@@ -168,8 +168,7 @@ StudySurface study_surface(const StudyOptions& o, double h, const Eigen::Vector3
   s.surface = load_surface(input);
   NormalRequest request;
   request.source = study_normal_source(o);
-  request.ii.k = o.ii_k;
-  request.ii.alpha = o.ii_alpha;
+  request.ii = IIParams{.k = o.ii_k, .alpha = o.ii_alpha};
   s.normals = resolve_normals(s.surface, NormalKind::Vertex, request, "study");
   return s;
 }
@@ -308,8 +307,7 @@ SharedSurface build_mesh_surface(const StudyOptions& o, double h, const Eigen::V
     request.vertex_normals = std::move(at_vertices.normals);
     request.face_normals = std::move(at_faces.normals);
   }
-  request.ii.k = o.ii_k;
-  request.ii.alpha = o.ii_alpha;
+  request.ii = IIParams{.k = o.ii_k, .alpha = o.ii_alpha};
   s.normals = resolve_normals(s.mesh, NormalKind::Vertex, request, nullptr, &grid, "study");
   s.pattern = QuadPattern::build(s.mesh);
   s.vertex_f = std::move(at_vertices.f);

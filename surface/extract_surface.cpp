@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <corrlap/core/error.hpp>
@@ -155,6 +156,170 @@ inline void corner_pointel(const DecodedFace& d, int c, int q[3]) {
   q[0] = p[0] / 2;
   q[1] = p[1] / 2;
   q[2] = p[2] / 2;
+}
+
+// Manifold sheets (docs/math.md §1.4). Pointels are shared by position, so where voxels touch
+// only along an edge or at a corner the quad mesh is pinched: a linel with four surfels, or a pointel
+// whose surfels form several fans. The pass below splits those pointels into one vertex per sheet.
+//
+// Pointel Q is the corner shared by the voxels Q - 1 + d, d in {0,1}^3 (its "cube", bit
+// d.x + 2 d.y + 4 d.z of a configuration). The linel from Q along +k (-k) is surrounded by the four
+// cube voxels with d_k = 1 (0); a surfel of the cube (two voxels differing along one axis, one
+// inside) touches the two linels of the other axes on its side.
+
+// Whether the faces at a pointel with this cube configuration need the pass: some linel has four
+// surfels (inside voxels on one diagonal of its square), or the surfels form several fans.
+std::array<bool, 256> pointel_needs_split_table() {
+  std::array<bool, 256> table{};
+  for (int config = 0; config < 256; ++config) {
+    auto in = [&](int d) { return (config >> d) & 1; };
+    // Surfels of the cube: (voxel bit, axis) with the voxel's d_axis = 0 and a change along axis.
+    std::vector<std::pair<int, int>> surfels;
+    for (int d = 0; d < 8; ++d)
+      for (int a = 0; a < 3; ++a)
+        if (!((d >> a) & 1) && in(d) != in(d | (1 << a))) surfels.push_back({d, a});
+    const int n = int(surfels.size());
+    std::vector<int> parent(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) parent[std::size_t(i)] = i;
+    auto find = [&](int i) {
+      while (parent[std::size_t(i)] != i) i = parent[std::size_t(i)];
+      return i;
+    };
+    bool diagonal = false;
+    for (int k = 0; k < 3; ++k)
+      for (int side = 0; side < 2; ++side) {
+        // The linel (k, side): its surfels have both voxels with d_k = side, and axis != k.
+        std::vector<int> at;
+        for (int i = 0; i < n; ++i)
+          if (surfels[std::size_t(i)].second != k && ((surfels[std::size_t(i)].first >> k) & 1) == side)
+            at.push_back(i);
+        if (at.size() == 4) diagonal = true;
+        if (at.size() == 2) parent[std::size_t(find(at[0]))] = find(at[1]);
+      }
+    int fans = 0;
+    for (int i = 0; i < n; ++i) fans += find(i) == i;
+    table[std::size_t(config)] = diagonal || fans > 1;
+  }
+  return table;
+}
+
+// Splits every pinched pointel of `mesh` (extracted from `grid`) into one vertex per sheet: faces
+// around a vertex that share a linel stay together, and at a linel with four surfels they pair up
+// toward the inside voxel (interior adjacency: inside voxels touching along an edge only are apart).
+// The one exception: when the two inside voxels at the linel are face-connected around it at both
+// of its ends (within each end's cube), interior pairing would leave both sheets with the same two
+// end vertices (an edge of four faces again), so there the surfels pair toward the outside voxel.
+// Both ends decide by the same cubes, so they agree. New vertices are appended in order (original
+// vertex, then the smallest face of the sheet), so that manifold surfaces keep the reference numbering.
+void split_pinched_pointels(const VoxelGrid& grid, SurfelMesh& mesh) {
+  static const std::array<bool, 256> needs = pointel_needs_split_table();
+  const Eigen::Vector3i lo = grid.lower(), up = grid.upper();
+  const double h = grid.h();
+  const int V = mesh.num_vertices(), F = mesh.num_faces();
+  auto pointel = [&](int v) {
+    Eigen::Vector3i q;
+    for (int a = 0; a < 3; ++a) q[a] = int(std::lround(mesh.positions(v, a) / h + 0.5));
+    return q;
+  };
+  auto in = [&](const Eigen::Vector3i& x) { return grid.get(x.x(), x.y(), x.z()); };
+  // 1. Flag the pointels that need the pass (pinched configurations, and the box's faces, where the
+  //    surfels toward voxels outside the box do not exist).
+  std::vector<std::uint8_t> flagged(std::size_t(V), 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int v = r.begin(); v != r.end(); ++v) {
+      const Eigen::Vector3i q = pointel(v);
+      if ((q.array() - 1 < lo.array()).any() || (q.array() > up.array()).any()) {
+        flagged[std::size_t(v)] = 1;
+        continue;
+      }
+      int config = 0;
+      for (int d = 0; d < 8; ++d)
+        if (grid.get(q.x() - 1 + (d & 1), q.y() - 1 + ((d >> 1) & 1), q.z() - 1 + ((d >> 2) & 1))) config |= 1 << d;
+      flagged[std::size_t(v)] = needs[std::size_t(config)];
+    }
+  });
+  // 2. Faces at the flagged vertices, by vertex then face.
+  std::vector<std::pair<int, int>> incidence;  // (vertex, 4 face + corner)
+  for (int f = 0; f < F; ++f)
+    for (int c = 0; c < 4; ++c)
+      if (flagged[std::size_t(mesh.faces(f, c))]) incidence.push_back({mesh.faces(f, c), 4 * f + c});
+  if (incidence.empty()) return;
+  std::stable_sort(incidence.begin(), incidence.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  // 3. Sheets of each flagged vertex; corners of the second and later sheets get new vertices.
+  std::vector<std::pair<int, int>> renumber;  // (4 face + corner, new vertex)
+  std::vector<int> copies_of;                 // original vertex of each new vertex
+  for (std::size_t b = 0; b < incidence.size();) {
+    std::size_t e = b;
+    while (e < incidence.size() && incidence[e].first == incidence[b].first) ++e;
+    const int v = incidence[b].first, n = int(e - b);
+    const Eigen::Vector3i qv = pointel(v);
+    std::vector<int> parent(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) parent[std::size_t(i)] = i;
+    auto find = [&](int i) {
+      while (parent[std::size_t(i)] != i) i = parent[std::size_t(i)];
+      return i;
+    };
+    // The faces along each linel (v, w), w a neighbour of v in a face.
+    std::vector<std::pair<int, int>> along;  // (w, local face index)
+    for (int i = 0; i < n; ++i) {
+      const int f = incidence[b + std::size_t(i)].second / 4, c = incidence[b + std::size_t(i)].second % 4;
+      along.push_back({mesh.faces(f, (c + 1) % 4), i});
+      along.push_back({mesh.faces(f, (c + 3) % 4), i});
+    }
+    std::sort(along.begin(), along.end());
+    for (std::size_t s = 0; s < along.size();) {
+      std::size_t t = s;
+      while (t < along.size() && along[t].first == along[s].first) ++t;
+      auto face_of = [&](std::size_t k) { return incidence[b + std::size_t(along[k].second)].second / 4; };
+      if (t - s == 2) {
+        parent[std::size_t(find(along[s].second))] = find(along[s + 1].second);
+      } else if (t - s == 4) {
+        // Inside voxels A, B (diagonal) and outside ones around the linel; dir from v to w.
+        const Eigen::Vector3i dir = pointel(along[s].first) - qv;
+        std::vector<Eigen::Vector3i> inside, outside;
+        for (std::size_t k = s; k < t; ++k) {
+          const Surfel& sf = mesh.surfels[std::size_t(face_of(k))];
+          for (const Eigen::Vector3i& x : {sf.inner_voxel(), sf.outer_voxel()}) {
+            auto& list = in(x) ? inside : outside;
+            if (std::find(list.begin(), list.end(), x) == list.end()) list.push_back(x);
+          }
+        }
+        // A and B face-connected within the cube at the end `sign` (the layer beyond that end).
+        auto joined = [&](int sign) {
+          const Eigen::Vector3i off = sign * dir;
+          return in(inside[0] + off) && in(inside[1] + off) && (in(outside[0] + off) || in(outside[1] + off));
+        };
+        const bool toward_outside = inside.size() == 2 && outside.size() == 2 && joined(-1) && joined(+1);
+        for (std::size_t k = s; k < t; ++k)
+          for (std::size_t l = k + 1; l < t; ++l) {
+            const Surfel& a = mesh.surfels[std::size_t(face_of(k))];
+            const Surfel& c = mesh.surfels[std::size_t(face_of(l))];
+            const bool pair = toward_outside ? a.outer_voxel() == c.outer_voxel() : a.inner_voxel() == c.inner_voxel();
+            if (pair) parent[std::size_t(find(along[k].second))] = find(along[l].second);
+          }
+      }
+      s = t;
+    }
+    // Sheets in order of their smallest face; the first keeps v.
+    std::vector<int> sheet_vertex(std::size_t(n), -1);
+    bool first = true;
+    for (int i = 0; i < n; ++i) {
+      const int root = find(i);
+      if (sheet_vertex[std::size_t(root)] < 0) {
+        sheet_vertex[std::size_t(root)] = first ? v : V + int(copies_of.size());
+        if (!first) copies_of.push_back(v);
+        first = false;
+      }
+      if (sheet_vertex[std::size_t(root)] != v)
+        renumber.push_back({incidence[b + std::size_t(i)].second, sheet_vertex[std::size_t(root)]});
+    }
+    b = e;
+  }
+  if (copies_of.empty()) return;
+  for (const auto& [corner, id] : renumber) mesh.faces(corner / 4, corner % 4) = id;
+  mesh.positions.conservativeResize(Eigen::Index(V + int(copies_of.size())), 3);
+  for (std::size_t i = 0; i < copies_of.size(); ++i)
+    mesh.positions.row(V + Eigen::Index(i)) = mesh.positions.row(copies_of[i]);
 }
 
 }  // namespace
@@ -324,6 +489,8 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
     }
   });
   lap("faces+positions");
+  split_pinched_pointels(grid, mesh);
+  lap("manifold sheets");
   return mesh;
 }
 

@@ -44,8 +44,8 @@ RegisterCommand reg(30, "normals", [](CLI::App& app) {
   args->normals.add_options(*cmd);
   // The spellings of this command before --normals/--ii-radius/--ii-alpha were shared by all.
   add_deprecated_alias(*cmd, "--estimator", "--normals", args->normals.source);
-  add_deprecated_alias(*cmd, "--radius", "--ii-radius", args->normals.ii.k)->check(positive_number());
-  add_deprecated_alias(*cmd, "--alpha", "--ii-alpha", args->normals.ii.alpha);
+  add_deprecated_alias(*cmd, "--radius", "--ii-radius", args->normals.ii_k)->check(positive_number());
+  add_deprecated_alias(*cmd, "--alpha", "--ii-alpha", args->normals.ii_alpha);
   cmd->add_option("--at", args->at, "faces (default) or vertices (normalized sum of incident face normals)")
       ->check(CLI::IsMember({"faces", "vertices"}));
   cmd->add_option("--out", args->out, "output text file")->required();

@@ -36,7 +36,8 @@ struct ReconstructArgs {
   std::string methods = "fem,polydec";
   std::optional<double> curvature_radius, h_clamp;
   double alpha0 = 10.0;
-  bool no_render = false, allow_nonmanifold = false;
+  bool no_render = false;
+  bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
 };
 
 void run(const ReconstructArgs& a) {
@@ -72,7 +73,7 @@ void run(const ReconstructArgs& a) {
   for (const std::string& w : report.warnings()) std::cerr << "warning: " << a.mesh_file << ": " << w << "\n";
   const SurfelMesh coarse = extract_surface(grid);
   if (coarse.num_faces() == 0) throw InputError("reconstruct: the voxelization of '" + a.mesh_file + "' is empty");
-  check_regularizable(coarse, a.allow_nonmanifold, "reconstruct");
+  check_regularizable(coarse, "reconstruct");
   const SurfelMesh mesh = subdivide_quads(coarse, a.subdivide);
   stages["voxelize_s"] = t.lap();
   // The normal map at the subdivided surface: the fine mesh's normals at the closest points.
@@ -170,8 +171,7 @@ RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
       ->capture_default_str();
   args->method_params.add_options(*cmd, /*method_flag=*/false);
   args->solver.add_options(*cmd, std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
-  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
-                "reconstruct from a coarse voxelization with non-manifold edges or vertices (refused by default)");
+  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold, kAllowNonmanifoldNote);
   cmd->add_flag("--no-render", args->no_render, "do not draw the pictures");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->callback([args] { run(*args); });

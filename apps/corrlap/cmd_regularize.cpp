@@ -48,8 +48,8 @@ struct RegularizeArgs {
   std::string output_units = OutputUnits::kDefault;
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
-  bool allow_nonmanifold = false;
-  bool no_render = false;  // before.png / after.png are drawn unless --no-render
+  bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
+  bool no_render = false;          // before.png / after.png are drawn unless --no-render
   // Options of the paper's regularization only: given with --baseline they would be ignored.
   std::vector<CLI::Option*> laplacian_only;
   CLI::Option* clamp_option = nullptr;
@@ -159,7 +159,7 @@ void regularize_one(const RegularizeArgs& a, const RegularizationOptions& o, con
                     const std::string& description, const std::string& dir, const std::string& shown, Stopwatch& t) {
   nlohmann::json stages;
   const SurfelMesh& mesh = surface.mesh;
-  check_regularizable(mesh, a.allow_nonmanifold, "regularize");
+  check_regularizable(mesh, "regularize");
   if (a.baseline.empty()) check_regularization_options(mesh, o);
   stages["surface_s"] = t.lap();
   std::cerr << "regularize: " << description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
@@ -340,8 +340,7 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                   "§9.1) with the face normals of --normals (its test: --normals convolved); alignment-direct: the "
                   "exact minimizer of the same energy by one sparse solve")
       ->check(CLI::IsMember({"alignment", "alignment-direct"}));
-  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
-                "regularize a surface with non-manifold edges or vertices (refused by default)");
+  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold, kAllowNonmanifoldNote);
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");

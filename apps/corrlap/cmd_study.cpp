@@ -26,6 +26,7 @@
 #include "command.hpp"
 #include "method_options.hpp"
 #include "study_output.hpp"
+#include "surface_source.hpp"
 #include "validators.hpp"
 
 namespace corrlap::cli {
@@ -48,7 +49,7 @@ struct StudyArgs {
   std::string shapes = "sphere1,torus,goursat";
   double alpha0 = 10.0;
   bool bbox_given = false;
-  bool allow_nonmanifold = false;
+  bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
   CLI::Option *h_option = nullptr, *resolutions_option = nullptr, *diffusion_option = nullptr;
   const CLI::App* command = nullptr;
 };
@@ -139,7 +140,6 @@ void run_regularization(const StudyArgs& a) {
   }
   o.normals = a.normals_given ? a.options.normals : "ii";
   o.alpha0 = a.alpha0;
-  o.allow_nonmanifold = a.allow_nonmanifold;
   if (a.bbox_given) {
     o.min_aabb = a.bbox[0];
     o.max_aabb = a.bbox[1];
@@ -414,9 +414,7 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
                       "longest side (default 32,64,128)")
           ->capture_default_str();
   cmd->add_option("--shapes", args->shapes, "regularization: implicit shapes")->capture_default_str();
-  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold,
-                "regularization: go on with shapes whose digitization is not manifold (refused by default, as by "
-                "corrlap regularize)");
+  cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold, kAllowNonmanifoldNote);
   cmd->add_option("--alpha0", args->alpha0, "regularization: attachment weight alpha = alpha0 / (h size)^2")
       ->check(positive_number())
       ->capture_default_str();

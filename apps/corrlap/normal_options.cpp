@@ -39,23 +39,26 @@ void NormalOptions::add_options(CLI::App& cmd) {
              "face normals (docs/math.md §1.5)")
           ->check(CLI::IsMember({"auto", "true", "ii", "trivial", "convolved"}))
           ->capture_default_str();
-  cmd.add_option("--ii-radius", ii.k, "II: r-radius k, Euclidean radius k*h^alpha (default 3)")
+  cmd.add_option("--ii-radius", ii_k,
+                 "II: radius factor k, Euclidean radius k*h^alpha; default: for volumes and mesh files 4 with "
+                 "--ii-alpha 1, i.e. 4 voxels (docs/regularization.md, \"Default radii\"); for --shape and "
+                 "--polynomial the paper's 3 with --ii-alpha 0.33")
       ->check(positive_number());
-  cmd.add_option("--ii-alpha", ii.alpha, "II: exponent alpha (default 0.33)");
+  cmd.add_option("--ii-alpha", ii_alpha, "II: exponent alpha (default 1 for volumes and mesh files, 0.33 for shapes)");
 }
 
-NormalRequest NormalOptions::request() const {
+NormalRequest NormalOptions::request(const LoadedSurface& s) const {
   NormalRequest r;
   r.source = parse_normal_source(source);
   r.face_normals_file = face_file;
   r.vertex_normals_file = vertex_file;
-  r.ii = ii;
+  r.ii = default_ii_params(s.shape_ptr() != nullptr, ii_k, ii_alpha);
   r.progress = stderr_progress("ii normals");
   return r;
 }
 
 NormalFields NormalOptions::resolve(const LoadedSurface& s, NormalKind need, const std::string& what) const {
-  return in_cli_terms([&] { return resolve_normals(s, need, request(), what); });
+  return in_cli_terms([&] { return resolve_normals(s, need, request(s), what); });
 }
 
 std::string NormalOptions::describe(const LoadedSurface& s) const {

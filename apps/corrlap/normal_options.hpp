@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <optional>
 #include <string>
 
 #include "surface_source.hpp"
@@ -18,11 +19,12 @@ ProgressFn stderr_progress(const std::string& what);
 struct NormalOptions {
   std::string source = "auto";
   std::string face_file, vertex_file;
-  IIParams ii;
+  std::optional<double> ii_k, ii_alpha;  ///< --ii-radius, --ii-alpha; unset: default_ii_params
   CLI::Option* source_option = nullptr;  ///< to know whether --normals was given explicitly
 
   void add_options(CLI::App& cmd);
-  NormalRequest request() const;
+  /// The request for this surface (its kind decides the II defaults).
+  NormalRequest request(const LoadedSurface& surface) const;
   /// resolve_normals for the surface (its shape and voxels); `what` names the consumer in errors,
   /// which name the CLI flags.
   NormalFields resolve(const LoadedSurface& surface, NormalKind need, const std::string& what) const;

@@ -165,8 +165,8 @@ Eigen::MatrixX3d OutputUnits::normals(const Eigen::MatrixX3d& n) const {
 
 std::string SurfaceSource::describe() const { return corrlap::describe(input()); }
 
-void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold, const std::string& command) {
-  in_cli_terms([&] { corrlap::check_regularizable(mesh, allow_nonmanifold); }, command);
+void check_regularizable(const SurfelMesh& mesh, const std::string& command) {
+  in_cli_terms([&] { corrlap::check_regularizable(mesh); }, command);
 }
 
 }  // namespace corrlap::cli

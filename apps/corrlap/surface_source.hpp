@@ -75,7 +75,13 @@ struct SurfaceSource {
   InsideRule inside() const;
 };
 
-/// The library's check_regularizable, its error naming `command` and the CLI flag.
-void check_regularizable(const SurfelMesh& mesh, bool allow_nonmanifold, const std::string& command);
+/// Help of --allow-nonmanifold, which regularize, reconstruct and study still accept so that
+/// existing command lines keep working.
+inline constexpr const char* kAllowNonmanifoldNote =
+    "accepted and ignored: surfaces from voxels are split into manifold sheets where voxels touch along an edge or "
+    "at a corner (docs/math.md §1.4)";
+
+/// The library's check_regularizable, its error naming `command`.
+void check_regularizable(const SurfelMesh& mesh, const std::string& command);
 
 }  // namespace corrlap::cli

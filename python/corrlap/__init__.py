@@ -208,7 +208,7 @@ def true_normals(shape, V, F, at="faces", center=(0.0, 0.0, 0.0)):
     return _core.true_normals(str(shape), V, F, at, _np.reshape(center, (1, 3)))
 
 
-def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbox=(-10.0, 10.0), offset=5,
+def ii_normals(volume_or_shape, V, F, h=None, alpha=None, k=None, at="faces", bbox=(-10.0, 10.0), offset=5,
                center=(0.0, 0.0, 0.0), threshold=0.0):
     """Integral-invariant normals (docs/math.md 7): covariance of the voxels in a ball of radius
     k h^alpha around each surfel.
@@ -217,7 +217,9 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbo
                      a 3D array (digitized as digitize_volume with h, threshold); V, F must be the
                      surface digitize / digitize_volume returned for it
     h                grid step (required for shapes; volumes: None means 2 / longest side)
-    alpha, k         radius exponent and factor (defaults 0.33 and 3, the CLI's; the paper says 1/3)
+    alpha, k         radius exponent and factor, the CLI's defaults: for a shape the paper's 0.33 and 3
+                     (the paper says 1/3); for a volume 1 and 4, a radius of 4 voxels (docs/regularization.md,
+                     "Default radii")
     at               "faces": (#F, 3); "vertices": normalized sums of face normals, (#V, 3)
     """
     if isinstance(volume_or_shape, str):
@@ -225,10 +227,9 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=0.33, k=3.0, at="faces", bbo
             raise ValueError("h: required with a shape")
         lo, hi = _bbox(bbox)
         return _core.ii_normals_shape(volume_or_shape, V, F, _real(h, "h"), lo, hi, _integer(offset, "offset"),
-                                      _np.reshape(center, (1, 3)), _real(k, "k", required=True),
-                                      _real(alpha, "alpha", required=True), str(at))
+                                      _np.reshape(center, (1, 3)), _real(k, "k"), _real(alpha, "alpha"), str(at))
     return _core.ii_normals_volume(volume_or_shape, V, F, _real(h, "h"), _real(threshold, "threshold", required=True),
-                                   _real(k, "k", required=True), _real(alpha, "alpha", required=True), str(at))
+                                   _real(k, "k"), _real(alpha, "alpha"), str(at))
 
 
 def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vertices", constant=False):
@@ -364,18 +365,18 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
     curvature_radius, size: as `corrlap regularize` (defaults 0.1 size and half the bounding box).
     solver, solver_options: the linear solver and its options.
-    allow_nonmanifold: the surface must be closed (ValueError otherwise) and, unless
-    allow_nonmanifold=True, manifold: voxels touching along an edge or at a corner only pinch the
-    surface, its normals and curvature are unreliable there and the result moves by several voxels,
-    so such a surface raises ValueError naming the counts, as `corrlap regularize` refuses it
-    (--allow-nonmanifold).
+    The surface must be closed and manifold (ValueError naming the counts otherwise). Surfaces from
+    voxels (digitize_volume, digitize) always are: pointels where voxels touch along an edge or at a
+    corner are split into one vertex per sheet (docs/math.md 1.4). A mesh from elsewhere is taken as
+    it is. allow_nonmanifold: accepted and ignored (it let pinched digital surfaces through before
+    they were split).
 
     Returns P (#V, 3), and H (#V,) too when return_curvature.
     """
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
                                       _real(alpha0, "alpha0", required=True),
                                       _real(curvature_radius, "curvature_radius"), _real(size, "size"), str(solver),
-                                      dict(solver_options or {}), bool(allow_nonmanifold))
+                                      dict(solver_options or {}))
     _warn(warnings)
     return (P, H) if return_curvature else P
 

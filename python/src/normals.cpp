@@ -19,7 +19,7 @@ bool at_vertices(const std::string& at) {
 
 // II normals need the surfels (which voxels each face separates): the mesh is extracted again
 // from the voxels and must be the given one, as digitize returned it.
-py::array_t<double> ii_normals(const VoxelGrid& grid, py::handle V, py::handle F, double k, double alpha,
+py::array_t<double> ii_normals(const VoxelGrid& grid, py::handle V, py::handle F, const IIParams& ii,
                                const std::string& at) {
   const bool vertices = at_vertices(at);
   const SurfelMesh given = mesh_arg(V, F);
@@ -34,7 +34,7 @@ py::array_t<double> ii_normals(const VoxelGrid& grid, py::handle V, py::handle F
                        " given): pass the V, F that digitize returned for the same shape or volume and parameters");
     NormalRequest request;
     request.source = NormalSource::II;
-    request.ii = {.k = k, .alpha = alpha};
+    request.ii = ii;
     const NormalFields fields =
         resolve_normals(mesh, vertices ? NormalKind::Vertex : NormalKind::Face, request, nullptr, &grid, "ii_normals");
     n = vertices ? fields.vertex : fields.face;
@@ -67,16 +67,19 @@ void bind_normals(py::module_& m) {
   m.def(
       "ii_normals_shape",
       [](const std::string& shape, py::handle V, py::handle F, double h, double bbox_min, double bbox_max, int offset,
-         py::handle center, double k, double alpha, const std::string& at) {
-        return ii_normals(shape_voxels(shape, h, bbox_min, bbox_max, offset, center), V, F, k, alpha, at);
+         py::handle center, std::optional<double> k, std::optional<double> alpha, const std::string& at) {
+        return ii_normals(shape_voxels(shape, h, bbox_min, bbox_max, offset, center), V, F,
+                          default_ii_params(/*implicit_shape=*/true, k, alpha), at);
       },
       py::arg("shape"), py::arg("V"), py::arg("F"), py::arg("h"), py::arg("bbox_min"), py::arg("bbox_max"),
       py::arg("offset"), py::arg("center"), py::arg("k"), py::arg("alpha"), py::arg("at"));
   m.def(
       "ii_normals_volume",
-      [](py::handle volume, py::handle V, py::handle F, std::optional<double> h, double threshold, double k,
-         double alpha,
-         const std::string& at) { return ii_normals(array_voxels(volume, h, threshold), V, F, k, alpha, at); },
+      [](py::handle volume, py::handle V, py::handle F, std::optional<double> h, double threshold,
+         std::optional<double> k, std::optional<double> alpha, const std::string& at) {
+        return ii_normals(array_voxels(volume, h, threshold), V, F,
+                          default_ii_params(/*implicit_shape=*/false, k, alpha), at);
+      },
       py::arg("volume"), py::arg("V"), py::arg("F"), py::arg("h"), py::arg("threshold"), py::arg("k"), py::arg("alpha"),
       py::arg("at"));
   m.def(

@@ -14,8 +14,7 @@ void bind_regularization(py::module_& m) {
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
          std::optional<double> h, const py::dict& params, double alpha0, std::optional<double> curvature_radius,
-         std::optional<double> size, const std::string& solver, const py::dict& solver_options,
-         bool allow_nonmanifold) {
+         std::optional<double> size, const std::string& solver, const py::dict& solver_options) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)
@@ -32,7 +31,7 @@ void bind_regularization(py::module_& m) {
           py::gil_scoped_release release;
           // As `corrlap regularize`: the same surface policy, and vertex normals the normalized sum of
           // the face normals unless given.
-          check_regularizable(mesh, allow_nonmanifold);
+          check_regularizable(mesh);
           const NormalFields normals =
               resolve_normals(mesh, NormalKind::Vertex, request, nullptr, nullptr, "regularize");
           return regularize_surface(mesh, normals, o);
@@ -43,7 +42,7 @@ void bind_regularization(py::module_& m) {
       },
       py::arg("V"), py::arg("F"), py::arg("face_normals"), py::arg("vertex_normals"), py::arg("method"), py::arg("h"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("size"), py::arg("solver"),
-      py::arg("solver_options"), py::arg("allow_nonmanifold"));
+      py::arg("solver_options"));
 }
 
 }  // namespace corrlap::python

@@ -50,14 +50,20 @@ TEST_CASE("resolve_normals: sources, files first, need None, errors naming what 
   const Sphere& s = sphere();
   // II with its parameters (reference II normals use alpha = 1/3).
   NormalRequest ii = from(NormalSource::II);
-  ii.ii.alpha = 1.0 / 3.0;
+  ii.ii = IIParams{.k = 3.0, .alpha = 1.0 / 3.0};
   const NormalFields n_ii = resolve_normals(s.mesh, NormalKind::Face, ii, nullptr, &s.grid);
   CHECK((n_ii.face - read_normals(kRef + "face_normals_ii.txt")).cwiseAbs().maxCoeff() < 1e-12);
   CHECK(!n_ii.has_vertex());
   // Auto without a shape but with voxels: II.
   NormalRequest autoii;
-  autoii.ii.alpha = 1.0 / 3.0;
+  autoii.ii = IIParams{.k = 3.0, .alpha = 1.0 / 3.0};
   CHECK(resolve_normals(s.mesh, NormalKind::Face, autoii, nullptr, &s.grid).face == n_ii.face);
+  // Unset II parameters: the paper's with a shape, kVoxelIIRadius voxels without one.
+  NormalRequest defaults = from(NormalSource::II);
+  CHECK(resolve_normals(s.mesh, NormalKind::Face, defaults, &s.shape, &s.grid).face ==
+        ii_face_normals(s.grid, s.mesh, IIParams{}));
+  CHECK(resolve_normals(s.mesh, NormalKind::Face, defaults, nullptr, &s.grid).face ==
+        ii_face_normals(s.grid, s.mesh, IIParams{.k = kVoxelIIRadius, .alpha = 1.0}));
   // Trivial: surfel normals, vertex normals from them.
   const NormalFields tr = resolve_normals(s.mesh, NormalKind::Vertex, from(NormalSource::Trivial));
   CHECK(tr.face == s.mesh.face_normals_from_positions());

@@ -7,6 +7,7 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <random>
 
 #include "test_support.hpp"
 
@@ -160,23 +161,84 @@ TEST_CASE("mesh equals the reference mesh exactly (sphere1, h = 0.2, box -1.5..1
   CHECK(m2.positions == m.positions);
 }
 
-TEST_CASE("non-manifold voxel configurations are counted, not fatal") {
-  // Two voxels sharing only an edge, and two sharing only a vertex.
-  VoxelGrid g(Eigen::Vector3i(-1, -1, -1), Eigen::Vector3i(3, 3, 3), 1.0);
-  g.set(0, 0, 0, true);
-  g.set(1, 1, 0, true);
-  MeshInfo info = compute_mesh_info(extract_surface(g));
-  CHECK(info.faces == 12);
-  CHECK(info.nonmanifold_edges == 1);  // the shared edge has 4 faces
-  CHECK(info.components == 1);
-  VoxelGrid g2(Eigen::Vector3i(-1, -1, -1), Eigen::Vector3i(3, 3, 3), 1.0);
-  g2.set(0, 0, 0, true);
-  g2.set(1, 1, 1, true);
-  info = compute_mesh_info(extract_surface(g2));
-  CHECK(info.faces == 12);
-  CHECK(info.nonmanifold_edges == 0);
-  CHECK(info.nonmanifold_vertices == 1);  // two fans meet at the shared vertex
-  CHECK(info.vertices == 15);
+namespace {
+// A grid with one voxel of margin around the given inside voxels (so the surface is closed).
+VoxelGrid voxels(std::initializer_list<Eigen::Vector3i> inside) {
+  VoxelGrid g(Eigen::Vector3i(-2, -2, -2), Eigen::Vector3i(4, 4, 4), 1.0);
+  for (const auto& x : inside) g.set(x.x(), x.y(), x.z(), true);
+  return g;
+}
+}  // namespace
+
+TEST_CASE("voxels touching along an edge or at a corner give separate manifold sheets") {
+  // docs/math.md §1.4: interior adjacency, one vertex per sheet at the shared pointels.
+  struct Case {
+    const char* name;
+    VoxelGrid grid;
+    int vertices, faces, euler, components;
+  };
+  const Case cases[] = {
+      {"edge", voxels({{0, 0, 0}, {1, 1, 0}}), 16, 12, 4, 2},
+      {"vertex", voxels({{0, 0, 0}, {1, 1, 1}}), 16, 12, 4, 2},
+      {"2x2x2 checkerboard", voxels({{0, 0, 0}, {1, 1, 0}, {1, 0, 1}, {0, 1, 1}}), 32, 24, 8, 4},
+      {"2x2x2 checkerboard, other parity", voxels({{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}), 32, 24, 8, 4},
+      // Two 2x2 slabs joined by two diagonal pillars: interior pairing at the pillars' shared edge
+      // would give both sheets the same end vertices, so there the surfels pair toward the outside
+      // voxel: one sphere (the pillars act as one column).
+      {"slab, diagonal pillars, slab",
+       voxels({{0, 0, 0},
+               {1, 0, 0},
+               {0, 1, 0},
+               {1, 1, 0},
+               {0, 0, 1},
+               {1, 1, 1},
+               {0, 0, 2},
+               {1, 0, 2},
+               {0, 1, 2},
+               {1, 1, 2}}),
+       0, 0, 2, 1},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    const SurfelMesh m = extract_surface(c.grid);
+    const MeshInfo info = compute_mesh_info(m);
+    CHECK(info.closed());
+    CHECK(info.nonmanifold_edges == 0);
+    CHECK(info.nonmanifold_vertices == 0);
+    CHECK(info.euler == c.euler);
+    CHECK(info.components == c.components);
+    if (c.vertices > 0) {
+      CHECK(info.vertices == c.vertices);
+      CHECK(info.faces == c.faces);
+    }
+    // Vertex positions stay the pointels' (a split pointel's copies share its position).
+    for (int v = 0; v < m.num_vertices(); ++v)
+      for (int a = 0; a < 3; ++a) CHECK(std::abs(m.positions(v, a) - std::round(m.positions(v, a) - 0.5) - 0.5) == 0.0);
+  }
+}
+
+TEST_CASE("random voxel sets give closed manifold surfaces with the Euler characteristic of their sheets") {
+  // Every local configuration appears; the surface must be a closed 2-manifold each time, and the
+  // divergence theorem must still give the voxel count (the faces are unchanged, only vertices split).
+  std::mt19937 rng(2024);
+  for (double density : {0.2, 0.5, 0.8})
+    for (int trial = 0; trial < 20; ++trial) {
+      CAPTURE(density);
+      CAPTURE(trial);
+      VoxelGrid g(Eigen::Vector3i(-1, -1, -1), Eigen::Vector3i(8, 7, 6), 1.0);
+      std::bernoulli_distribution bit(density);
+      for (int z = 0; z <= 5; ++z)
+        for (int y = 0; y <= 6; ++y)
+          for (int x = 0; x <= 7; ++x)
+            if (bit(rng)) g.set(x, y, z, true);
+      const SurfelMesh m = extract_surface(g);
+      const MeshInfo info = compute_mesh_info(m);
+      CHECK(info.closed());
+      CHECK(info.nonmanifold_edges == 0);
+      CHECK(info.nonmanifold_vertices == 0);
+      CHECK(info.genus() >= 0);
+      CHECK(enclosed_volume(m) == doctest::Approx(double(g.count())).epsilon(1e-12));
+    }
 }
 
 TEST_CASE("empty and full volumes are clear errors") {

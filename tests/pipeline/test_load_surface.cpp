@@ -2,10 +2,12 @@
 // shape, grid step, voxel frame and provenance; the surface checks have one policy.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
 #include <corrlap/corrlap.hpp>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <vector>
 
 #include "test_support.hpp"
@@ -188,19 +190,27 @@ TEST_CASE("load_surface of a mesh to voxelize reports its warnings and note thro
 }
 
 TEST_CASE("surface checks: one policy for open and non-manifold surfaces, the boundary from MeshInfo") {
+  // Blocks touching along an edge: the extraction splits the edge into two sheets (docs/math.md §1.4).
   const std::vector<double> values = edge_touching_blocks();
   VolumeArrayInput array = VolumeArrayInput::c_order(values, {6, 6, 4});
   array.inside = InsideRule::above(0.5);
   const LoadedSurface s = load_surface(array);
-  CHECK_THROWS_WITH_AS(check_regularizable(s.mesh, false), doctest::Contains("not manifold (2 non-manifold edges"),
-                       InputError);
-  try {
-    check_regularizable(s.mesh, false);
-  } catch (const InputError& e) {
-    CHECK(e.parameter() == "allow_nonmanifold");
-  }
-  CHECK_NOTHROW(check_regularizable(s.mesh, true));
+  CHECK(compute_mesh_info(s.mesh).manifold());
+  CHECK(compute_mesh_info(s.mesh).components == 2);
+  CHECK_NOTHROW(check_regularizable(s.mesh));
   CHECK(boundary_condition(s.mesh).closed());
+  // The same quads with vertices merged by position, as a mesh given as it is: refused, with the counts.
+  SurfelMesh pinched = s.mesh;
+  pinched.surfels.clear();
+  std::map<std::array<double, 3>, int> by_position;
+  for (int f = 0; f < pinched.num_faces(); ++f)
+    for (int c = 0; c < 4; ++c) {
+      const Eigen::RowVector3d x = pinched.positions.row(pinched.faces(f, c));
+      pinched.faces(f, c) =
+          by_position.emplace(std::array<double, 3>{x[0], x[1], x[2]}, pinched.faces(f, c)).first->second;
+    }
+  CHECK_THROWS_WITH_AS(check_regularizable(pinched), doctest::Contains("not manifold (2 non-manifold edges"),
+                       InputError);
   // Half the faces: open.
   SurfelMesh open = s.mesh;
   open.faces.conservativeResize(open.faces.rows() / 2, 4);
@@ -209,7 +219,7 @@ TEST_CASE("surface checks: one policy for open and non-manifold surfaces, the bo
   CHECK(bc.boundary_edges == compute_mesh_info(open).boundary_edges);
   CHECK(bc.boundary_edges > 0);
   CHECK(bc.note().find("natural (zero Neumann)") != std::string::npos);
-  CHECK_THROWS_WITH_AS(check_regularizable(open, true), doctest::Contains("the surface is open"), InputError);
+  CHECK_THROWS_WITH_AS(check_regularizable(open), doctest::Contains("the surface is open"), InputError);
 }
 
 TEST_CASE("resolve_normals takes normals in memory like files, and names the parameter at fault") {
@@ -257,12 +267,11 @@ TEST_CASE("resolve_normals takes normals in memory like files, and names the par
   CHECK(parameter_of([] { (void)parse_normal_source("sideways"); }) == "normals");
   NormalRequest ii;
   ii.source = NormalSource::II;
-  ii.ii.k = -1.0;
+  ii.ii = IIParams{.k = -1.0, .alpha = 0.33};
   CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, ii); }) == "ii_radius");
-  ii.ii.k = 3.0;
-  ii.ii.alpha = std::nan("");
+  ii.ii = IIParams{.k = 3.0, .alpha = std::nan("")};
   CHECK(parameter_of([&] { (void)resolve_normals(s, NormalKind::Face, ii); }) == "ii_alpha");
-  ii.ii.alpha = 0.33;
+  ii.ii = IIParams{.k = 3.0, .alpha = 0.33};
   QuadMeshInput quad;
   quad.mesh = s.mesh;
   quad.mesh.surfels.clear();

@@ -373,21 +373,28 @@ def test_regularize_equals_cli_regularize(sphere, tmp_path):
     assert np.abs(np.linalg.norm(P, axis=1) - 1).mean() < 0.5 * np.abs(np.linalg.norm(V, axis=1) - 1).mean()
 
 
-def test_regularize_refuses_a_non_manifold_surface_unless_allowed():
-    # Two one-voxel-thin 2 x 2 blocks that touch along one edge only: `corrlap regularize` refuses it too.
+def test_regularize_splits_touching_voxels_and_refuses_a_given_non_manifold_mesh():
+    # Two one-voxel-thin 2 x 2 blocks that touch along one edge only: the digital surface gives each
+    # block its own vertices along that edge (docs/math.md 1.4), so it is manifold and regularizes.
     volume = np.zeros((6, 6, 3), bool)
     volume[0:2, 0:2, 1] = True
     volume[2:4, 2:4, 1] = True
     V, F = corrlap.digitize_volume(volume)
+    assert len(F) == 2 * 16 and len(V) == 2 * 18
     # Surfel normals (quads counter-clockwise seen from outside).
     fn = np.cross(V[F[:, 2]] - V[F[:, 0]], V[F[:, 3]] - V[F[:, 1]])
     fn /= np.linalg.norm(fn, axis=1)[:, None]
-    with pytest.raises(ValueError, match=r"not manifold \(1 non-manifold edges.*allow_nonmanifold"):
-        corrlap.regularize(V, F, face_normals=fn)
-    P = corrlap.regularize(V, F, face_normals=fn, allow_nonmanifold=True)
+    P = corrlap.regularize(V, F, face_normals=fn)
     assert P.shape == V.shape and np.isfinite(P).all() and not np.array_equal(P, V)
+    # The keyword is still accepted and changes nothing.
+    assert np.array_equal(corrlap.regularize(V, F, face_normals=fn, allow_nonmanifold=True), P)
+    # The same quads with the vertices merged by position: a mesh given as it is, refused.
+    _, first, inverse = np.unique(V, axis=0, return_index=True, return_inverse=True)
+    F_merged = first[inverse.reshape(-1)][F]
+    with pytest.raises(ValueError, match=r"not manifold \(1 non-manifold edges"):
+        corrlap.regularize(V, F_merged, face_normals=fn)
     with pytest.raises(ValueError, match="the surface is open"):
-        corrlap.regularize(V, F[: len(F) // 2], face_normals=fn[: len(F) // 2], allow_nonmanifold=True)
+        corrlap.regularize(V, F[: len(F) // 2], face_normals=fn[: len(F) // 2])
 
 
 @needs_cli
