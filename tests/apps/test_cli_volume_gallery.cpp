@@ -32,8 +32,8 @@ corrlap::Volume make_volume(const Eigen::Vector3i& size, const Inside& inside, s
     for (int y = 0; y < size.y(); ++y)
       for (int x = 0; x < size.x(); ++x)
         if (inside(x, y, z))
-          v.values[(std::size_t(z) * std::size_t(size.y()) + std::size_t(y)) * std::size_t(size.x()) +
-                   std::size_t(x)] = value;
+          v.values[(std::size_t(z) * std::size_t(size.y()) + std::size_t(y)) * std::size_t(size.x()) + std::size_t(x)] =
+              value;
   return v;
 }
 
@@ -79,8 +79,7 @@ void check_gallery(const std::string& name, const corrlap::Volume& volume) {
 
 }  // namespace
 
-TEST_CASE("gallery: an L-bracket with a plate two voxels thin regularizes with the defaults" *
-          doctest::skip()) {
+TEST_CASE("gallery: an L-bracket with a plate two voxels thin regularizes with the defaults" * doctest::skip()) {
   // Waits for the volume defaults (II and curvature radii in voxels): the default radius spans the
   // thin plate.
   check_gallery("l_bracket", make_volume({48, 40, 40}, [](int x, int y, int z) {
@@ -99,7 +98,9 @@ TEST_CASE("gallery: a CAD-like block with a drilled hole regularizes with the de
 
 TEST_CASE("gallery: two components are both kept and reported") {
   const corrlap::Volume v = make_volume({48, 32, 32}, [](int x, int y, int z) {
-    const auto ball = [&](double cx) { return (x - cx) * (x - cx) + (y - 15.5) * (y - 15.5) + (z - 15.5) * (z - 15.5); };
+    const auto ball = [&](double cx) {
+      return (x - cx) * (x - cx) + (y - 15.5) * (y - 15.5) + (z - 15.5) * (z - 15.5);
+    };
     return ball(12.0) <= 64.0 || ball(35.0) <= 64.0;
   });
   check_gallery("two_components", v);
@@ -159,9 +160,8 @@ TEST_CASE("volume flags: --label, --labels all writes one folder per label, --th
   fs::remove_all(dir);
   fs::create_directories(dir);
   // Two boxes labelled 3 and 7.
-  corrlap::Volume v = make_volume({24, 14, 14}, [](int x, int y, int z) {
-    return x >= 2 && x < 10 && y >= 3 && y < 11 && z >= 3 && z < 11;
-  }, 3);
+  corrlap::Volume v = make_volume(
+      {24, 14, 14}, [](int x, int y, int z) { return x >= 2 && x < 10 && y >= 3 && y < 11 && z >= 3 && z < 11; }, 3);
   for (int z = 3; z < 11; ++z)
     for (int y = 3; y < 11; ++y)
       for (int x = 13; x < 21; ++x) v.values[std::size_t((z * 14 + y) * 24 + x)] = 7;
