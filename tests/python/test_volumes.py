@@ -52,9 +52,12 @@ def test_the_affine_round_trips(tmp_path):
     np.testing.assert_allclose(back_affine, affine)
 
 
+# h=1: voxel units, so that the II radius (3 h^(1/3)) is 3 voxels, below these small shapes' size.
+
+
 def test_regularize_volume_returns_millimetres_for_anisotropic_voxels():
     values, affine = ellipsoid((1.0, 1.0, 2.5))
-    V, F = corrlap.regularize_volume(values, affine=affine)
+    V, F = corrlap.regularize_volume(values, affine=affine, h=1.0)
     assert F.shape[1] == 4 and V.shape[1] == 3
     assert np.isfinite(V).all()
     # Millimetres around the true ellipsoid (semi-axes 16, 12, 10): within the coarse voxel.
@@ -63,7 +66,7 @@ def test_regularize_volume_returns_millimetres_for_anisotropic_voxels():
     r = np.sqrt(((V / [16.0, 12.0, 10.0]) ** 2).sum(axis=1))
     assert np.abs(r - 1).max() < 0.15
     # Without an affine: voxel indices (the ellipsoid's centre voxel index).
-    W, _ = corrlap.regularize_volume(values)
+    W, _ = corrlap.regularize_volume(values, h=1.0)
     centre = -affine[:3, 3] / np.diag(affine)[:3]
     np.testing.assert_allclose((W.max(axis=0) + W.min(axis=0)) / 2, centre, atol=1.0)
 
@@ -72,21 +75,21 @@ def test_regularize_volume_labels_and_paths(tmp_path):
     seg = np.zeros((24, 14, 14), dtype=np.int16)
     seg[2:10, 3:11, 3:11] = 3
     seg[13:21, 3:11, 3:11] = 7
-    V, _ = corrlap.regularize_volume(seg, label=7)
+    V, _ = corrlap.regularize_volume(seg, label=7, h=1.0)
     assert 12.0 < V[:, 0].min() and V[:, 0].max() < 21.0
-    V, _ = corrlap.regularize_volume(seg, threshold=5)
+    V, _ = corrlap.regularize_volume(seg, threshold=5, h=1.0)
     assert V[:, 0].min() > 12.0
-    both, _ = corrlap.regularize_volume(seg)  # every nonzero voxel: both boxes
+    both, _ = corrlap.regularize_volume(seg, h=1.0)  # every nonzero voxel: both boxes
     assert both[:, 0].min() < 3.0 and both[:, 0].max() > 20.0
     with pytest.raises(ValueError, match="label, threshold: give one of them"):
         corrlap.regularize_volume(seg, label=3, threshold=1)
     with pytest.raises(ValueError, match="no voxel equal to the label 4"):
         corrlap.regularize_volume(seg, label=4)
-    with pytest.raises(ValueError, match="affine: expected a 4 by 4 array"):
+    with pytest.raises(ValueError, match="affine: expected 4 rows"):
         corrlap.regularize_volume(seg, affine=np.eye(3))
     path = tmp_path / "seg.nrrd"
     corrlap.write_volume(path, seg.astype(np.uint8))
-    P, _ = corrlap.regularize_volume(path, label=3)
+    P, _ = corrlap.regularize_volume(path, label=3, h=1.0)
     assert P[:, 0].max() < 10.0
     with pytest.raises(ValueError, match="a volume file has its own geometry"):
         corrlap.regularize_volume(str(path), affine=np.eye(4))
