@@ -15,6 +15,13 @@
 
 namespace corrlap {
 
+/// The smallest default curvature radius for surfaces from files (volumes, mesh files), in voxels.
+/// 0.1 of the object's size is below one voxel on volumes under about 20 voxels across: the ball
+/// then holds little more than the vertex's own faces, and where voxels touch along an edge or at a
+/// corner H exceeded 1/h (2 to 10 vertices, up to 6/h); 2 voxels gave none, with the same result
+/// elsewhere (docs/regularization.md, "Default radii").
+inline constexpr double kVoxelMinCurvatureRadius = 2.0;
+
 struct RegularizationOptions {
   std::string method = "fem";  ///< a vertex-based discretization of the registry
   Config method_params;        ///< its parameters
@@ -23,8 +30,13 @@ struct RegularizationOptions {
   /// which gives the same p' as regularizing the scaled shape and scaling back (L is scale
   /// invariant, M scales as size^2, H as 1/size). Unset: half the longest side of the bounding box.
   std::optional<double> size;
-  std::optional<double> curvature_radius;  ///< ball radius of the corrected mean curvature (default 0.1 size)
-  double alpha0 = 10.0;                    ///< alpha = alpha0 / (h size)^2
+  /// Ball radius of the corrected mean curvature; default 0.1 size, and at least
+  /// min_curvature_radius_voxels grid steps.
+  std::optional<double> curvature_radius;
+  /// Lower bound of the default curvature radius, in grid steps: 0 keeps the paper's 0.1 size
+  /// (implicit shapes); front ends give kVoxelMinCurvatureRadius for surfaces from files.
+  double min_curvature_radius_voxels = 0.0;
+  double alpha0 = 10.0;  ///< alpha = alpha0 / (h size)^2
   /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
   /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.
   std::optional<double> alpha_step;

@@ -155,11 +155,12 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
 }
 
 // One surface regularized into `dir` (`shown`: the folder as the user names it).
-void regularize_one(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
+void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const LoadedSurface& surface,
                     const std::string& description, const std::string& dir, const std::string& shown, Stopwatch& t) {
   nlohmann::json stages;
   const SurfelMesh& mesh = surface.mesh;
   check_regularizable(mesh, "regularize");
+  if (!surface.shape) o.min_curvature_radius_voxels = kVoxelMinCurvatureRadius;
   if (a.baseline.empty()) check_regularization_options(mesh, o);
   stages["surface_s"] = t.lap();
   std::cerr << "regularize: " << description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
@@ -312,7 +313,8 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                       "1/s (default: half the longest side of the bounding box; 1 for sphere1)")
           ->check(positive_number()));
   only.push_back(cmd->add_option("--curvature-radius", args->curvature_radius,
-                                 "ball radius of the corrected mean curvature H, world units (default 0.1 s)")
+                                 "ball radius of the corrected mean curvature H, world units (default 0.1 s; for "
+                                 "volumes and mesh files at least 2 voxels)")
                      ->check(positive_number()));
   only.push_back(cmd->add_option("--alpha0", args->alpha0, "attachment weight: alpha = alpha0 / (h s)^2")
                      ->check(positive_number())

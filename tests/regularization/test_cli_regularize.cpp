@@ -251,3 +251,49 @@ TEST_CASE("regularize: a mesh file gives the same surface in any unit (scaled by
   CHECK(diff01 < 1e-8);
   CHECK(diff21 < 1e-8);
 }
+
+TEST_CASE("regularize: a checkerboard of blocks and a checkerboard corner run with no other flag") {
+  // Blocks of 4^3 voxels on the even cells of a 2x2x2 checkerboard touch along edges and at the
+  // centre only: four cubes (docs/math.md §1.4). A solid block with a 2x2x2 checkerboard carved into
+  // it pinches the inner surface the same way.
+  corrlap::Volume board;
+  board.size = {10, 10, 10};
+  board.values.assign(1000, 0);
+  corrlap::Volume corner;
+  corner.size = {14, 14, 14};
+  corner.values.assign(14 * 14 * 14, 0);
+  for (int z = 0; z < 14; ++z)
+    for (int y = 0; y < 14; ++y)
+      for (int x = 0; x < 14; ++x) {
+        if (x >= 1 && x < 9 && y >= 1 && y < 9 && z >= 1 && z < 9 && ((x - 1) / 4 + (y - 1) / 4 + (z - 1) / 4) % 2 == 0)
+          board.values[std::size_t((z * 10 + y) * 10 + x)] = 255;
+        const bool block = x >= 1 && x < 13 && y >= 1 && y < 13 && z >= 1 && z < 13;
+        const bool carved = x >= 6 && x < 8 && y >= 6 && y < 8 && z >= 6 && z < 8 && (x + y + z) % 2 == 1;
+        if (block && !carved) corner.values[std::size_t((z * 14 + y) * 14 + x)] = 255;
+      }
+  struct Case {
+    const char* name;
+    const corrlap::Volume* volume;
+    int components, euler;
+  };
+  // The corner: the block's outer surface and the cavity's (two of the carved voxels' faces pinch).
+  for (const Case& c : {Case{"checkerboard", &board, 4, 8}, Case{"checkerboard_corner", &corner, 2, 4}}) {
+    CAPTURE(c.name);
+    const std::string vol = corrlap::test::tmp_path(std::string(c.name) + ".vol");
+    corrlap::write_volume(vol, *c.volume);
+    const std::string dir = corrlap::test::tmp_path(std::string("reg_") + c.name);
+    std::string err, out;
+    const int rc = run_cli("regularize --volume " + vol + " --no-render --out " + dir, nullptr, &err);
+    INFO(err);
+    CHECK(rc == 0);
+    if (rc != 0) continue;
+    CHECK(corrlap::read_mesh(dir + "/regularized.ply").positions.allFinite());
+    REQUIRE(run_cli("info " + dir + "/input.ply --json", &out) == 0);
+    const auto info = nlohmann::json::parse(out);
+    CHECK(info["boundary_edges"] == 0);
+    CHECK(info["nonmanifold_edges"] == 0);
+    CHECK(info["nonmanifold_vertices"] == 0);
+    CHECK(info["components"] == c.components);
+    CHECK(info["euler"] == c.euler);
+  }
+}
