@@ -198,6 +198,9 @@ void read_metaimage(const std::string& path, VoxelSink& sink) {
     data_path = (p.is_absolute() ? p : std::filesystem::path(path).parent_path() / p).string();
     external.open(data_path, std::ios::binary);
     if (!external) fail(path, "cannot open its data file '" + data_path + "' (ElementDataFile = " + data_file + ")");
+    // A device or a pipe has no length to check the sizes against, and may never end.
+    if (!std::filesystem::is_regular_file(data_path))
+      fail(path, "its data file '" + data_path + "' is not a regular file");
     data = &external;
     if (header_size == -1) {
       // The values are the last bytes of the file (MetaIO's convention for an unknown header).

@@ -614,3 +614,11 @@ TEST_CASE("NRRD bad inputs of the typed reader are named errors") {
     check_error(p, fragment);
   }
 }
+
+TEST_CASE("NRRD and MetaImage data files must be regular files (a device has no length and may never end)") {
+  const std::string nrrd = scratch("device.nhdr"), mhd = scratch("device.mhd");
+  write_text(nrrd, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: gzip\ndata file: /dev/zero\n\n");
+  check_error(nrrd, "is not a regular file");
+  write_text(mhd, "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementDataFile = /dev/zero\n");
+  check_error(mhd, "is not a regular file");
+}
