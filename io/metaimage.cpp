@@ -198,6 +198,9 @@ void read_metaimage(const std::string& path, VoxelSink& sink) {
     data_path = (p.is_absolute() ? p : std::filesystem::path(path).parent_path() / p).string();
     external.open(data_path, std::ios::binary);
     if (!external) fail(path, "cannot open its data file '" + data_path + "' (ElementDataFile = " + data_file + ")");
+    // A device or a pipe has no length to check the sizes against, and may never end.
+    if (!std::filesystem::is_regular_file(data_path))
+      fail(path, "its data file '" + data_path + "' is not a regular file");
     data = &external;
     if (header_size == -1) {
       // The values are the last bytes of the file (MetaIO's convention for an unknown header).
@@ -244,6 +247,14 @@ void write_metaimage(const std::string& path, const VolumeData& volume) {
   h << "ObjectType = Image\nNDims = 3\nBinaryData = True\n";
   h << "BinaryDataByteOrderMSB = " << (std::endian::native == std::endian::big ? "True" : "False") << "\n";
   h << "CompressedData = " << (compressed ? "True" : "False") << "\n";
+  // MetaIO needs the compressed length to read LOCAL data; it is known once the values are written,
+  // so the field is written zero-padded and filled in then.
+  std::size_t size_field = 0;
+  if (compressed) {
+    h << "CompressedDataSize = ";
+    size_field = std::size_t(h.tellp());
+    h << std::string(20, '0') << "\n";
+  }
   h << "TransformMatrix =";
   for (int a = 0; a < 3; ++a)
     for (int r = 0; r < 3; ++r) h << ' ' << g.direction(r, a);
@@ -254,7 +265,7 @@ void write_metaimage(const std::string& path, const VolumeData& volume) {
   h << "ElementDataFile = " << (detached ? raw_path.filename().string() : std::string("LOCAL")) << "\n";
   const std::string text = h.str();
 
-  auto write_values = [&](OutputFile& out) {
+  auto write_values = [&](OutputFile& out) -> std::uint64_t {
     PayloadWriter writer(out.get(), path, compressed ? PayloadWriter::Encoding::Zlib : PayloadWriter::Encoding::Raw);
     for (std::size_t done = 0; done < volume.bytes.size();) {
       const std::size_t k = std::min(kChunk, volume.bytes.size() - done);
@@ -262,11 +273,12 @@ void write_metaimage(const std::string& path, const VolumeData& volume) {
       done += k;
     }
     writer.finish();
+    return writer.written();
   };
   if (detached) {
     // The data first: a header never names a data file that is not there.
     OutputFile raw(raw_path.string(), "volume", true);
-    write_values(raw);
+    (void)write_values(raw);
     raw.commit();
     OutputFile out(path, "volume", false);
     std::fputs(text.c_str(), out.get());
@@ -275,7 +287,13 @@ void write_metaimage(const std::string& path, const VolumeData& volume) {
   }
   OutputFile out(path, "volume", true);
   std::fputs(text.c_str(), out.get());
-  write_values(out);
+  const std::uint64_t written = write_values(out);
+  if (compressed) {
+    char digits[32];
+    std::snprintf(digits, sizeof digits, "%020llu", static_cast<unsigned long long>(written));
+    if (std::fseek(out.get(), long(size_field), SEEK_SET) != 0) fail(path, "cannot seek to fill in CompressedDataSize");
+    std::fputs(digits, out.get());
+  }
   out.commit();
 }
 

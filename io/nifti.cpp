@@ -384,7 +384,6 @@ void read_nifti(const std::string& path, VoxelSink& sink) {
                    std::to_string(header_bytes) + "-byte header");
   const std::size_t n = checked_voxels(path, stored.size) * size;
   const std::uint64_t end = std::uint64_t(*start) + n;
-  sink.check(path, header);
   if (!in.compressed()) {
     if (std::uint64_t(*start) > in.file_bytes())
       fail(path, "vox_offset = " + readable_count(std::uint64_t(*start)) + " is past the end of the file (" +
@@ -398,6 +397,8 @@ void read_nifti(const std::string& path, VoxelSink& sink) {
                      ", more than the " + readable_bytes(double(*most + 1024)) + " that " +
                      readable_bytes(double(in.file_bytes())) + " of gzip data can hold");
   }
+  // What the file can hold is checked first: a corrupt header is named as such, not as too large.
+  sink.check(path, header);
   // Skip the extensions (at most the bytes checked above).
   std::vector<std::uint8_t> buffer(std::min<std::size_t>(kChunk / size * size, std::max<std::size_t>(n, header_bytes)));
   for (std::uint64_t at = header_bytes; at < std::uint64_t(*start);) {

@@ -323,6 +323,9 @@ void read_nrrd(const std::string& path, VoxelSink& sink) {
     data_path = (p.is_absolute() ? p : std::filesystem::path(path).parent_path() / p).string();
     external.open(data_path, std::ios::binary);
     if (!external) fail(path, "cannot open its data file '" + data_path + "' (data file: " + name + ")");
+    // A device or a pipe has no length to check the sizes against, and may never end.
+    if (!std::filesystem::is_regular_file(data_path))
+      fail(path, "its data file '" + data_path + "' is not a regular file");
     data = &external;
   }
   for (std::int64_t i = skip_count(path, fields, "line skip", 0); i > 0; --i)

@@ -40,6 +40,7 @@ void PayloadWriter::write(const void* data, std::size_t n) {
   if (!deflater_) {
     // A short write sets the stream's error flag, which OutputFile::commit() reports.
     if (n > 0) (void)std::fwrite(data, 1, n, file_);
+    written_ += n;
     return;
   }
 #ifdef CORRLAP_HAVE_ZLIB
@@ -52,11 +53,20 @@ void PayloadWriter::write(const void* data, std::size_t n) {
       deflater_->zs.next_out = deflater_->buffer.data();
       deflater_->zs.avail_out = uInt(deflater_->buffer.size());
       if (deflate(&deflater_->zs, Z_NO_FLUSH) == Z_STREAM_ERROR) fail(path_, "zlib compression failed");
-      (void)std::fwrite(deflater_->buffer.data(), 1, deflater_->buffer.size() - deflater_->zs.avail_out, file_);
+      emit();
     } while (deflater_->zs.avail_out == 0);
     bytes += k;
     n -= k;
   }
+#endif
+}
+
+void PayloadWriter::emit() {
+#ifdef CORRLAP_HAVE_ZLIB
+  const std::size_t k = deflater_->buffer.size() - deflater_->zs.avail_out;
+  // A short write sets the stream's error flag, which OutputFile::commit() reports.
+  (void)std::fwrite(deflater_->buffer.data(), 1, k, file_);
+  written_ += k;
 #endif
 }
 
@@ -69,7 +79,7 @@ void PayloadWriter::finish() {
     deflater_->zs.avail_out = uInt(deflater_->buffer.size());
     rc = deflate(&deflater_->zs, Z_FINISH);
     if (rc == Z_STREAM_ERROR) fail(path_, "zlib compression failed");
-    (void)std::fwrite(deflater_->buffer.data(), 1, deflater_->buffer.size() - deflater_->zs.avail_out, file_);
+    emit();
   } while (rc != Z_STREAM_END);
 #endif
 }

@@ -3,6 +3,7 @@
 // stream a chunk at a time, so that a compressed volume is never held whole (NIfTI .nii.gz,
 // MetaImage CompressedData).
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -21,12 +22,16 @@ class PayloadWriter {
   void write(const void* data, std::size_t n);
   /// Ends the compressed stream (nothing for raw); the caller then commits the file.
   void finish();
+  /// Bytes written to the file so far (compressed bytes when compressed).
+  std::uint64_t written() const { return written_; }
 
  private:
   struct Deflater;
+  void emit();  // the deflater's output so far, to the file
   std::FILE* file_;
   std::string path_;
   std::unique_ptr<Deflater> deflater_;
+  std::uint64_t written_ = 0;
 };
 
 }  // namespace corrlap::io_detail

@@ -128,17 +128,61 @@ std::vector<double> values_as_double(const VolumeData& v) {
     const std::uint8_t* p = v.bytes.data() + i;
     double d = 0;
     switch (v.type) {
-      case VoxelValueType::UInt8: d = *p; break;
-      case VoxelValueType::Int8: d = double(std::int8_t(*p)); break;
-      case VoxelValueType::Int16: { std::int16_t x; std::memcpy(&x, p, 2); d = x; break; }
-      case VoxelValueType::UInt16: { std::uint16_t x; std::memcpy(&x, p, 2); d = x; break; }
-      case VoxelValueType::Int32: { std::int32_t x; std::memcpy(&x, p, 4); d = x; break; }
-      case VoxelValueType::UInt32: { std::uint32_t x; std::memcpy(&x, p, 4); d = x; break; }
-      case VoxelValueType::Int64: { std::int64_t x; std::memcpy(&x, p, 8); d = double(x); break; }
-      case VoxelValueType::UInt64: { std::uint64_t x; std::memcpy(&x, p, 8); d = double(x); break; }
-      case VoxelValueType::Float32: { float x; std::memcpy(&x, p, 4); d = x; break; }
-      case VoxelValueType::Float64: { std::memcpy(&d, p, 8); break; }
-      case VoxelValueType::Bool: d = *p != 0; break;
+      case VoxelValueType::UInt8:
+        d = *p;
+        break;
+      case VoxelValueType::Int8:
+        d = double(std::int8_t(*p));
+        break;
+      case VoxelValueType::Int16: {
+        std::int16_t x;
+        std::memcpy(&x, p, 2);
+        d = x;
+        break;
+      }
+      case VoxelValueType::UInt16: {
+        std::uint16_t x;
+        std::memcpy(&x, p, 2);
+        d = x;
+        break;
+      }
+      case VoxelValueType::Int32: {
+        std::int32_t x;
+        std::memcpy(&x, p, 4);
+        d = x;
+        break;
+      }
+      case VoxelValueType::UInt32: {
+        std::uint32_t x;
+        std::memcpy(&x, p, 4);
+        d = x;
+        break;
+      }
+      case VoxelValueType::Int64: {
+        std::int64_t x;
+        std::memcpy(&x, p, 8);
+        d = double(x);
+        break;
+      }
+      case VoxelValueType::UInt64: {
+        std::uint64_t x;
+        std::memcpy(&x, p, 8);
+        d = double(x);
+        break;
+      }
+      case VoxelValueType::Float32: {
+        float x;
+        std::memcpy(&x, p, 4);
+        d = x;
+        break;
+      }
+      case VoxelValueType::Float64: {
+        std::memcpy(&d, p, 8);
+        break;
+      }
+      case VoxelValueType::Bool:
+        d = *p != 0;
+        break;
     }
     out.push_back(d);
   }
@@ -199,7 +243,7 @@ TEST_CASE("NIfTI: scl_slope and scl_inter give the scaled values, thresholds and
   CHECK(back.type == VoxelValueType::Float64);
   const std::vector<double> stored = values_as_double(v), scaled = values_as_double(back);
   REQUIRE(scaled.size() == stored.size());
-  std::size_t above = 0;
+  std::int64_t above = 0;
   for (std::size_t i = 0; i < stored.size(); ++i) {
     CHECK(scaled[i] == 2.0 * stored[i] - 5.0);
     above += 2.0 * stored[i] - 5.0 > 10.0;
@@ -223,7 +267,7 @@ TEST_CASE("NIfTI: the qform is used without an sform, with qfac, and the voxel s
   const VolumeGeometry q = read_volume_data(p).geometry;
   CHECK((q.affine() - v.geometry.affine()).cwiseAbs().maxCoeff() < 1e-6);  // a float32 quaternion
   CHECK(q.direction.determinant() < 0.0);                                  // qfac = -1 kept
-  poke<std::int16_t>(bytes, 252, 0);  // no form: pixdim only
+  poke<std::int16_t>(bytes, 252, 0);                                       // no form: pixdim only
   write_text(p, bytes);
   const VolumeGeometry s = read_volume_data(p).geometry;
   CHECK(s.direction == Eigen::Matrix3d::Identity());
@@ -247,7 +291,8 @@ TEST_CASE("NIfTI bad inputs are named errors") {
   check_error(variant("short_header.nii", [](std::string& b) { b.resize(200); }), "truncated header");
   check_error(variant("magic.nii", [](std::string& b) { std::memcpy(b.data() + 344, "abc", 4); }), "no NIfTI-1 magic");
   check_error(variant("pair.nii", [](std::string& b) { std::memcpy(b.data() + 344, "ni1", 4); }), ".hdr/.img pair");
-  check_error(variant("sizeof.nii", [](std::string& b) { poke<std::int32_t>(b, 0, 123); }), "not a NIfTI file (sizeof_hdr is 123");
+  check_error(variant("sizeof.nii", [](std::string& b) { poke<std::int32_t>(b, 0, 123); }),
+              "not a NIfTI file (sizeof_hdr is 123");
   check_error(variant("absurd.nii",
                       [](std::string& b) {
                         for (std::size_t a = 1; a <= 3; ++a) poke<std::int16_t>(b, 40 + 2 * a, 32000);
@@ -261,7 +306,8 @@ TEST_CASE("NIfTI bad inputs are named errors") {
                       }),
               "unsupported datatype 128 (RGB24)");
   check_error(variant("complex.nii", [](std::string& b) { poke<std::int16_t>(b, 70, 32); }), "(complex64)");
-  check_error(variant("unknown_type.nii", [](std::string& b) { poke<std::int16_t>(b, 70, 3); }), "unknown datatype code 3");
+  check_error(variant("unknown_type.nii", [](std::string& b) { poke<std::int16_t>(b, 70, 3); }),
+              "unknown datatype code 3");
   check_error(variant("bitpix.nii", [](std::string& b) { poke<std::int16_t>(b, 72, 8); }), "bitpix 8 does not match");
   check_error(variant("time.nii",
                       [](std::string& b) {
@@ -273,8 +319,6 @@ TEST_CASE("NIfTI bad inputs are named errors") {
   check_error(variant("offset_inside.nii", [](std::string& b) { poke<float>(b, 108, 100.0f); }), "vox_offset = 100");
   check_error(variant("sform.nii", [](std::string& b) { poke<float>(b, 280, std::nanf("")); }), "not finite");
   // A gzip file whose announced sizes its bytes cannot hold is refused before inflating.
-  VolumeData big = pattern_volume(VoxelValueType::UInt8, Eigen::Vector3i(4, 4, 4));
-  big.size = Eigen::Vector3i(2000, 2000, 2000);
   std::string hb = bytes_of(good);
   hb.resize(352);
   for (std::size_t a = 1; a <= 3; ++a) poke<std::int16_t>(hb, 40 + 2 * a, 2000);
@@ -299,7 +343,8 @@ TEST_CASE("NIfTI files written by nibabel: NIfTI-1, NIfTI-2, gzip, big-endian, q
   // corrlap writes one file nibabel reads back.
   write_volume_data(dir + "/ours.nii.gz", pattern_volume(VoxelValueType::Int16));
   run_python(R"(import numpy as np, nibabel as nib, sys
-d = ')" + dir + R"('
+d = ')" + dir +
+             R"('
 shape = (5, 4, 3)
 base = (np.arange(60).reshape(shape, order='F') * 37 % 101 - 50)
 # A rotated, anisotropic affine with a flip, and an origin in millimetres.
@@ -318,6 +363,7 @@ save(nib.Nifti2Image(base.astype(np.float32) + 0.5, aff), 'n2.nii', base)
 save(nib.Nifti1Image(base.astype(np.uint8) % 7, aff), 'n1gz.nii.gz', base)
 save(nib.Nifti2Image(base.astype(np.int32), aff), 'n2gz.nii.gz', base)
 be = nib.Nifti1Header(endianness='>')
+be.set_data_dtype('>i2')
 save(nib.Nifti1Image(base.astype('>i2'), aff, be), 'big.nii', base)
 q = nib.Nifti1Image(base.astype(np.uint16) + 50, aff)
 q.set_sform(None, code=0)
@@ -344,8 +390,9 @@ print(nib.load(d + '/n2.nii').header.sizeof_hdr, nib.load(d + '/big.nii').header
   // nibabel reads corrlap's file: the same values and affine.
   const VolumeData ours = pattern_volume(VoxelValueType::Int16);
   CHECK(values_as_double(ours) == read_numbers(dir + "/ours.values"));
-  CHECK((affine_from(read_numbers(dir + "/ours.affine")) - float_rounded(ours.geometry.affine())).cwiseAbs().maxCoeff() <
-        1e-12);
+  CHECK(
+      (affine_from(read_numbers(dir + "/ours.affine")) - float_rounded(ours.geometry.affine())).cwiseAbs().maxCoeff() <
+      1e-12);
 }
 
 TEST_CASE("MetaImage round trips: .mha (zlib) and .mhd + .raw, every value type, the geometry exactly") {
@@ -362,8 +409,9 @@ TEST_CASE("MetaImage round trips: .mha (zlib) and .mhd + .raw, every value type,
       CHECK((back.geometry.affine() - v.geometry.affine()).cwiseAbs().maxCoeff() < 1e-12);
     }
   }
-  CHECK(read_text(scratch("round.mhd")).find("ElementDataFile = medical_" + std::to_string(::getpid()) + "_round.raw") !=
-        std::string::npos);
+  CHECK(
+      read_text(scratch("round.mhd")).find("ElementDataFile = medical_" + std::to_string(::getpid()) + "_round.raw") !=
+      std::string::npos);
   if (nrrd_gzip_supported()) CHECK(read_text(scratch("round.mha")).find("CompressedData = True") != std::string::npos);
 }
 
@@ -375,11 +423,12 @@ TEST_CASE("MetaImage headers as ITK writes them: TransformMatrix triples are the
     values += char(0);
     values += char(i * 10);
   }
-  write_text(p, "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = True\n"
-                "CompressedData = False\nTransformMatrix = 0 1 0 -1 0 0 0 0 1\nPosition = 1 2 3\n"
-                "CenterOfRotation = 0 0 0\nAnatomicalOrientation = RAI\nElementSpacing = 0.5 2 3\n"
-                "DimSize = 2 2 2\nElementType = MET_SHORT\nElementDataFile = LOCAL\n" +
-                    values);
+  write_text(p,
+             "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = True\n"
+             "CompressedData = False\nTransformMatrix = 0 1 0 -1 0 0 0 0 1\nPosition = 1 2 3\n"
+             "CenterOfRotation = 0 0 0\nAnatomicalOrientation = RAI\nElementSpacing = 0.5 2 3\n"
+             "DimSize = 2 2 2\nElementType = MET_SHORT\nElementDataFile = LOCAL\n" +
+                 values);
   const VolumeData v = read_volume_data(p);
   CHECK(v.type == VoxelValueType::Int16);
   CHECK(values_as_double(v) == std::vector<double>{0, 10, 20, 30, 40, 50, 60, 70});
@@ -392,9 +441,10 @@ TEST_CASE("MetaImage headers as ITK writes them: TransformMatrix triples are the
   CHECK(read_volume_data(p).geometry.spacing == Eigen::Vector3d(1, 1, 4));
   // A data file with a header of its own (HeaderSize), relative to the .mhd.
   write_text(scratch("skip.raw"), "HEADER" + std::string(8, '\2'));
-  write_text(scratch("skip.mhd"), "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nHeaderSize = 6\n"
-                                  "ElementDataFile = medical_" +
-                                      std::to_string(::getpid()) + "_skip.raw\n");
+  write_text(scratch("skip.mhd"),
+             "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nHeaderSize = 6\n"
+             "ElementDataFile = medical_" +
+                 std::to_string(::getpid()) + "_skip.raw\n");
   CHECK(read_volume_data(scratch("skip.mhd")).bytes == std::vector<std::uint8_t>(8, 2));
 }
 
@@ -408,9 +458,11 @@ TEST_CASE("MetaImage bad inputs are named errors") {
       {head + "ElementType = MET_STRING\nElementDataFile = LOCAL\n12345678", "unsupported ElementType 'MET_STRING'"},
       {head + "ElementDataFile = LOCAL\n12345678", "no ElementType"},
       {"NDims = 2\nDimSize = 2 2\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n1234", "NDims = 2"},
-      {"NDims = 3\nDimSize = 100000 100000 100000\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n1", "absurdly large"},
+      {"NDims = 3\nDimSize = 100000 100000 100000\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n1",
+       "absurdly large"},
       {"NDims = 3\nDimSize = 2 0 2\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n", "sizes must be positive"},
-      {head + "ElementType = MET_UCHAR\nElementNumberOfChannels = 3\nElementDataFile = LOCAL\n", "ElementNumberOfChannels = 3"},
+      {head + "ElementType = MET_UCHAR\nElementNumberOfChannels = 3\nElementDataFile = LOCAL\n",
+       "ElementNumberOfChannels = 3"},
       {head + "ElementType = MET_UCHAR\nElementDataFile = missing.raw\n", "cannot open its data file"},
       {head + "ElementType = MET_UCHAR\nElementDataFile = LIST\n", "LIST or a pattern"},
       {head + "ElementType = MET_UCHAR\nElementSpacing = 1 0 1\nElementDataFile = LOCAL\n12345678", "positive"},
@@ -437,7 +489,8 @@ TEST_CASE("MetaImage files written by VTK are read with their values and geometr
   write_volume_data(dir + "/ours.mha", ours);
   run_python(R"(import vtk, numpy as np
 from vtk.util import numpy_support
-d = ')" + dir + R"('
+d = ')" + dir +
+             R"('
 img = vtk.vtkImageData()
 img.SetDimensions(5, 4, 3)
 img.SetSpacing(0.7, 0.9, 2.5)
@@ -502,10 +555,11 @@ TEST_CASE("NRRD headers as Slicer and teem write them: space, space directions, 
     be += char(i);
   }
   // A segmentation in LPS with a direction that swaps the first two axes.
-  write_text(p, "NRRD0005\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
-                "space directions: (0,0.5,0) (-0.75,0,0) (0,0,2.5)\nkinds: domain domain domain\nendian: big\n"
-                "encoding: raw\nspace origin: (10,-20.5,30)\nSegment0_Name:=liver\n\n" +
-                    be);
+  write_text(p,
+             "NRRD0005\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
+             "space directions: (0,0.5,0) (-0.75,0,0) (0,0,2.5)\nkinds: domain domain domain\nendian: big\n"
+             "encoding: raw\nspace origin: (10,-20.5,30)\nSegment0_Name:=liver\n\n" +
+                 be);
   const VolumeData v = read_volume_data(p);
   CHECK(v.type == VoxelValueType::Int16);
   CHECK(values_as_double(v) == std::vector<double>{0, 1, 2, 3, 4, 5, 6, 7});
@@ -540,11 +594,13 @@ TEST_CASE("NRRD bad inputs of the typed reader are named errors") {
       {head + "endian: little\nspace: RAS\nspace directions: (1,0,0) (0,1,0)\n\n1234567890123456", "needs 3 vectors"},
       {head + "endian: little\nspace: RAS\nspace directions: (1,0,0) (0,1) (0,0,1)\n\n1234567890123456",
        "malformed 'space directions' vector '(0,1)'"},
-      {head + "endian: little\nspace: RAS\nspace directions: (1,0,0) (0,0,0) (0,0,1)\n\n1234567890123456", "zero vector"},
+      {head + "endian: little\nspace: RAS\nspace directions: (1,0,0) (0,0,0) (0,0,1)\n\n1234567890123456",
+       "zero vector"},
       {head + "endian: little\nspace: RAST\n\n1234567890123456", "is not a 3D space"},
       {head + "endian: little\nspace directions: (1,0,0) (0,1,0) (0,0,1)\n\n1234567890123456",
        "without a 'space' or 'space dimension'"},
-      {head + "endian: little\nspace: RAS\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nspacings: 1 1 1\n\n1234567890123456",
+      {head +
+           "endian: little\nspace: RAS\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nspacings: 1 1 1\n\n1234567890123456",
        "both 'space directions' and 'spacings'"},
       {head + "endian: little\nspacings: 1 nan 1\n\n1234567890123456", "not a voxel size"},
       {head + "endian: little\nspace: RAS\nspace origin: (1,2)\n\n1234567890123456", "malformed 'space origin'"},
@@ -557,4 +613,12 @@ TEST_CASE("NRRD bad inputs of the typed reader are named errors") {
     write_text(p, content);
     check_error(p, fragment);
   }
+}
+
+TEST_CASE("NRRD and MetaImage data files must be regular files (a device has no length and may never end)") {
+  const std::string nrrd = scratch("device.nhdr"), mhd = scratch("device.mhd");
+  write_text(nrrd, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: gzip\ndata file: /dev/zero\n\n");
+  check_error(nrrd, "is not a regular file");
+  write_text(mhd, "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementDataFile = /dev/zero\n");
+  check_error(mhd, "is not a regular file");
 }
