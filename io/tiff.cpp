@@ -201,6 +201,9 @@ void read_page(const TiffFile& file, const Page& p, const std::string& where, st
     TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
     rows_per_strip = std::clamp<std::uint32_t>(rows_per_strip, 1, p.height);
     const std::uint32_t strips = TIFFNumberOfStrips(t);
+    if (std::uint64_t(strips) * rows_per_strip < p.height)
+      fail(file.path(), where + " has " + std::to_string(strips) + " strips of " + std::to_string(rows_per_strip) +
+                            " rows for " + std::to_string(p.height) + " rows");
     for (std::uint32_t s = 0; s < strips && std::uint64_t(s) * rows_per_strip < p.height; ++s) {
       const std::uint64_t first = std::uint64_t(s) * rows_per_strip;
       const std::uint64_t bytes = (std::min<std::uint64_t>(p.height, first + rows_per_strip) - first) * row;
@@ -328,6 +331,10 @@ void read_tiff(const std::string& path, VoxelSink& sink) {
   const std::uint64_t page_bytes = first.row_bytes() * first.height;
   sink.check(path, header);
   checked_voxels(path, header.size);
+  // The page being decoded is held whole (and unpacked to bytes for 1-bit pixels).
+  check_budget("volume file '" + path + "'",
+               double(page_bytes) + (first.bits == 1 ? double(first.width) * double(first.height) : 0.0),
+               "one page of " + first.describe());
   check_holds(path, header.size, page_bytes * pages, stored, "at least ");
   sink.begin(path, header);
   std::vector<std::uint8_t> values, packed, piece;

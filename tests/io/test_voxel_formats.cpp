@@ -6,6 +6,7 @@
 
 #include <bit>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/memory_budget.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <cstdint>
@@ -529,6 +530,12 @@ TEST_CASE("TIFF round trip: a multi-page stack of every value type, and the fold
   const std::string path = tmp_path("voxfmt_big.tiff");
   write_volume_data(path, big);
   CHECK(read_volume_data(path).bytes == big.bytes);
+  // The page being decoded counts against the memory budget, not only the bit grid.
+  struct RestoreBudget {
+    ~RestoreBudget() { set_memory_budget(0); }
+  } restore;
+  set_memory_budget(100 * 1024);
+  CHECK_THROWS_WITH_AS(read_volume_as_voxels(path, {}), doctest::Contains("one page of 300 x 250 uint16"), IoError);
 }
 
 TEST_CASE(
