@@ -232,8 +232,7 @@ std::string npy(const std::string& dict, const std::string& payload, int major =
 }
 }  // namespace
 
-TEST_CASE(
-    "npy files built byte by byte: C order is array[i, j, k], versions 2 and 3, big-endian, a trailing axis of 1") {
+TEST_CASE("npy files built byte by byte: C order, versions 2 and 3, big-endian, a trailing axis of 1") {
   // C order (2, 3, 4) of <i2: value number n is array[i, j, k] with n = (i * 3 + j) * 4 + k.
   std::string payload;
   for (int i = 0; i < 2; ++i)
@@ -513,7 +512,7 @@ TEST_CASE("bad MagicaVoxel files are named errors: magic, chunk sizes, coordinat
 
 // ---- TIFF ----
 
-TEST_CASE("TIFF round trip: a multi-page stack of every value type, and the folder of slices") {
+TEST_CASE("TIFF round trip: a multi-page stack of every value type, a page in several strips, the page budget") {
   if (!have_tiff()) return;
   for (VoxelValueType type : kAllTypes) {
     CAPTURE(value_type_name(type));
