@@ -1,5 +1,5 @@
-// libFuzzer target: MagicaVoxel .vox volumes (io/magicavoxel.cpp): chunks, sparse voxels, read in their own type and streamed into a
-// voxel grid.
+// libFuzzer target: MagicaVoxel .vox volumes (io/magicavoxel.cpp): chunks, sparse voxels, read in their own type and
+// streamed into a voxel grid.
 #include <corrlap/io/volume_io.hpp>
 
 #include "fuzz_support.hpp"

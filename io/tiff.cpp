@@ -14,8 +14,11 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -198,6 +201,9 @@ void read_page(const TiffFile& file, const Page& p, const std::string& where, st
     TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
     rows_per_strip = std::clamp<std::uint32_t>(rows_per_strip, 1, p.height);
     const std::uint32_t strips = TIFFNumberOfStrips(t);
+    if (std::uint64_t(strips) * rows_per_strip < p.height)
+      fail(file.path(), where + " has " + std::to_string(strips) + " strips of " + std::to_string(rows_per_strip) +
+                            " rows for " + std::to_string(p.height) + " rows");
     for (std::uint32_t s = 0; s < strips && std::uint64_t(s) * rows_per_strip < p.height; ++s) {
       const std::uint64_t first = std::uint64_t(s) * rows_per_strip;
       const std::uint64_t bytes = (std::min<std::uint64_t>(p.height, first + rows_per_strip) - first) * row;
@@ -210,6 +216,27 @@ void read_page(const TiffFile& file, const Page& p, const std::string& where, st
   for (std::uint32_t y = 0; y < p.height; ++y)
     for (std::uint32_t x = 0; x < p.width; ++x)
       out[std::size_t(y) * p.width + x] = (packed[y * row + x / 8] >> (7 - x % 8)) & 1;
+}
+
+// ImageJ's stacks give the pixel size as XResolution and YResolution (pixels per unit) and the
+// slice spacing as "spacing=" in their ImageDescription ("ImageJ=1.54f\nunit=micron\nspacing=2.5\n");
+// other files' resolution tags (dots per inch of a scanner) say nothing of a voxel, so the
+// geometry is the identity unless the description is ImageJ's.
+VolumeGeometry imagej_geometry(TIFF* t) {
+  VolumeGeometry g;
+  const char* text = nullptr;
+  if (!TIFFGetField(t, TIFFTAG_IMAGEDESCRIPTION, &text) || !text || std::strncmp(text, "ImageJ=", 7) != 0) return g;
+  auto usable = [](double v) { return std::isfinite(v) && v > 0; };
+  float resolution = 0;
+  if (TIFFGetField(t, TIFFTAG_XRESOLUTION, &resolution) && usable(1.0 / resolution)) g.spacing.x() = 1.0 / resolution;
+  if (TIFFGetField(t, TIFFTAG_YRESOLUTION, &resolution) && usable(1.0 / resolution)) g.spacing.y() = 1.0 / resolution;
+  const std::string description(text, strnlen(text, 65536));
+  const auto at = description.find("\nspacing=");
+  if (at != std::string::npos) {
+    const double z = std::strtod(description.c_str() + at + 9, nullptr);
+    if (usable(z)) g.spacing.z() = z;
+  }
+  return g;
 }
 
 // "slice10.tif" after "slice2.tif": runs of digits compare as numbers.
@@ -261,6 +288,7 @@ void read_tiff(const std::string& path, VoxelSink& sink) {
   const std::vector<std::string> files = folder ? slice_files(path) : std::vector<std::string>{path};
   std::uint64_t stored = 0, pages = 0;
   Page first;
+  VolumeGeometry geometry;
   auto where = [&](const std::string& file, std::uint64_t page) {
     return folder ? "slice '" + std::filesystem::path(file).filename().string() + "'" : "page " + std::to_string(page);
   };
@@ -278,7 +306,10 @@ void read_tiff(const std::string& path, VoxelSink& sink) {
       if (++in_file > 1 && folder)
         fail(path, where(name, pages) + " has several pages; a folder holds single-page slices");
       const Page p = read_layout(file, name, where(name, pages), file_bytes);
-      if (pages == 0) first = p;
+      if (pages == 0) {
+        first = p;
+        geometry = imagej_geometry(file.get());
+      }
       if (!(p == first))
         fail(path, where(name, pages) + " is " + p.describe() + ", the first " + (folder ? "slice" : "page") + " " +
                        first.describe() + " (every slice must have the same size and type)");
@@ -296,9 +327,14 @@ void read_tiff(const std::string& path, VoxelSink& sink) {
   header.size = Eigen::Vector3i(int(first.width), int(first.height), int(pages));
   header.type = first.type;
   header.big_endian = std::endian::native == std::endian::big;  // libtiff decodes to native order
+  header.geometry = geometry;
   const std::uint64_t page_bytes = first.row_bytes() * first.height;
   sink.check(path, header);
   checked_voxels(path, header.size);
+  // The page being decoded is held whole (and unpacked to bytes for 1-bit pixels).
+  check_budget("volume file '" + path + "'",
+               double(page_bytes) + (first.bits == 1 ? double(first.width) * double(first.height) : 0.0),
+               "one page of " + first.describe());
   check_holds(path, header.size, page_bytes * pages, stored, "at least ");
   sink.begin(path, header);
   std::vector<std::uint8_t> values, packed, piece;

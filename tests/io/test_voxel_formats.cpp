@@ -6,6 +6,7 @@
 
 #include <bit>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/memory_budget.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <cstdint>
@@ -30,7 +31,9 @@ std::string bytes(std::initializer_list<int> values) {
   return s;
 }
 
-std::string le32(std::uint32_t v) { return bytes({int(v & 0xff), int(v >> 8 & 0xff), int(v >> 16 & 0xff), int(v >> 24)}); }
+std::string le32(std::uint32_t v) {
+  return bytes({int(v & 0xff), int(v >> 8 & 0xff), int(v >> 16 & 0xff), int(v >> 24)});
+}
 
 // A volume of `type` whose value at (i, j, k) is i + 10 j + 100 k (bool: that number is odd).
 VolumeData pattern(VoxelValueType type, const Eigen::Vector3i& size) {
@@ -46,30 +49,71 @@ VolumeData pattern(VoxelValueType type, const Eigen::Vector3i& size) {
         const int x = i + 10 * j + 100 * k;
         std::uint8_t* at = v.bytes.data() + n * b;
         switch (type) {
-          case VoxelValueType::Bool: *at = std::uint8_t(x % 2); break;
-          case VoxelValueType::Int8: { const auto t = std::int8_t(x % 100 - 50); std::memcpy(at, &t, b); break; }
-          case VoxelValueType::UInt8: *at = std::uint8_t(x % 256); break;
-          case VoxelValueType::Int16: { const auto t = std::int16_t(-x); std::memcpy(at, &t, b); break; }
-          case VoxelValueType::UInt16: { const auto t = std::uint16_t(x); std::memcpy(at, &t, b); break; }
-          case VoxelValueType::Int32: { const auto t = std::int32_t(-x); std::memcpy(at, &t, b); break; }
-          case VoxelValueType::UInt32: { const auto t = std::uint32_t(x); std::memcpy(at, &t, b); break; }
-          case VoxelValueType::Int64: { const auto t = std::int64_t(-x) * (std::int64_t(1) << 40); std::memcpy(at, &t, b); break; }
-          case VoxelValueType::UInt64: { const auto t = std::uint64_t(x) << 40; std::memcpy(at, &t, b); break; }
-          case VoxelValueType::Float32: { const auto t = float(x) + 0.25f; std::memcpy(at, &t, b); break; }
-          case VoxelValueType::Float64: { const auto t = double(x) / 3.0; std::memcpy(at, &t, b); break; }
+          case VoxelValueType::Bool:
+            *at = std::uint8_t(x % 2);
+            break;
+          case VoxelValueType::Int8: {
+            const auto t = std::int8_t(x % 100 - 50);
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::UInt8:
+            *at = std::uint8_t(x % 256);
+            break;
+          case VoxelValueType::Int16: {
+            const auto t = std::int16_t(-x);
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::UInt16: {
+            const auto t = std::uint16_t(x);
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::Int32: {
+            const auto t = std::int32_t(-x);
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::UInt32: {
+            const auto t = std::uint32_t(x);
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::Int64: {
+            const auto t = std::int64_t(-x) * (std::int64_t(1) << 40);
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::UInt64: {
+            const auto t = std::uint64_t(x) << 40;
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::Float32: {
+            const auto t = float(x) + 0.25f;
+            std::memcpy(at, &t, b);
+            break;
+          }
+          case VoxelValueType::Float64: {
+            const auto t = double(x) / 3.0;
+            std::memcpy(at, &t, b);
+            break;
+          }
         }
       }
   return v;
 }
 
-const VoxelValueType kAllTypes[] = {VoxelValueType::Bool,   VoxelValueType::Int8,    VoxelValueType::Int16,
-                                    VoxelValueType::Int32,  VoxelValueType::Int64,   VoxelValueType::UInt8,
-                                    VoxelValueType::UInt16, VoxelValueType::UInt32,  VoxelValueType::UInt64,
+const VoxelValueType kAllTypes[] = {VoxelValueType::Bool,    VoxelValueType::Int8,   VoxelValueType::Int16,
+                                    VoxelValueType::Int32,   VoxelValueType::Int64,  VoxelValueType::UInt8,
+                                    VoxelValueType::UInt16,  VoxelValueType::UInt32, VoxelValueType::UInt64,
                                     VoxelValueType::Float32, VoxelValueType::Float64};
 
 // The value at voxel (i, j, k) as a double.
 double value_at(const VolumeData& v, int i, int j, int k) {
-  const std::size_t n = (std::size_t(k) * std::size_t(v.size.y()) + std::size_t(j)) * std::size_t(v.size.x()) + std::size_t(i);
+  const std::size_t n =
+      (std::size_t(k) * std::size_t(v.size.y()) + std::size_t(j)) * std::size_t(v.size.x()) + std::size_t(i);
   const std::uint8_t* at = v.bytes.data() + n * value_bytes(v.type);
   double out = 0;
   auto get = [&](auto t) {
@@ -77,17 +121,39 @@ double value_at(const VolumeData& v, int i, int j, int k) {
     out = double(t);
   };
   switch (v.type) {
-    case VoxelValueType::Bool: out = *at; break;
-    case VoxelValueType::Int8: get(std::int8_t{}); break;
-    case VoxelValueType::UInt8: get(std::uint8_t{}); break;
-    case VoxelValueType::Int16: get(std::int16_t{}); break;
-    case VoxelValueType::UInt16: get(std::uint16_t{}); break;
-    case VoxelValueType::Int32: get(std::int32_t{}); break;
-    case VoxelValueType::UInt32: get(std::uint32_t{}); break;
-    case VoxelValueType::Int64: get(std::int64_t{}); break;
-    case VoxelValueType::UInt64: get(std::uint64_t{}); break;
-    case VoxelValueType::Float32: get(float{}); break;
-    case VoxelValueType::Float64: get(double{}); break;
+    case VoxelValueType::Bool:
+      out = *at;
+      break;
+    case VoxelValueType::Int8:
+      get(std::int8_t{});
+      break;
+    case VoxelValueType::UInt8:
+      get(std::uint8_t{});
+      break;
+    case VoxelValueType::Int16:
+      get(std::int16_t{});
+      break;
+    case VoxelValueType::UInt16:
+      get(std::uint16_t{});
+      break;
+    case VoxelValueType::Int32:
+      get(std::int32_t{});
+      break;
+    case VoxelValueType::UInt32:
+      get(std::uint32_t{});
+      break;
+    case VoxelValueType::Int64:
+      get(std::int64_t{});
+      break;
+    case VoxelValueType::UInt64:
+      get(std::uint64_t{});
+      break;
+    case VoxelValueType::Float32:
+      get(float{});
+      break;
+    case VoxelValueType::Float64:
+      get(double{});
+      break;
   }
   return out;
 }
@@ -166,7 +232,7 @@ std::string npy(const std::string& dict, const std::string& payload, int major =
 }
 }  // namespace
 
-TEST_CASE("npy files built byte by byte: C order is array[i, j, k], versions 2 and 3, big-endian, a trailing axis of 1") {
+TEST_CASE("npy files built byte by byte: C order, versions 2 and 3, big-endian, a trailing axis of 1") {
   // C order (2, 3, 4) of <i2: value number n is array[i, j, k] with n = (i * 3 + j) * 4 + k.
   std::string payload;
   for (int i = 0; i < 2; ++i)
@@ -295,7 +361,8 @@ TEST_CASE("bad npy files are named errors: magic, truncation, absurd shapes, dty
   check(npy("{'descr': '<U3', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "string dtype '<U3'");
   check(npy("{'descr': '<M8[s]', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "datetime dtype");
   check(npy("{'descr': '|i2', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "has no byte order");
-  check(npy("{'descr': '<u1', 'fortran_order': 0, 'shape': (2, 2, 2), }", eight), "'fortran_order' is not True or False");
+  check(npy("{'descr': '<u1', 'fortran_order': 0, 'shape': (2, 2, 2), }", eight),
+        "'fortran_order' is not True or False");
   check(npy("{'descr': '<u1', 'fortran_order': False, 'shape': (2, 2, 2), 'x': 1}", eight), "unexpected key 'x'");
   check(npy("{'descr': '<u1', 'shape': (2, 2, 2), }", eight), "no 'fortran_order' key");
   check(npy("{'descr': '<u1', 'fortran_order': False, 'shape': (2, 2, 2) ", eight), "malformed numpy header");
@@ -308,8 +375,8 @@ TEST_CASE("bad npy files are named errors: magic, truncation, absurd shapes, dty
 TEST_CASE("binvox built byte by byte: y fastest, then z, then x, and the model coordinates") {
   // dim 2: voxel number n = x * 4 + z * 2 + y. Set voxels 1 (y = 1), 2 (z = 1) and 4 (x = 1).
   const std::string path = tmp_path("voxfmt_order.binvox");
-  write_text(path, "#binvox 1\ndim 2 2 2\ntranslate 1 2 3\nscale 4\ndata\n" +
-                       bytes({0, 1, 1, 1, 1, 1, 0, 1, 1, 1, 0, 3}));
+  write_text(path,
+             "#binvox 1\ndim 2 2 2\ntranslate 1 2 3\nscale 4\ndata\n" + bytes({0, 1, 1, 1, 1, 1, 0, 1, 1, 1, 0, 3}));
   const VolumeData v = read_volume_data(path);
   CHECK(v.size == Eigen::Vector3i(2, 2, 2));
   CHECK(v.type == VoxelValueType::UInt8);
@@ -386,7 +453,9 @@ std::string chunk(const std::string& id, const std::string& content, const std::
   return id + le32(std::uint32_t(content.size())) + le32(std::uint32_t(children.size())) + content + children;
 }
 std::string vox(const std::string& children) { return "VOX " + le32(150) + chunk("MAIN", "", children); }
-std::string size_chunk(int x, int y, int z) { return chunk("SIZE", le32(std::uint32_t(x)) + le32(std::uint32_t(y)) + le32(std::uint32_t(z))); }
+std::string size_chunk(int x, int y, int z) {
+  return chunk("SIZE", le32(std::uint32_t(x)) + le32(std::uint32_t(y)) + le32(std::uint32_t(z)));
+}
 std::string xyzi(std::initializer_list<std::array<int, 4>> voxels) {
   std::string s = le32(std::uint32_t(voxels.size()));
   for (const auto& v : voxels) s += bytes({v[0], v[1], v[2], v[3]});
@@ -396,8 +465,9 @@ std::string xyzi(std::initializer_list<std::array<int, 4>> voxels) {
 
 TEST_CASE("MagicaVoxel built byte by byte: the palette indices at their voxels, other chunks skipped") {
   const std::string path = tmp_path("voxfmt_model.vox");
-  write_text(path, vox(chunk("PACK", le32(1)) + size_chunk(3, 4, 5) + xyzi({{0, 0, 0, 1}, {2, 3, 4, 255}, {1, 2, 3, 17}}) +
-                       chunk("RGBA", std::string(1024, '\x7f')) + chunk("nTRN", "abc", chunk("nSHP", "de"))));
+  write_text(path,
+             vox(chunk("PACK", le32(1)) + size_chunk(3, 4, 5) + xyzi({{0, 0, 0, 1}, {2, 3, 4, 255}, {1, 2, 3, 17}}) +
+                 chunk("RGBA", std::string(1024, '\x7f')) + chunk("nTRN", "abc", chunk("nSHP", "de"))));
   const VolumeData v = read_volume_data(path);
   CHECK(v.size == Eigen::Vector3i(3, 4, 5));
   CHECK(v.type == VoxelValueType::UInt8);
@@ -431,7 +501,8 @@ TEST_CASE("bad MagicaVoxel files are named errors: magic, chunk sizes, coordinat
   check(vox(size_chunk(2, 2, 2)), "model without an XYZI chunk");
   check(vox(chunk("RGBA", "")), "without a SIZE chunk");
   // XYZI announcing more voxels than its bytes hold; a chunk longer than the file.
-  check(vox(size_chunk(2, 2, 2) + chunk("XYZI", le32(1000000) + bytes({0, 0, 0, 1}))), "cannot hold the 1 000 000 voxels");
+  check(vox(size_chunk(2, 2, 2) + chunk("XYZI", le32(1000000) + bytes({0, 0, 0, 1}))),
+        "cannot hold the 1 000 000 voxels");
   std::string cut = vox(size_chunk(2, 2, 2) + xyzi({{0, 0, 0, 1}}));
   check(cut.substr(0, cut.size() - 2), "MAIN chunk announces");
   std::string longer = vox(size_chunk(2, 2, 2) + xyzi({{0, 0, 0, 1}}));
@@ -441,7 +512,7 @@ TEST_CASE("bad MagicaVoxel files are named errors: magic, chunk sizes, coordinat
 
 // ---- TIFF ----
 
-TEST_CASE("TIFF round trip: a multi-page stack of every value type, and the folder of slices") {
+TEST_CASE("TIFF round trip: a multi-page stack of every value type, a page in several strips, the page budget") {
   if (!have_tiff()) return;
   for (VoxelValueType type : kAllTypes) {
     CAPTURE(value_type_name(type));
@@ -458,9 +529,17 @@ TEST_CASE("TIFF round trip: a multi-page stack of every value type, and the fold
   const std::string path = tmp_path("voxfmt_big.tiff");
   write_volume_data(path, big);
   CHECK(read_volume_data(path).bytes == big.bytes);
+  // The page being decoded counts against the memory budget, not only the bit grid.
+  struct RestoreBudget {
+    ~RestoreBudget() { set_memory_budget(0); }
+  } restore;
+  set_memory_budget(100 * 1024);
+  CHECK_THROWS_WITH_AS(read_volume_as_voxels(path, {}), doctest::Contains("one page of 300 x 250 uint16"), IoError);
 }
 
-TEST_CASE("TIFF stacks written by tifffile: multi-page, strips, tiles, zlib, big-endian, a folder in natural order") {
+TEST_CASE(
+    "TIFF stacks written by tifffile: multi-page, strips, tiles, zlib, big-endian, ImageJ spacing, a folder in natural "
+    "order") {
   if (!have_tiff() || !have_python("numpy, tifffile")) return;
   const std::string dir = tmp_path("voxfmt_tifffile");
   std::filesystem::remove_all(dir);
@@ -476,6 +555,8 @@ tifffile.imwrite(d + '/tiled.tif', (-x).astype(np.int32), tile=(16, 16), compres
 tifffile.imwrite(d + '/zlib.tif', x.astype(np.float32), compression='zlib', rowsperstrip=7)
 tifffile.imwrite(d + '/strips.tif', (x % 256).astype(np.uint8), rowsperstrip=3)
 tifffile.imwrite(d + '/be.tif', x.astype('>f8'), byteorder='>')
+tifffile.imwrite(d + '/imagej.tif', x.astype(np.uint16), imagej=True, resolution=(1 / 0.5, 1 / 0.25),
+                 metadata={'spacing': 2.5, 'unit': 'micron'})
 for n in range(12):
     tifffile.imwrite(d + '/slices/slice%d.tif' % (n + 1), x[n].astype(np.float32))
 tifffile.imwrite(d + '/rgb.tif', np.zeros((4, 5, 3), np.uint8), photometric='rgb')
@@ -488,6 +569,11 @@ tifffile.imwrite(d + '/mixed/a2.tif', np.zeros((4, 6), np.uint8))
   check_pattern(read_volume_data(dir + "/tiled.tif"), -1.0);
   check_pattern(read_volume_data(dir + "/zlib.tif"), 1.0);
   check_pattern(read_volume_data(dir + "/be.tif"), 1.0);
+  CHECK(read_volume_data(dir + "/stack.tif").geometry.affine().isApprox(Eigen::Matrix4d::Identity()));
+  // ImageJ's pixel size (resolution tags) and slice spacing.
+  const VolumeData imagej = read_volume_data(dir + "/imagej.tif");
+  check_pattern(imagej, 1.0);
+  CHECK(imagej.geometry.spacing.isApprox(Eigen::Vector3d(0.5, 0.25, 2.5)));
   const VolumeData pb = read_volume_data(dir + "/strips.tif");
   CHECK(value_at(pb, 34, 39, 11) == (34 + 390 + 1100) % 256);
   const VolumeData slices = read_volume_data(dir + "/slices");
