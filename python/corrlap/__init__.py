@@ -154,8 +154,7 @@ def write_volume(path, array, affine=None):
 
 
 def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0=10.0,
-                      curvature_radius=None, size=None, solver="cholmod", solver_options=None,
-                      allow_nonmanifold=False, **params):
+                      curvature_radius=None, size=None, solver="cholmod", solver_options=None, **params):
     """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
     from the voxels, docs/regularization.md), in physical coordinates.
 
@@ -166,7 +165,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
     affine     arrays only: 4 by 4 map from (i, j, k, 1) to physical coordinates (read_volume's,
                nibabel's img.affine); None: voxel indices. Anisotropic voxels are resampled to
                cubes of the finest spacing first (docs/io.md)
-    h, method, alpha0, curvature_radius, size, solver, solver_options, allow_nonmanifold, params:
+    h, method, alpha0, curvature_radius, size, solver, solver_options, params:
                as regularize, in the normalized units of the computation (the longest side spans 2)
 
     Returns V (#V, 3) in physical coordinates and F (#F, 4) int64 quads facing outwards.
@@ -178,7 +177,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
         volume, _real(label, "label"), _real(threshold, "threshold"),
         None if affine is None else _np.asarray(affine, dtype=_np.float64), _real(h, "h"), str(method), params,
         _real(alpha0, "alpha0", required=True), _real(curvature_radius, "curvature_radius"), _real(size, "size"),
-        str(solver), dict(solver_options or {}), bool(allow_nonmanifold))
+        str(solver), dict(solver_options or {}))
     _warn(warnings)
     return V, F
 

@@ -165,7 +165,7 @@ void bind_surface(py::module_& m) {
       [](py::handle volume, std::optional<double> label, std::optional<double> threshold, py::handle affine,
          std::optional<double> h, const std::string& method, const py::dict& params, double alpha0,
          std::optional<double> curvature_radius, std::optional<double> size, const std::string& solver,
-         const py::dict& solver_options, bool allow_nonmanifold) {
+         const py::dict& solver_options) {
         const InsideRule inside = inside_arg(label, threshold);
         py::array values;
         SurfaceInput input;
@@ -197,7 +197,8 @@ void bind_surface(py::module_& m) {
           check_regularization_options(o);
           // As `corrlap regularize --volume`: II normals from the voxels, outputs in physical coordinates.
           const LoadedSurface surface = load_surface(input);
-          check_regularizable(surface.mesh, allow_nonmanifold);
+          check_regularizable(surface.mesh);
+          o.min_curvature_radius_voxels = kVoxelMinCurvatureRadius;  // a volume, as the CLI's
           check_regularization_options(surface.mesh, o);
           const NormalFields normals =
               resolve_normals(surface, NormalKind::Vertex, NormalRequest{}, "regularize_volume");
@@ -213,7 +214,7 @@ void bind_surface(py::module_& m) {
       },
       py::arg("volume"), py::arg("label"), py::arg("threshold"), py::arg("affine"), py::arg("h"), py::arg("method"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("size"), py::arg("solver"),
-      py::arg("solver_options"), py::arg("allow_nonmanifold"));
+      py::arg("solver_options"));
   m.def(
       "read_mesh",
       [](const std::string& path) {
