@@ -79,9 +79,7 @@ void check_gallery(const std::string& name, const corrlap::Volume& volume) {
 
 }  // namespace
 
-TEST_CASE("gallery: an L-bracket with a plate two voxels thin regularizes with the defaults" * doctest::skip()) {
-  // Waits for the volume defaults (II and curvature radii in voxels): the default radius spans the
-  // thin plate.
+TEST_CASE("gallery: an L-bracket with a plate two voxels thin regularizes with the defaults") {
   check_gallery("l_bracket", make_volume({48, 40, 40}, [](int x, int y, int z) {
                   const bool plate = x >= 4 && x < 44 && y >= 4 && y < 36 && z >= 4 && z < 6;
                   const bool wall = x >= 4 && x < 10 && y >= 4 && y < 36 && z >= 4 && z < 36;
@@ -89,18 +87,14 @@ TEST_CASE("gallery: an L-bracket with a plate two voxels thin regularizes with t
                 }));
 }
 
-TEST_CASE("gallery: a CAD-like block with a drilled hole regularizes with the defaults" * doctest::skip()) {
-  // Waits for the volume defaults (II and curvature radii in voxels): the default radius spans the
-  // hole and the ridges, H exceeds 1/h there.
+TEST_CASE("gallery: a CAD-like block with a drilled hole regularizes with the defaults") {
   check_gallery("drilled_block", make_volume({40, 40, 32}, [](int x, int y, int z) {
                   const double dx = x - 19.5, dy = y - 19.5;
                   return x >= 4 && x < 36 && y >= 4 && y < 36 && z >= 4 && z < 28 && dx * dx + dy * dy > 36.0;
                 }));
 }
 
-TEST_CASE("gallery: two components are both kept and reported" * doctest::skip()) {
-  // Waits for the volume defaults (II radius in voxels): the default radius exceeds the balls, the
-  // normals vanish.
+TEST_CASE("gallery: two components are both kept and reported") {
   const corrlap::Volume v = make_volume({48, 32, 32}, [](int x, int y, int z) {
     const auto ball = [&](double cx) {
       return (x - cx) * (x - cx) + (y - 15.5) * (y - 15.5) + (z - 15.5) * (z - 15.5);
@@ -112,28 +106,21 @@ TEST_CASE("gallery: two components are both kept and reported" * doctest::skip()
   CHECK(nlohmann::json::parse(metrics)["components"] == 2);
 }
 
-TEST_CASE("gallery: a torus (a hole through the shape) regularizes with the defaults" * doctest::skip()) {
-  // Waits for the volume defaults (II and curvature radii in voxels): the default radius spans the
-  // hole and the ridges, H exceeds 1/h there.
+TEST_CASE("gallery: a torus (a hole through the shape) regularizes with the defaults") {
   check_gallery("torus", make_volume({44, 44, 20}, [](int x, int y, int z) {
                   const double q = std::hypot(x - 21.5, y - 21.5) - 13.0, dz = z - 9.5;
                   return q * q + dz * dz <= 25.0;
                 }));
 }
 
-TEST_CASE("gallery: a checkerboard corner (non-manifold edges and vertices) regularizes with the defaults" *
-          doctest::skip()) {
-  // Waits for the non-manifold handling (surfel adjacency splitting the pinches into sheets):
-  // refused today without --allow-nonmanifold.
+TEST_CASE("gallery: a checkerboard corner (non-manifold edges and vertices) regularizes with the defaults") {
   check_gallery("checkerboard", make_volume({28, 28, 28}, [](int x, int y, int z) {
                   if (x < 4 || y < 4 || z < 4 || x >= 24 || y >= 24 || z >= 24) return false;
                   return ((x - 4) / 10 + (y - 4) / 10 + (z - 4) / 10) % 2 == 0;
                 }));
 }
 
-TEST_CASE("gallery: a scan-like ellipsoid of 1 x 1 x 2.5 mm voxels comes out in millimetres" * doctest::skip()) {
-  // Waits for the NRRD space fields (io/nrrd.cpp reads `space directions` / `space origin`): today
-  // the file's geometry is dropped on reading.
+TEST_CASE("gallery: a scan-like ellipsoid of 1 x 1 x 2.5 mm voxels comes out in millimetres") {
   const std::string dir = tmp_path("gallery_ellipsoid");
   fs::remove_all(dir);
   fs::create_directories(dir);

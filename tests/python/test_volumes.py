@@ -43,16 +43,12 @@ def test_write_then_read_keeps_values_shape_and_order(tmp_path):
     np.testing.assert_array_equal(corrlap.read_volume(path)[0], values[::2, :, :])
 
 
-@pytest.mark.skip(reason="waits for the NRRD space fields (io/nrrd.cpp writes and reads space directions)")
 def test_the_affine_round_trips(tmp_path):
     values, affine = ellipsoid((1.0, 1.0, 2.5))
     corrlap.write_volume(tmp_path / "e.nrrd", values, affine)
     back, back_affine = corrlap.read_volume(tmp_path / "e.nrrd")
     np.testing.assert_array_equal(back, values)
     np.testing.assert_allclose(back_affine, affine)
-
-
-# h=1: voxel units, so that the II radius (3 h^(1/3)) is 3 voxels, below these small shapes' size.
 
 
 def test_regularize_volume_returns_millimetres_for_anisotropic_voxels():
