@@ -161,9 +161,8 @@ TEST_CASE("volume flags: --label, --labels all writes one folder per label, --th
   const std::string file = dir + "/seg.vol";
   corrlap::write_volume(file, v);
   std::string err;
-  // --h 1: voxel units, so that the II radius (3 h^(1/3)) is 3 voxels, below the boxes' size.
-  REQUIRE(run_cli("regularize --volume " + file + " --labels all --h 1 --no-render --out " + dir + "/all", nullptr,
-                  &err) == 0);
+  REQUIRE(run_cli("regularize --volume " + file + " --labels all --no-render --out " + dir + "/all", nullptr, &err) ==
+          0);
   CHECK(fs::exists(dir + "/all/label-3/regularized.obj"));
   CHECK(fs::exists(dir + "/all/label-7/regularized.obj"));
   CHECK(fs::exists(dir + "/all/labels.json"));
