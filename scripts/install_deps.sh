@@ -1,12 +1,20 @@
 #!/usr/bin/env bash
 # Installs the Debian packages corrlap needs, only those missing. Needs root (or sudo).
+# --vtk also installs VTK's Python module (large), which the MetaImage cross-checks with VTK use;
+# without it those checks skip with a message. CI asks for it.
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config python3
           libeigen3-dev libsuitesparse-dev libopenblas-dev libspectra-dev libtbb-dev
           doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev zlib1g-dev libpng-dev libtiff-dev clang-format
           clang-14 libclang-rt-14-dev python3-numpy python3-matplotlib python3-pytest
           python3-dev python3-scipy pybind11-dev
-          python3-nibabel python3-tifffile python3-vtk9)
+          python3-nibabel python3-tifffile)
+for arg in "$@"; do
+  case "$arg" in
+    --vtk) packages+=(python3-vtk9) ;;
+    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
