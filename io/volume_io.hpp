@@ -1,8 +1,9 @@
 #pragma once
 // Volumes and their conversion to voxel sets by an inside rule (io/voxel_values.hpp).
-// Formats: DGtal .vol and .longvol (64-bit voxels) (read/write; Version 2 raw and Version 3 zlib),
-// raw uint8 with given dimensions (.raw), NRRD (.nrrd: attached header, encodings raw, ascii and
-// gzip (with zlib)); see docs/io.md. Every reader streams (io/detail/volume_stream.hpp).
+// Formats, chosen by extension: DGtal .vol and .longvol, raw uint8 (.raw), NRRD (.nrrd, .nhdr),
+// NIfTI-1/2 (.nii, .nii.gz), MetaImage (.mha, .mhd), numpy (.npy), binvox, MagicaVoxel (.vox) and
+// TIFF stacks (.tif, .tiff, a folder of slices); what each reads and writes: docs/io.md. Every
+// reader streams into a sink (io/detail/volume_stream.hpp), one reader per file.
 #include <Eigen/Core>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/io/voxel_values.hpp>
