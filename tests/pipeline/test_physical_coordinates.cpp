@@ -99,8 +99,8 @@ struct Regularized {
 Regularized regularize_physical(const SampledVolume& v) {
   const LoadedSurface s = load_surface(v.input());
   NormalRequest request;
-  request.ii.k = 7.5 / v.geometry.spacing.minCoeff();  // in (resampled) voxels
-  request.ii.alpha = 1.0;                              // radius k h^alpha = k h
+  // In (resampled) voxels: radius k h^alpha = k h.
+  request.ii = IIParams{.k = 7.5 / v.geometry.spacing.minCoeff(), .alpha = 1.0};
   const NormalFields n = resolve_normals(s, NormalKind::Vertex, request);
   const RegularizedSurface r = regularize_surface(s.mesh, n, RegularizationOptions{});
   Regularized out;
