@@ -65,7 +65,9 @@ void check_gallery(const std::string& name, const corrlap::Volume& volume) {
   const corrlap::PolygonMesh m = corrlap::read_mesh(dir + "/out/regularized.obj");
   REQUIRE(m.positions.rows() > 0);
   CHECK(m.positions.allFinite());
-  const auto [lo, hi] = labelled_box(volume);
+  // Not a structured binding: INFO captures lo and hi, which clang-14 refuses for bindings.
+  const auto box = labelled_box(volume);
+  const Eigen::RowVector3d lo = box.first, hi = box.second;
   const Eigen::RowVector3d min = m.positions.colwise().minCoeff(), max = m.positions.colwise().maxCoeff();
   INFO("output box " << min << " .. " << max << ", labelled box " << lo << " .. " << hi);
   // Within 2 voxels: the regularization rounds sharp corners (the tip of a 2-voxel plate recedes
