@@ -40,18 +40,6 @@ constexpr ElementTypeName kElementTypes[] = {
     {"MET_FLOAT", VoxelValueType::Float32},   {"MET_DOUBLE", VoxelValueType::Float64},
 };
 
-std::string trim(std::string s) {
-  s.erase(0, s.find_first_not_of(" \t"));
-  const auto e = s.find_last_not_of(" \t\r");
-  s.erase(e == std::string::npos ? 0 : e + 1);
-  return s;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
 // Exactly `count` numbers from a field's value.
 std::vector<double> numbers(const std::string& path, const std::string& key, const std::string& value, int count) {
   std::istringstream ss(value);

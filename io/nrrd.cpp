@@ -26,18 +26,6 @@ namespace corrlap::io_detail {
 
 namespace {
 
-std::string trim(std::string s) {
-  s.erase(0, s.find_first_not_of(" \t"));
-  const auto e = s.find_last_not_of(" \t\r");
-  s.erase(e == std::string::npos ? 0 : e + 1);
-  return s;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
 // NRRD's spellings of each type (the C type names and the stdint names).
 std::optional<VoxelValueType> nrrd_type(const std::string& t) {
   static const std::map<std::string, VoxelValueType> types = {

@@ -5,7 +5,9 @@
 // that no reader ever holds the volume. One reader per format, in its own file (io/nifti.cpp ...),
 // declared in io/detail/volume_readers.hpp and dispatched by extension in io/volume_io.cpp.
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <corrlap/io/voxel_values.hpp>
 #include <cstddef>
 #include <cstdint>
@@ -62,6 +64,18 @@ void read_payload(std::istream& in, const std::string& path, const VolumeHeader&
 /// names the data in messages ("gzip", "zlib"). Needs zlib (IoError otherwise).
 void read_compressed_payload(std::istream& in, const std::string& path, const VolumeHeader& header, VoxelSink& sink,
                              const std::string& format);
+/// A header value without its surrounding blanks (and a CR left by Windows line ends).
+inline std::string trim(std::string s) {
+  s.erase(0, s.find_first_not_of(" \t"));
+  const auto e = s.find_last_not_of(" \t\r");
+  s.erase(e == std::string::npos ? 0 : e + 1);
+  return s;
+}
+/// ASCII lower case: header keys and values that are case-insensitive.
+inline std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
 /// True when corrlap was built with zlib.
 bool have_zlib();
 
