@@ -11,6 +11,11 @@
 
 namespace corrlap {
 
+/// The paper's curvature radius for its reconstructions (Fig. 16): 0.2 of a unit-sized model, as a
+/// fraction of the object size (default_curvature_radius, whose floor in coarse voxels applies: the
+/// coarse voxels come from a mesh file).
+inline constexpr double kReconstructionCurvatureRadiusFraction = 0.2;
+
 /// Every quad split into s x s quads, s = 2^levels, by bilinear interpolation of its corners
 /// (exact on planar surfels). A point on an edge is shared by the faces that meet there, so a
 /// closed mesh stays closed. Vertex order: the input's vertices, then the edges' inner points (edge

@@ -16,6 +16,11 @@
 
 namespace corrlap {
 
+double default_curvature_radius(double size, double voxel, bool voxels_from_file, double fraction) {
+  const double radius = fraction * size;
+  return voxels_from_file ? std::max(radius, kVoxelMinCurvatureRadius * voxel) : radius;
+}
+
 double regularization_size(const SurfelMesh& mesh) {
   if (mesh.num_vertices() == 0) return 0.0;
   return 0.5 * (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).maxCoeff();
@@ -103,8 +108,6 @@ void check_regularization_options(const RegularizationOptions& o) {
   (void)make_linear_solver(o.solver, kDefaultLinearSolver);
   if (o.size) check_real(*o.size, "size", "the object size", 0.0);
   if (o.curvature_radius) check_real(*o.curvature_radius, "curvature_radius", "the curvature radius", 0.0);
-  check_real(o.min_curvature_radius_voxels, "min_curvature_radius_voxels", "the smallest default curvature radius", 0.0,
-             /*open=*/false);
   check_real(o.alpha0, "alpha0", "alpha0", 0.0);
   if (o.alpha_step) check_real(*o.alpha_step, "alpha_step", "the step of alpha", 0.0);
   if (!std::isfinite(o.h_scale))
@@ -143,8 +146,7 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   RegularizationCurvature c;
   const double h = mesh.grid_step();
   c.size = object_size(mesh, o);
-  c.curvature_radius =
-      o.curvature_radius ? *o.curvature_radius : std::max(0.1 * c.size, o.min_curvature_radius_voxels * h);
+  c.curvature_radius = o.curvature_radius ? *o.curvature_radius : default_curvature_radius(c.size, h, false);
   Stopwatch watch;
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
   // Principal edits need k1, k2 and their directions; H alone has a faster walk (equal results).

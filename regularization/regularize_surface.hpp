@@ -15,12 +15,24 @@
 
 namespace corrlap {
 
-/// The smallest default curvature radius for surfaces from files (volumes, mesh files), in voxels.
-/// 0.1 of the object's size is below one voxel on volumes under about 20 voxels across: the ball
-/// then holds little more than the vertex's own faces, and where voxels touch along an edge or at a
-/// corner H exceeded 1/h (2 to 10 vertices, up to 6/h); 2 voxels gave none, with the same result
-/// elsewhere (docs/regularization.md, "Default radii").
+/// The smallest default curvature radius for voxels from a file (volumes, arrays, voxelized mesh
+/// files), in voxels. 0.1 of the object's size is below one voxel on volumes under about 20 voxels
+/// across: the ball then holds little more than the vertex's own faces, and where voxels touch along
+/// an edge or at a corner H exceeded 1/h (2 to 10 vertices, up to 6/h); 2 voxels gave none, with
+/// the same result elsewhere (docs/regularization.md, "Default radii").
 inline constexpr double kVoxelMinCurvatureRadius = 2.0;
+
+/// The paper's curvature radius for a unit-sized shape (0.1), as a fraction of the object size.
+inline constexpr double kCurvatureRadiusFraction = 0.1;
+
+/// The default ball radius of the corrected curvature, the one rule of every command and binding
+/// that computes curvature (regularize, reconstruct, curvature, the studies): `fraction` of the
+/// object size, and for voxels from a file at least kVoxelMinCurvatureRadius voxels of side
+/// `voxel`. Implicit shapes and meshes given as they are (voxels_from_file false) keep the
+/// paper's rule. The II radius is decided from the same information (default_ii_params); the
+/// pipeline's overloads on a LoadedSurface (pipeline/surface_defaults.hpp) decide voxels_from_file.
+double default_curvature_radius(double size, double voxel, bool voxels_from_file,
+                                double fraction = kCurvatureRadiusFraction);
 
 struct RegularizationOptions {
   std::string method = "fem";  ///< a vertex-based discretization of the registry
@@ -30,12 +42,10 @@ struct RegularizationOptions {
   /// which gives the same p' as regularizing the scaled shape and scaling back (L is scale
   /// invariant, M scales as size^2, H as 1/size). Unset: half the longest side of the bounding box.
   std::optional<double> size;
-  /// Ball radius of the corrected mean curvature; default 0.1 size, and at least
-  /// min_curvature_radius_voxels grid steps.
+  /// Ball radius of the corrected mean curvature; unset: default_curvature_radius of the surface
+  /// (0.1 size here, where the mesh alone does not say whether its voxels came from a file; the
+  /// overloads on a LoadedSurface add the floor for volumes and mesh files).
   std::optional<double> curvature_radius;
-  /// Lower bound of the default curvature radius, in grid steps: 0 keeps the paper's 0.1 size
-  /// (implicit shapes); front ends give kVoxelMinCurvatureRadius for surfaces from files.
-  double min_curvature_radius_voxels = 0.0;
   double alpha0 = 10.0;  ///< alpha = alpha0 / (h size)^2
   /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
   /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.

@@ -6,6 +6,7 @@
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <corrlap/pipeline/surface_checks.hpp>
+#include <corrlap/pipeline/surface_defaults.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
@@ -102,8 +103,8 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       NormalRequest request;
       request.source = parse_normal_source(o.normals);
       const NormalFields normals = resolve_normals(surface, NormalKind::Vertex, request, "study");
-      // The quality of both surfaces with the curvature radius of the regularization (0.1 size).
-      const double radius = 0.1 * regularization_size(mesh);
+      // The quality of both surfaces with the curvature radius of the regularization.
+      const double radius = default_curvature_radius(surface);
       const SurfaceQuality before = measure_against_shape(mesh, shape, radius);
       const double area_before = surface_area(mesh);
       RegularizationOptions options;
@@ -118,8 +119,8 @@ void run_regularization_study(const RegularizationStudyOptions& o,
             result.positions = alignment_regularization(mesh, normals.face).positions;
           } else {
             options.method = method;
-            if (!curvature) curvature = regularization_curvature(mesh, normals, options);
-            result = regularize_surface(mesh, normals, options, &*curvature).mesh;
+            if (!curvature) curvature = regularization_curvature(surface, normals, options);
+            result = regularize_surface(surface, normals, options, &*curvature).mesh;
           }
         } catch (const Error& e) {
           std::ostringstream os;

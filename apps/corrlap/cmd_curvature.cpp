@@ -5,7 +5,9 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/pipeline/surface_defaults.hpp>
 #include <iostream>
+#include <optional>
 
 #include "command.hpp"
 #include "normal_options.hpp"
@@ -20,7 +22,7 @@ struct CurvatureArgs {
   SurfaceSource source;
   NormalOptions normals;
   std::string out;
-  double radius = 0.1;
+  std::optional<double> radius;  // unset: default_curvature_radius of the surface
   bool constant = false;
 };
 
@@ -56,8 +58,9 @@ void run(const CurvatureArgs& a) {
   const NormalFields n = opt.resolve(surface, need, "curvature");
   const CorrectedCurvature cc = need == NormalKind::Vertex ? CorrectedCurvature::interpolated(mesh, n.vertex)
                                                            : CorrectedCurvature::constant(mesh, n.face);
-  const CurvatureEstimates ef = cc.at_faces(a.radius);
-  const CurvatureEstimates ev = cc.at_vertices(a.radius);
+  const double radius = a.radius ? *a.radius : default_curvature_radius(surface);
+  const CurvatureEstimates ef = cc.at_faces(radius);
+  const CurvatureEstimates ev = cc.at_vertices(radius);
   write_set(out.path(), "faces", ef);
   write_set(out.path(), "vertices", ev);
   MeshAttributes attr;
@@ -73,7 +76,7 @@ void run(const CurvatureArgs& a) {
   const Eigen::Vector3d t = cc.totals();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "curvature (" << (cc.interpolated_normals() ? "interpolated vertex normals" : "constant face normals")
-            << ", r=" << a.radius << "): " << mesh.num_faces() << " faces, totals mu0=" << t[0] << " mu1=" << t[1]
+            << ", r=" << radius << "): " << mesh.num_faces() << " faces, totals mu0=" << t[0] << " mu1=" << t[1]
             << " mu2=" << t[2] << ", mean H (faces) " << ef.H.mean() << " -> " << a.out << " (" << secs << " s)\n";
 }
 
@@ -86,7 +89,12 @@ RegisterCommand reg(31, "curvature", [](CLI::App& app) {
   // file: interpolated); --normals with a shape or volume.
   args->normals.add_options(*cmd);
   cmd->add_flag("--constant", args->constant, "with --normals: use the face normals as constant per face");
-  cmd->add_option("--radius", args->radius, "ball radius in world units (default 0.1)")->check(non_negative_number());
+  cmd->add_option("--radius", args->radius,
+                  "ball radius in world units (default " + number_text(kCurvatureRadiusFraction) +
+                      " s, s = half the longest side of the surface's bounding box; for volumes and mesh files at "
+                      "least " +
+                      number_text(kVoxelMinCurvatureRadius) + " voxels)")
+      ->check(non_negative_number());
   cmd->add_option("--out", args->out,
                   "output directory (H_faces.txt, G_, k1_, k2_, d1_, d2_ per faces/vertices, curvature.ply)")
       ->required();

@@ -10,6 +10,7 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/pipeline/surface_defaults.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
@@ -145,8 +146,8 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   m["energy_initial"] = r.energy_initial;
   m["energy_final"] = r.energy_final;
   m["time_s"] = stages;
-  // Measured with the paper's default curvature radius, 0.1 of the object size.
-  add_geometry_metrics(m, surface, result, 0.1 * regularization_size(mesh), units);
+  // Measured with the default curvature radius of the paper's regularization.
+  add_geometry_metrics(m, surface, result, default_curvature_radius(surface), units);
   write_metrics(dir, m);
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << shown
@@ -160,7 +161,6 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   nlohmann::json stages;
   const SurfelMesh& mesh = surface.mesh;
   check_regularizable(mesh, "regularize");
-  if (!surface.shape) o.min_curvature_radius_voxels = kVoxelMinCurvatureRadius;
   if (a.baseline.empty()) check_regularization_options(mesh, o);
   stages["surface_s"] = t.lap();
   std::cerr << "regularize: " << description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
@@ -173,7 +173,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Vertex, "regularize");
   stages["normals_s"] = t.lap();
-  const RegularizedSurface r = regularize_surface(mesh, normals, o);
+  const RegularizedSurface r = regularize_surface(surface, normals, o);
   for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
   stages["curvature_s"] = r.curvature_seconds;
   stages["operators_s"] = r.operators_seconds;
@@ -313,8 +313,10 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                       "1/s (default: half the longest side of the bounding box; 1 for sphere1)")
           ->check(positive_number()));
   only.push_back(cmd->add_option("--curvature-radius", args->curvature_radius,
-                                 "ball radius of the corrected mean curvature H, world units (default 0.1 s; for "
-                                 "volumes and mesh files at least 2 voxels)")
+                                 "ball radius of the corrected mean curvature H, world units (default " +
+                                     number_text(kCurvatureRadiusFraction) +
+                                     " s; for volumes and mesh files at least " +
+                                     number_text(kVoxelMinCurvatureRadius) + " voxels)")
                      ->check(positive_number()));
   only.push_back(cmd->add_option("--alpha0", args->alpha0, "attachment weight: alpha = alpha0 / (h s)^2")
                      ->check(positive_number())

@@ -39,12 +39,17 @@ void NormalOptions::add_options(CLI::App& cmd) {
              "face normals (docs/math.md §1.5)")
           ->check(CLI::IsMember({"auto", "true", "ii", "trivial", "convolved"}))
           ->capture_default_str();
+  const IIParams voxels = default_ii_params(/*implicit_shape=*/false), shapes = default_ii_params(true);
   cmd.add_option("--ii-radius", ii_k,
-                 "II: radius factor k, Euclidean radius k*h^alpha; default: for volumes and mesh files 4 with "
-                 "--ii-alpha 1, i.e. 4 voxels (docs/regularization.md, \"Default radii\"); for --shape and "
-                 "--polynomial the paper's 3 with --ii-alpha 0.33")
+                 "II: radius factor k, Euclidean radius k*h^alpha; default: for volumes and mesh files " +
+                     number_text(voxels.k) + " with --ii-alpha " + number_text(voxels.alpha) + ", i.e. " +
+                     number_text(voxels.k) +
+                     " voxels (docs/regularization.md, \"Default radii\"); for --shape and --polynomial the paper's " +
+                     number_text(shapes.k) + " with --ii-alpha " + number_text(shapes.alpha))
       ->check(positive_number());
-  cmd.add_option("--ii-alpha", ii_alpha, "II: exponent alpha (default 1 for volumes and mesh files, 0.33 for shapes)");
+  cmd.add_option("--ii-alpha", ii_alpha,
+                 "II: exponent alpha (default " + number_text(voxels.alpha) + " for volumes and mesh files, " +
+                     number_text(shapes.alpha) + " for shapes)");
 }
 
 NormalRequest NormalOptions::request(const LoadedSurface& s) const {

@@ -47,4 +47,11 @@ inline std::vector<std::string> split_list(const std::string& text) {
   return items;
 }
 
+/// A default as a user would type it (4, 0.33), for help texts built from the library's constants.
+inline std::string number_text(double value) {
+  std::ostringstream os;
+  os << value;
+  return os.str();
+}
+
 }  // namespace corrlap::cli

@@ -166,7 +166,9 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
                nibabel's img.affine); None: voxel indices. Anisotropic voxels are resampled to
                cubes of the finest spacing first (docs/io.md)
     h, method, alpha0, curvature_radius, size, solver, solver_options, params:
-               as regularize, in the normalized units of the computation (the longest side spans 2)
+               as regularize, in the normalized units of the computation (the longest side spans 2);
+               the default curvature_radius is at least {voxel_min_curvature_radius} voxels, as for
+               `corrlap regularize --volume`
 
     Returns V (#V, 3) in physical coordinates and F (#F, 4) int64 quads facing outwards.
     """
@@ -217,8 +219,8 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=None, k=None, at="faces", bb
                      surface digitize / digitize_volume returned for it
     h                grid step (required for shapes; volumes: None means 2 / longest side)
     alpha, k         radius exponent and factor, the CLI's defaults: for a shape the paper's 0.33 and 3
-                     (the paper says 1/3); for a volume 1 and 4, a radius of 4 voxels (docs/regularization.md,
-                     "Default radii")
+                     (the paper says 1/3); for a volume 1 and {voxel_ii_radius}, a radius of {voxel_ii_radius}
+                     voxels (docs/regularization.md, "Default radii")
     at               "faces": (#F, 3); "vertices": normalized sums of face normals, (#V, 3)
     """
     if isinstance(volume_or_shape, str):
@@ -231,8 +233,10 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=None, k=None, at="faces", bb
                                    _real(k, "k"), _real(alpha, "alpha"), str(at))
 
 
-def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vertices", constant=False):
-    """Corrected curvature measures (docs/math.md 8) in balls of the given radius.
+def curvature(V, F, face_normals=None, vertex_normals=None, radius=None, at="vertices", constant=False):
+    """Corrected curvature measures (docs/math.md 8) in balls of the given radius (None: the
+    default of `corrlap curvature --mesh`, {curvature_radius_fraction} s with s half the longest side of
+    the bounding box).
 
     V (#V, 3), F (#F, 4); face_normals (#F, 3) and/or vertex_normals (#V, 3). By default the normals
     are interpolated from the vertex normals (the normalized sum of the face normals when only
@@ -243,7 +247,7 @@ def curvature(V, F, face_normals=None, vertex_normals=None, radius=0.1, at="vert
     Returns H, G, k1, k2 (n,) mean, Gaussian and principal curvatures (k1 <= k2; the unit sphere
     has H = 1) and d1, d2 (n, 3) their unit principal directions.
     """
-    return _core.curvature(V, F, face_normals, vertex_normals, _real(radius, "radius", required=True), str(at),
+    return _core.curvature(V, F, face_normals, vertex_normals, _real(radius, "radius"), str(at),
                            bool(constant))
 
 
@@ -362,7 +366,8 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     V (#V, 3), F (#F, 4); face_normals (#F, 3) and/or vertex_normals (#V, 3) (default: normalized
     sums of the face normals). method: a vertex-based discretization (its parameters as keywords).
     h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
-    curvature_radius, size: as `corrlap regularize` (defaults 0.1 size and half the bounding box).
+    curvature_radius, size: as `corrlap regularize --mesh` (defaults {curvature_radius_fraction} size and half the
+    bounding box).
     solver, solver_options: the linear solver and its options.
     The surface must be closed and manifold (ValueError naming the counts otherwise). Surfaces from
     voxels (digitize_volume, digitize) always are: pointels where voxels touch along an edge or at a
@@ -432,3 +437,16 @@ def backends():
 
 
 _document_laplacian()
+
+
+def _document_defaults():
+    """The library's default radii in the docstrings that name them."""
+    values = {"{voxel_ii_radius}": _core.VOXEL_II_RADIUS,
+              "{voxel_min_curvature_radius}": _core.VOXEL_MIN_CURVATURE_RADIUS,
+              "{curvature_radius_fraction}": _core.CURVATURE_RADIUS_FRACTION}
+    for function in (ii_normals, curvature, regularize, regularize_volume):
+        for placeholder, value in values.items():
+            function.__doc__ = function.__doc__.replace(placeholder, f"{value:g}")
+
+
+_document_defaults()

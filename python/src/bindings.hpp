@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <corrlap/core/voxel_grid.hpp>
+#include <corrlap/regularization/regularize_surface.hpp>
 #include <optional>
 #include <string>
 
@@ -25,5 +26,11 @@ VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, doub
 /// Voxels of a 3D array indexed volume[x, y, z], inside = value > threshold, centred as the CLI
 /// centres a volume file (docs/io.md); no h: the longest side spans 2.
 VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double threshold);
+
+/// The options of regularize and regularize_volume from their common keywords (regularization.cpp);
+/// unset curvature_radius and size keep the library's defaults.
+RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params, double alpha0,
+                                                 std::optional<double> curvature_radius, std::optional<double> size,
+                                                 const std::string& solver, const py::dict& solver_options);
 
 }  // namespace corrlap::python

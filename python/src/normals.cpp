@@ -4,7 +4,9 @@
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
+#include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/surface/extract_surface.hpp>
+#include <optional>
 
 #include "bindings.hpp"
 #include "convert.hpp"
@@ -84,7 +86,7 @@ void bind_normals(py::module_& m) {
       py::arg("at"));
   m.def(
       "curvature",
-      [](py::handle V, py::handle F, py::object face_normals, py::object vertex_normals, double radius,
+      [](py::handle V, py::handle F, py::object face_normals, py::object vertex_normals, std::optional<double> radius,
          const std::string& at, bool constant) {
         const bool vertices = at_vertices(at);
         const SurfelMesh mesh = mesh_arg(V, F);
@@ -102,7 +104,11 @@ void bind_normals(py::module_& m) {
                                                  nullptr, nullptr, "curvature");
           const CorrectedCurvature cc =
               constant ? CorrectedCurvature::constant(mesh, n.face) : CorrectedCurvature::interpolated(mesh, n.vertex);
-          e = vertices ? cc.at_vertices(radius) : cc.at_faces(radius);
+          // The default of `corrlap curvature --mesh`: a mesh given as it is, whose voxels (if any) are unknown.
+          const double r = radius ? *radius
+                                  : default_curvature_radius(regularization_size(mesh), mesh.grid_step(),
+                                                             /*voxels_from_file=*/false);
+          e = vertices ? cc.at_vertices(r) : cc.at_faces(r);
         }
         return py::make_tuple(to_numpy(e.H), to_numpy(e.G), to_numpy(e.k1), to_numpy(e.k2), to_numpy(e.d1),
                               to_numpy(e.d2));

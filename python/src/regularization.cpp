@@ -1,5 +1,6 @@
 // Surface regularization of paper §4.1 (docs/regularization.md): regularize(V, F, normals, ...) -> P.
 #include <corrlap/core/error.hpp>
+#include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/pipeline/surface_checks.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
@@ -9,7 +10,25 @@
 
 namespace corrlap::python {
 
+RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params, double alpha0,
+                                                 std::optional<double> curvature_radius, std::optional<double> size,
+                                                 const std::string& solver, const py::dict& solver_options) {
+  RegularizationOptions o;
+  o.method = method;
+  o.method_params = config_arg(params, method);
+  o.alpha0 = alpha0;
+  o.curvature_radius = curvature_radius;
+  o.size = size;
+  o.solver = config_arg(solver_options, solver);
+  o.solver.set("solver", solver);
+  return o;
+}
+
 void bind_regularization(py::module_& m) {
+  // The library's default radii, for the docstrings (python/corrlap/__init__.py) and the tests.
+  m.attr("VOXEL_II_RADIUS") = kVoxelIIRadius;
+  m.attr("VOXEL_MIN_CURVATURE_RADIUS") = kVoxelMinCurvatureRadius;
+  m.attr("CURVATURE_RADIUS_FRACTION") = kCurvatureRadiusFraction;
   m.def(
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
@@ -19,14 +38,8 @@ void bind_regularization(py::module_& m) {
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)
           throw py::value_error("face_normals, vertex_normals: give one of them");
-        RegularizationOptions o;
-        o.method = method;
-        o.method_params = config_arg(params, method);
-        o.alpha0 = alpha0;
-        o.curvature_radius = curvature_radius;
-        o.size = size;
-        o.solver = config_arg(solver_options, solver);
-        o.solver.set("solver", solver);
+        const RegularizationOptions o =
+            regularization_options_arg(method, params, alpha0, curvature_radius, size, solver, solver_options);
         const RegularizedSurface r = [&] {
           py::gil_scoped_release release;
           // As `corrlap regularize`: the same surface policy, and vertex normals the normalized sum of

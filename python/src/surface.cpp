@@ -9,7 +9,7 @@
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <corrlap/pipeline/surface_checks.hpp>
-#include <corrlap/regularization/regularize_surface.hpp>
+#include <corrlap/pipeline/surface_defaults.hpp>
 #include <limits>
 #include <optional>
 #include <span>
@@ -182,14 +182,8 @@ void bind_surface(py::module_& m) {
           if (!affine.is_none()) in.geometry = geometry_arg(affine);
           input = in;
         }
-        RegularizationOptions o;
-        o.method = method;
-        o.method_params = config_arg(params, method);
-        o.alpha0 = alpha0;
-        o.curvature_radius = curvature_radius;
-        o.size = size;
-        o.solver = config_arg(solver_options, solver);
-        o.solver.set("solver", solver);
+        const RegularizationOptions o =
+            regularization_options_arg(method, params, alpha0, curvature_radius, size, solver, solver_options);
         std::vector<std::string> warnings;
         SurfelMesh out;
         {
@@ -198,11 +192,10 @@ void bind_surface(py::module_& m) {
           // As `corrlap regularize --volume`: II normals from the voxels, outputs in physical coordinates.
           const LoadedSurface surface = load_surface(input);
           check_regularizable(surface.mesh);
-          o.min_curvature_radius_voxels = kVoxelMinCurvatureRadius;  // a volume, as the CLI's
           check_regularization_options(surface.mesh, o);
           const NormalFields normals =
               resolve_normals(surface, NormalKind::Vertex, NormalRequest{}, "regularize_volume");
-          const RegularizedSurface r = regularize_surface(surface.mesh, normals, o);
+          const RegularizedSurface r = regularize_surface(surface, normals, o);
           warnings = r.warnings;
           out = r.mesh;
           out.positions = surface.frame.to_physical(r.mesh.positions);

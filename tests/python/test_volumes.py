@@ -4,10 +4,23 @@ coordinates, as `corrlap regularize --volume` writes them.
 
 Run by ctest (python_volumes) with PYTHONPATH=<build>/python.
 """
+import json
+import os
+import subprocess
+
 import numpy as np
 import pytest
 
 import corrlap
+
+CLI = os.environ.get("CORRLAP_CLI")
+needs_cli = pytest.mark.skipif(not CLI, reason="CORRLAP_CLI is not set (the CLI is not built)")
+
+
+def run_cli(*args):
+    r = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True)
+    assert r.returncode == 0, f"corrlap {' '.join(map(str, args))} failed:\n{r.stderr}"
+    return r
 
 
 def ellipsoid(spacing, axes=(16.0, 12.0, 10.0)):
@@ -89,3 +102,48 @@ def test_regularize_volume_labels_and_paths(tmp_path):
     assert P[:, 0].max() < 10.0
     with pytest.raises(ValueError, match="a volume file has its own geometry"):
         corrlap.regularize_volume(str(path), affine=np.eye(4))
+
+
+@needs_cli
+def test_cli_and_python_take_the_default_curvature_radius_from_the_library(tmp_path):
+    # A ball 8 voxels across: 0.1 of its size is below one voxel, so a volume's default curvature
+    # radius is the library's floor in voxels, whichever front end regularizes it.
+    x = np.arange(12) - 5.5
+    ball = ((x[:, None, None] ** 2 + x[None, :, None] ** 2 + x[None, None, :] ** 2) <= 16).astype(np.uint8)
+    path = tmp_path / "ball.nrrd"
+    corrlap.write_volume(path, ball)
+    run_cli("regularize", "--volume", path, "--no-render", "--out", tmp_path / "cli")
+    metrics = json.loads((tmp_path / "cli" / "metrics.json").read_text())
+    floor = corrlap._core.VOXEL_MIN_CURVATURE_RADIUS * metrics["h"]
+    assert metrics["curvature_radius"] == floor
+    assert corrlap._core.CURVATURE_RADIUS_FRACTION * metrics["size"] < floor
+    P_cli, _ = corrlap.read_mesh(tmp_path / "cli" / "regularized.ply")
+    V, _ = corrlap.regularize_volume(path)
+    np.testing.assert_array_equal(V, P_cli)
+    # The floor is what both used: given, it changes nothing; the paper's 0.1 size gives another surface.
+    np.testing.assert_array_equal(corrlap.regularize_volume(path, curvature_radius=floor)[0], V)
+    paper = corrlap._core.CURVATURE_RADIUS_FRACTION * metrics["size"]
+    assert not np.array_equal(corrlap.regularize_volume(path, curvature_radius=paper)[0], V)
+    # `corrlap curvature` on the volume: the same default as regularize.
+    run_cli("curvature", "--volume", path, "--out", tmp_path / "k")
+    run_cli("curvature", "--volume", path, "--radius", repr(floor), "--out", tmp_path / "k_floor")
+    np.testing.assert_array_equal(np.loadtxt(tmp_path / "k" / "H_vertices.txt"),
+                                  np.loadtxt(tmp_path / "k_floor" / "H_vertices.txt"))
+
+
+@needs_cli
+def test_cli_and_python_keep_the_papers_curvature_radius_on_a_shape(tmp_path):
+    # sphere1 at h = 0.2: 0.1 size is half a voxel, below the volumes' floor, and kept for a shape.
+    shape = ["--shape", "sphere1", "--h", "0.2", "--bbox", "-1.5", "1.5"]
+    run_cli("regularize", *shape, "--normals", "true", "--no-render", "--out", tmp_path / "r")
+    metrics = json.loads((tmp_path / "r" / "metrics.json").read_text())
+    assert metrics["curvature_radius"] == corrlap._core.CURVATURE_RADIUS_FRACTION * metrics["size"]
+    assert metrics["curvature_radius"] < corrlap._core.VOXEL_MIN_CURVATURE_RADIUS * metrics["h"]
+    V, F = corrlap.digitize("sphere1", h=0.2, bbox=(-1.5, 1.5))
+    fn = corrlap.true_normals("sphere1", V, F)
+    P_cli, _ = corrlap.read_mesh(tmp_path / "r" / "regularized.ply")
+    np.testing.assert_array_equal(corrlap.regularize(V, F, face_normals=fn, h=0.2), P_cli)
+    # `corrlap curvature` and corrlap.curvature: the same default radius on the shape's surface.
+    run_cli("curvature", *shape, "--normals", "true", "--out", tmp_path / "k")
+    H = corrlap.curvature(V, F, face_normals=fn)[0]
+    np.testing.assert_array_equal(H, np.loadtxt(tmp_path / "k" / "H_vertices.txt"))
