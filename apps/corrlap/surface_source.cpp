@@ -192,15 +192,28 @@ SurfelMesh OutputUnits::mesh(const SurfelMesh& m) const {
   return out;
 }
 
+namespace {
+
+// False when physical vectors are the world ones: the voxel axes are the physical axes (cubic
+// voxels scale lengths only) and no space flip; the unit vectors are then kept bit for bit.
+bool turns_vectors(const OutputUnits& u) {
+  return u.kind == OutputUnits::Kind::Physical &&
+         ((u.frame.geometry() && u.frame.geometry()->direction != Eigen::Matrix3d::Identity()) ||
+          u.flip != Eigen::Matrix3d::Identity());
+}
+
+}  // namespace
+
 Eigen::MatrixX3d OutputUnits::normals(const Eigen::MatrixX3d& n) const {
-  return kind == Kind::Physical ? Eigen::MatrixX3d(frame.normals_to_physical(n) * flip) : n;
+  return turns_vectors(*this) ? Eigen::MatrixX3d(frame.normals_to_physical(n) * flip) : n;
 }
 
 Eigen::MatrixX3d OutputUnits::directions(const Eigen::MatrixX3d& d) const {
-  if (kind != Kind::Physical || !frame.geometry()) return d;
+  if (!turns_vectors(*this)) return d;
   // Tangent vectors follow the linear part of the map (normals its inverse transpose); the
   // resampled voxels are cubes, so the direction matrix alone is that part up to scale.
-  Eigen::MatrixX3d out = d * frame.geometry()->direction.transpose() * flip;
+  const Eigen::Matrix3d direction = frame.geometry() ? frame.geometry()->direction : Eigen::Matrix3d::Identity();
+  Eigen::MatrixX3d out = d * direction.transpose() * flip;
   for (Eigen::Index i = 0; i < out.rows(); ++i) {
     const double norm = out.row(i).norm();
     if (norm > 0.0) out.row(i) /= norm;

@@ -5,11 +5,11 @@
 #include <doctest/doctest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/io/volume_io.hpp>
-#include <algorithm>
-#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -115,7 +115,7 @@ TEST_CASE("One segmentation as LPS .nrrd and RAS .nii.gz: outputs differ by the 
   CHECK(read_text(dir + "/regularized.ply").find("\ncomment SPACE=RAS\n") != std::string::npos);
 }
 
-TEST_CASE("--output-space needs physical units and an input whose space is known") {
+TEST_CASE("Output spaces need physical units and an input whose space is known") {
   VolumeData plain = ball_segmentation();
   plain.geometry = VolumeGeometry{};
   const std::string vol = scratch("plain.nrrd");
@@ -151,7 +151,8 @@ TEST_CASE("curvature, normals, solve and eigs follow --output-units: lengths in 
   for (const char* name : {"H", "k1", "k2", "G"}) {
     CAPTURE(name);
     const double power = std::string(name) == "G" ? 2.0 : 1.0;
-    const Eigen::VectorXd v = read_scalars(cv + "/" + name + "_faces.txt"), p = read_scalars(cp + "/" + name + "_faces.txt");
+    const Eigen::VectorXd v = read_scalars(cv + "/" + name + "_faces.txt"),
+                          p = read_scalars(cp + "/" + name + "_faces.txt");
     CHECK(max_difference(p, v / std::pow(mm, power)) < 1e-9 * v.cwiseAbs().maxCoeff() / std::pow(mm, power));
   }
   const double mean_h = read_scalars(cp + "/H_faces.txt").mean();
