@@ -26,7 +26,7 @@ PolygonMesh read_mesh(const std::string& path, MeshAttributes* attributes) {
 
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshAttributes& attributes) {
   const std::string ext = file_extension(path);
-  if (ext == "obj") return write_obj(path, mesh);  // OBJ has no place for attributes
+  if (ext == "obj") return write_obj(path, mesh, attributes.comments);  // OBJ has no place for the others
   if (ext == "ply") return write_ply(path, mesh, attributes);
   throw IoError("mesh file '" + path + "': unsupported extension '" + ext + "' for writing (supported: .obj, .ply)");
 }

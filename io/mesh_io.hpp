@@ -7,6 +7,7 @@
 #include <corrlap/core/surfel_mesh.hpp>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace corrlap {
 
@@ -16,6 +17,9 @@ namespace corrlap {
 struct MeshAttributes {
   std::map<std::string, Eigen::VectorXd> vertex_scalars, face_scalars;
   Eigen::MatrixX3d vertex_normals, face_normals;  // empty = absent
+  /// Header comments, one line each, written by OBJ ("# ...") and PLY ("comment ..."): e.g.
+  /// "SPACE=LPS", which 3D Slicer reads to place the mesh.
+  std::vector<std::string> comments;
 };
 
 /// The extension of a file name, lower case, without the dot ("" when there is none): how the
@@ -36,9 +40,10 @@ PolygonMesh read_ply(const std::string& path, MeshAttributes* attributes = nullp
 PolygonMesh read_off(const std::string& path);
 
 /// Writes by extension (.obj or .ply). Positions with 17 significant digits in OBJ; PLY stores
-/// doubles (exact round trip).
+/// doubles (exact round trip). OBJ writes the attributes' comments only.
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshAttributes& attributes = {});
-void write_obj(const std::string& path, const PolygonMesh& mesh);
+/// `comments`: header lines after the first, each without a line break (IoError otherwise).
+void write_obj(const std::string& path, const PolygonMesh& mesh, const std::vector<std::string>& comments = {});
 /// Binary little-endian PLY: vertex x y z [nx ny nz] [scalars] as double, face list
 /// (uchar count, int ids) "vertex_indices" [nx ny nz] [scalars]. Throws IoError when an attribute
 /// has the wrong number of rows or an invalid name.

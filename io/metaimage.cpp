@@ -2,7 +2,9 @@
 // ending with ElementDataFile, then the values (LOCAL, .mha) or a data file next to the header
 // (.mhd + .raw/.zraw). Raw or zlib (CompressedData). The geometry is ITK's: physical =
 // Offset + D * diag(ElementSpacing) * index, D's column a listed as the a-th triple of
-// TransformMatrix (ITK's MetaImageIO reads the triples as the axes' directions).
+// TransformMatrix (ITK's MetaImageIO reads the triples as the axes' directions), in ITK's world
+// space, LPS. AnatomicalOrientation describes the voxel axes, which TransformMatrix already gives:
+// it is written, not read.
 #include <algorithm>
 #include <bit>
 #include <cctype>
@@ -132,6 +134,7 @@ void read_metaimage(const std::string& path, VoxelSink& sink) {
   if (auto msb = find({"BinaryDataByteOrderMSB", "ElementByteOrderMSB"}))
     header.big_endian = boolean(path, msb->first, msb->second);
   // Geometry.
+  header.geometry.space = PhysicalSpace::LPS;
   if (auto s = find({"ElementSpacing"})) {
     const auto v = numbers(path, s->first, s->second, 3);
     header.geometry.spacing = Eigen::Vector3d(v[0], v[1], v[2]);
@@ -215,12 +218,35 @@ void read_metaimage(const std::string& path, VoxelSink& sink) {
   read_payload(*data, data_path, header, sink);
 }
 
+namespace {
+
+// ITK's three letters for the voxel axes of an LPS direction ("RAI" for the identity): per axis, the
+// side its nearest anatomical axis comes from. None when two voxel axes share one anatomical axis.
+std::optional<std::string> anatomical_orientation(const Eigen::Matrix3d& direction) {
+  static const char from[3][2] = {{'R', 'L'}, {'A', 'P'}, {'I', 'S'}};
+  std::string code;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Index nearest = 0;
+    direction.col(a).cwiseAbs().maxCoeff(&nearest);
+    const char letter = from[nearest][direction(nearest, a) > 0.0 ? 0 : 1];
+    for (char used : code)
+      if (used == from[nearest][0] || used == from[nearest][1]) return std::nullopt;
+    code += letter;
+  }
+  return code;
+}
+
+}  // namespace
+
 void write_metaimage(const std::string& path, const VolumeData& volume) {
   const bool detached = file_extension(path) == "mhd";
   // .mha: one file, zlib-compressed when built with zlib (label maps shrink a hundredfold);
   // .mhd: the values raw in a .raw file beside it, readable by any tool that takes raw data.
   const bool compressed = !detached && have_zlib();
-  const VolumeGeometry& g = volume.geometry;
+  // ITK's world is LPS: a geometry in another anatomical space is flipped into it; one in an unknown
+  // space is written as it is (and read back as LPS).
+  const VolumeGeometry g =
+      volume.geometry.space == PhysicalSpace::Unknown ? volume.geometry : volume.geometry.in_space(PhysicalSpace::LPS);
   if (!g.spacing.allFinite() || !g.origin.allFinite() || !g.direction.allFinite() || (g.spacing.array() <= 0).any())
     fail(path, "the geometry has a spacing that is not positive or a value that is not finite");
   const char* type = "MET_UCHAR";  // bool: its values 0 and 1 as bytes
@@ -247,6 +273,9 @@ void write_metaimage(const std::string& path, const VolumeData& volume) {
   for (int a = 0; a < 3; ++a)
     for (int r = 0; r < 3; ++r) h << ' ' << g.direction(r, a);
   h << "\nOffset = " << g.origin.x() << ' ' << g.origin.y() << ' ' << g.origin.z() << "\n";
+  if (g.space != PhysicalSpace::Unknown) {
+    if (const auto code = anatomical_orientation(g.direction)) h << "AnatomicalOrientation = " << *code << "\n";
+  }
   h << "ElementSpacing = " << g.spacing.x() << ' ' << g.spacing.y() << ' ' << g.spacing.z() << "\n";
   h << "DimSize = " << volume.size.x() << ' ' << volume.size.y() << ' ' << volume.size.z() << "\n";
   h << "ElementType = " << type << "\n";

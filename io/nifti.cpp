@@ -125,46 +125,39 @@ struct NiftiFields {
   Eigen::Matrix<double, 3, 4> srow = Eigen::Matrix<double, 3, 4>::Zero();
 };
 
-NiftiFields parse_nifti1(const HeaderBytes& h) {
-  NiftiFields f;
-  f.version = 1;
-  for (int i = 0; i < 8; ++i) f.dim[std::size_t(i)] = h.get<std::int16_t>(40 + 2 * std::size_t(i));
-  f.datatype = h.get<std::int16_t>(70);
-  f.bitpix = h.get<std::int16_t>(72);
-  for (int i = 0; i < 8; ++i) f.pixdim[std::size_t(i)] = h.get<float>(76 + 4 * std::size_t(i));
-  f.vox_offset = h.get<float>(108);
-  f.scl_slope = h.get<float>(112);
-  f.scl_inter = h.get<float>(116);
-  f.qform_code = h.get<std::int16_t>(252);
-  f.sform_code = h.get<std::int16_t>(254);
-  f.quatern_b = h.get<float>(256);
-  f.quatern_c = h.get<float>(260);
-  f.quatern_d = h.get<float>(264);
-  for (int i = 0; i < 3; ++i) f.qoffset[i] = h.get<float>(268 + 4 * std::size_t(i));
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) f.srow(r, c) = h.get<float>(280 + 16 * std::size_t(r) + 4 * std::size_t(c));
-  return f;
-}
+// Where the fields are in each version's header. NIfTI-2 has the fields of NIfTI-1 at other offsets,
+// widened: 64-bit dimensions and vox_offset, 32-bit form codes, doubles for the floats.
+struct NiftiLayout {
+  std::size_t dim, datatype, bitpix, pixdim, vox_offset, scl_slope, scl_inter, qform_code, sform_code;
+  std::size_t quatern;  ///< quatern_b, then quatern_c and quatern_d
+  std::size_t qoffset;  ///< qoffset_x, y, z
+  std::size_t srow;     ///< srow_x, srow_y, srow_z: four values each
+};
+constexpr NiftiLayout kNifti1Layout{40, 70, 72, 76, 108, 112, 116, 252, 254, 256, 268, 280};
+constexpr NiftiLayout kNifti2Layout{16, 12, 14, 104, 168, 176, 184, 344, 348, 352, 376, 400};
 
-NiftiFields parse_nifti2(const HeaderBytes& h) {
+// The fields of one version: Dim its dimensions' type, Real its floats', Offset vox_offset's, Code the
+// form codes'.
+template <class Dim, class Real, class Offset, class Code>
+NiftiFields parse_fields(const HeaderBytes& h, const NiftiLayout& at, int version) {
   NiftiFields f;
-  f.version = 2;
-  f.datatype = h.get<std::int16_t>(12);
-  f.bitpix = h.get<std::int16_t>(14);
-  for (int i = 0; i < 8; ++i) f.dim[std::size_t(i)] = h.get<std::int64_t>(16 + 8 * std::size_t(i));
-  for (int i = 0; i < 8; ++i) f.pixdim[std::size_t(i)] = h.get<double>(104 + 8 * std::size_t(i));
-  const auto offset = h.get<std::int64_t>(168);
-  f.vox_offset = double(offset);
-  f.scl_slope = h.get<double>(176);
-  f.scl_inter = h.get<double>(184);
-  f.qform_code = h.get<std::int32_t>(344);
-  f.sform_code = h.get<std::int32_t>(348);
-  f.quatern_b = h.get<double>(352);
-  f.quatern_c = h.get<double>(360);
-  f.quatern_d = h.get<double>(368);
-  for (int i = 0; i < 3; ++i) f.qoffset[i] = h.get<double>(376 + 8 * std::size_t(i));
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) f.srow(r, c) = h.get<double>(400 + 32 * std::size_t(r) + 8 * std::size_t(c));
+  f.version = version;
+  const auto real = [&](std::size_t offset, std::size_t i) { return double(h.get<Real>(offset + sizeof(Real) * i)); };
+  for (std::size_t i = 0; i < 8; ++i) f.dim[i] = h.get<Dim>(at.dim + sizeof(Dim) * i);
+  f.datatype = h.get<std::int16_t>(at.datatype);
+  f.bitpix = h.get<std::int16_t>(at.bitpix);
+  for (std::size_t i = 0; i < 8; ++i) f.pixdim[i] = real(at.pixdim, i);
+  f.vox_offset = double(h.get<Offset>(at.vox_offset));
+  f.scl_slope = real(at.scl_slope, 0);
+  f.scl_inter = real(at.scl_inter, 0);
+  f.qform_code = h.get<Code>(at.qform_code);
+  f.sform_code = h.get<Code>(at.sform_code);
+  f.quatern_b = real(at.quatern, 0);
+  f.quatern_c = real(at.quatern, 1);
+  f.quatern_d = real(at.quatern, 2);
+  for (std::size_t i = 0; i < 3; ++i) f.qoffset[Eigen::Index(i)] = real(at.qoffset, i);
+  for (std::size_t r = 0; r < 3; ++r)
+    for (std::size_t c = 0; c < 4; ++c) f.srow(Eigen::Index(r), Eigen::Index(c)) = real(at.srow, 4 * r + c);
   return f;
 }
 
@@ -244,9 +237,11 @@ double pixdim_spacing(const std::string& path, const NiftiFields& f, int axis) {
 }
 
 // The voxel-to-world map, by the NIfTI rules: the sform when sform_code > 0, else the qform
-// (quaternion, pixdim, qfac = pixdim[0]) when qform_code > 0, else the voxel sizes alone.
+// (quaternion, pixdim, qfac = pixdim[0]) when qform_code > 0, else the voxel sizes alone. NIfTI's
+// world is RAS in every case (the affine nibabel, 3D Slicer and ITK-SNAP read).
 VolumeGeometry geometry_of(const std::string& path, const NiftiFields& f) {
   VolumeGeometry g;
+  g.space = PhysicalSpace::RAS;
   if (f.sform_code > 0) {
     if (!f.srow.allFinite()) fail(path, "sform (srow_x/y/z) holds a value that is not finite");
     g.origin = f.srow.col(3);
@@ -305,7 +300,7 @@ NiftiFields read_header(const std::string& path, NiftiInput& in, std::size_t& he
            "it (e.g. nibabel: nib.save(nib.load('x.hdr'), 'x.nii'))");
     if (std::memcmp(magic, "n+1\0", 4) != 0)
       fail(path, "no NIfTI-1 magic 'n+1' at byte 344 (an Analyze 7.5 file, or not NIfTI)");
-    NiftiFields f = parse_nifti1(h);
+    NiftiFields f = parse_fields<std::int16_t, float, float, std::int16_t>(h, kNifti1Layout, 1);
     f.big_endian = big_endian;
     return f;
   }
@@ -313,7 +308,7 @@ NiftiFields read_header(const std::string& path, NiftiInput& in, std::size_t& he
   if (std::memcmp(magic, "ni2\0", 4) == 0)
     fail(path, "the header of a NIfTI-2 .hdr/.img pair; corrlap reads single-file NIfTI (.nii, .nii.gz)");
   if (std::memcmp(magic, "n+2\0\r\n\032\n", 8) != 0) fail(path, "no NIfTI-2 magic 'n+2' at byte 4 (not NIfTI)");
-  NiftiFields f = parse_nifti2(h);
+  NiftiFields f = parse_fields<std::int64_t, double, std::int64_t, std::int32_t>(h, kNifti2Layout, 2);
   f.big_endian = big_endian;
   return f;
 }
@@ -437,17 +432,21 @@ void write_nifti(const std::string& path, const VolumeData& volume) {
   for (int a = 0; a < 3; ++a)
     if (volume.size[a] > std::numeric_limits<std::int16_t>::max())
       fail(path, describe_sizes(volume.size) + ": NIfTI-1 holds at most 32 767 voxels per axis");
-  const VolumeGeometry& g = volume.geometry;
+  // NIfTI's world is RAS: a geometry in another anatomical space is flipped into it; one in an
+  // unknown space is written as it is (and read back as RAS).
+  const VolumeGeometry g =
+      volume.geometry.space == PhysicalSpace::Unknown ? volume.geometry : volume.geometry.in_space(PhysicalSpace::RAS);
   if (!g.spacing.allFinite() || !g.origin.allFinite() || !g.direction.allFinite() || (g.spacing.array() <= 0).any())
     fail(path, "the geometry has a spacing that is not positive or a value that is not finite");
+  const NiftiLayout& at = kNifti1Layout;
   std::vector<unsigned char> header(kNifti1Header + 4, 0);  // + the 4-byte extension flag: none
   put<std::int32_t>(header, 0, std::int32_t(kNifti1Header));
   put<char>(header, 38, 'r');  // regular: Analyze's flag, still set by every writer
   const std::int16_t dim[8] = {
       3, std::int16_t(volume.size.x()), std::int16_t(volume.size.y()), std::int16_t(volume.size.z()), 1, 1, 1, 1};
-  for (std::size_t i = 0; i < 8; ++i) put<std::int16_t>(header, 40 + 2 * i, dim[i]);
-  put<std::int16_t>(header, 70, std::int16_t(datatype_code(volume.type)));
-  put<std::int16_t>(header, 72, std::int16_t(8 * value_bytes(volume.type)));
+  for (std::size_t i = 0; i < 8; ++i) put<std::int16_t>(header, at.dim + 2 * i, dim[i]);
+  put<std::int16_t>(header, at.datatype, std::int16_t(datatype_code(volume.type)));
+  put<std::int16_t>(header, at.bitpix, std::int16_t(8 * value_bytes(volume.type)));
   // The qform holds a rotation, possibly with the third axis flipped (qfac = -1); a sheared
   // direction is left to the sform alone.
   Eigen::Matrix3d rotation = g.direction;
@@ -458,27 +457,26 @@ void write_nifti(const std::string& path, const VolumeData& volume) {
   }
   const bool orthonormal = (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm() < 1e-6;
   const float pixdim[8] = {qfac, float(g.spacing.x()), float(g.spacing.y()), float(g.spacing.z()), 1, 1, 1, 1};
-  for (std::size_t i = 0; i < 8; ++i) put<float>(header, 76 + 4 * i, pixdim[i]);
-  put<float>(header, 108, float(kNifti1Header + 4));
-  put<float>(header, 112, 1.0f);  // scl_slope, scl_inter: the values as they are
-  put<float>(header, 116, 0.0f);
+  for (std::size_t i = 0; i < 8; ++i) put<float>(header, at.pixdim + 4 * i, pixdim[i]);
+  put<float>(header, at.vox_offset, float(kNifti1Header + 4));
+  put<float>(header, at.scl_slope, 1.0f);  // scl_slope, scl_inter: the values as they are
+  put<float>(header, at.scl_inter, 0.0f);
   put<char>(header, 123, 2);  // xyzt_units: millimetres
   const char description[] = "corrlap";
   std::memcpy(header.data() + 148, description, sizeof description);
-  put<std::int16_t>(header, 252, orthonormal ? 1 : 0);  // qform_code, sform_code: scanner anatomical
-  put<std::int16_t>(header, 254, 1);
+  put<std::int16_t>(header, at.qform_code, orthonormal ? 1 : 0);  // qform_code, sform_code: scanner anatomical
+  put<std::int16_t>(header, at.sform_code, 1);
   if (orthonormal) {
     Eigen::Quaterniond q(rotation);
     if (q.w() < 0.0) q.coeffs() *= -1.0;  // NIfTI keeps a >= 0 and stores b, c, d
-    put<float>(header, 256, float(q.x()));
-    put<float>(header, 260, float(q.y()));
-    put<float>(header, 264, float(q.z()));
+    const float bcd[3] = {float(q.x()), float(q.y()), float(q.z())};
+    for (std::size_t i = 0; i < 3; ++i) put<float>(header, at.quatern + 4 * i, bcd[i]);
   }
-  for (std::size_t i = 0; i < 3; ++i) put<float>(header, 268 + 4 * i, float(g.origin[Eigen::Index(i)]));
+  for (std::size_t i = 0; i < 3; ++i) put<float>(header, at.qoffset + 4 * i, float(g.origin[Eigen::Index(i)]));
   const Eigen::Matrix4d affine = g.affine();
   for (std::size_t r = 0; r < 3; ++r)
     for (std::size_t c = 0; c < 4; ++c)
-      put<float>(header, 280 + 16 * r + 4 * c, float(affine(Eigen::Index(r), Eigen::Index(c))));
+      put<float>(header, at.srow + 16 * r + 4 * c, float(affine(Eigen::Index(r), Eigen::Index(c))));
   std::memcpy(header.data() + 344, "n+1\0", 4);
 
   OutputFile out(path, "volume", true);

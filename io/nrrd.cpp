@@ -75,18 +75,33 @@ std::optional<VoxelValueType> nrrd_type(const std::string& t) {
   return it->second;
 }
 
-// The spaces of three dimensions NRRD names; the geometry stays in the file's space whichever it is.
-bool is_3d_space(const std::string& s) {
-  static const char* spaces[] = {"right-anterior-superior",
-                                 "ras",
-                                 "left-anterior-superior",
-                                 "las",
-                                 "left-posterior-superior",
-                                 "lps",
-                                 "scanner-xyz",
-                                 "3d-right-handed",
-                                 "3d-left-handed"};
-  return std::any_of(std::begin(spaces), std::end(spaces), [&](const char* x) { return s == x; });
+// The spaces of three dimensions NRRD names, and the anatomical space each one is (Unknown for the
+// spaces without anatomy); nullopt for a name that is not a 3D space.
+std::optional<PhysicalSpace> nrrd_space(const std::string& s) {
+  static const std::map<std::string, PhysicalSpace> spaces = {
+      {"right-anterior-superior", PhysicalSpace::RAS}, {"ras", PhysicalSpace::RAS},
+      {"left-anterior-superior", PhysicalSpace::LAS},  {"las", PhysicalSpace::LAS},
+      {"left-posterior-superior", PhysicalSpace::LPS}, {"lps", PhysicalSpace::LPS},
+      {"scanner-xyz", PhysicalSpace::Unknown},         {"3d-right-handed", PhysicalSpace::Unknown},
+      {"3d-left-handed", PhysicalSpace::Unknown}};
+  const auto it = spaces.find(s);
+  if (it == spaces.end()) return std::nullopt;
+  return it->second;
+}
+
+// NRRD's long name of a known space (what 3D Slicer writes).
+const char* nrrd_space_name(PhysicalSpace space) {
+  switch (space) {
+    case PhysicalSpace::RAS:
+      return "right-anterior-superior";
+    case PhysicalSpace::LAS:
+      return "left-anterior-superior";
+    case PhysicalSpace::LPS:
+      return "left-posterior-superior";
+    case PhysicalSpace::Unknown:
+      break;
+  }
+  return nullptr;
 }
 
 // "(x,y,z)" (blanks allowed) -> the vector; nullopt for anything else.
@@ -128,12 +143,15 @@ VolumeGeometry nrrd_geometry(const std::string& path, const std::map<std::string
   const auto space_dimension = fields.find("space dimension");
   if (space != fields.end() && space_dimension != fields.end())
     fail(path, "both 'space' and 'space dimension' are given (NRRD allows one)");
-  if (space != fields.end() && !is_3d_space(lower(space->second)))
+  const std::optional<PhysicalSpace> named =
+      space != fields.end() ? nrrd_space(lower(space->second)) : std::optional(PhysicalSpace::Unknown);
+  if (!named)
     fail(path, "space '" + space->second.substr(0, 40) +
                    "' is not a 3D space (supported: right-anterior-superior/RAS, left-anterior-superior/LAS, "
                    "left-posterior-superior/LPS, scanner-xyz, 3D-right-handed, 3D-left-handed)");
   if (space_dimension != fields.end() && space_dimension->second != "3")
     fail(path, "space dimension " + space_dimension->second.substr(0, 20) + ": corrlap reads 3D volumes (3)");
+  g.space = *named;
   const bool has_space = space != fields.end() || space_dimension != fields.end();
   const auto directions = fields.find("space directions");
   const auto spacings = fields.find("spacings");
@@ -357,9 +375,12 @@ void write_nrrd(const std::string& path, const VolumeData& v) {
   std::ostringstream h;
   h.precision(17);
   h << "NRRD0004\n# written by corrlap\ntype: " << type << "\ndimension: 3\n";
-  // The geometry's space is not recorded: "space dimension: 3" says the vectors are in a 3D space
-  // without naming it (the space of the file the volume came from).
-  h << "space dimension: 3\nsizes: " << v.size.x() << ' ' << v.size.y() << ' ' << v.size.z() << "\n";
+  // An unknown space is not named: "space dimension: 3" says the vectors are in a 3D space.
+  if (const char* space = nrrd_space_name(g.space))
+    h << "space: " << space << "\n";
+  else
+    h << "space dimension: 3\n";
+  h << "sizes: " << v.size.x() << ' ' << v.size.y() << ' ' << v.size.z() << "\n";
   h << "space directions:";
   for (int a = 0; a < 3; ++a) {
     const Eigen::Vector3d d = g.direction.col(a) * g.spacing[a];

@@ -103,7 +103,10 @@ PolygonMesh read_obj(const std::string& path) {
   return mesh;
 }
 
-void write_obj(const std::string& path, const PolygonMesh& mesh) {
+void write_obj(const std::string& path, const PolygonMesh& mesh, const std::vector<std::string>& comments) {
+  for (const std::string& c : comments)
+    if (c.find_first_of("\r\n") != std::string::npos)
+      throw IoError("OBJ file '" + path + "': a header comment holds a line break");
   for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
     for (int c = 0; c < 3; ++c)
       io_detail::require_finite(mesh.positions(v, c), path, "OBJ", "vertex", (long long)v + 1);
@@ -113,6 +116,11 @@ void write_obj(const std::string& path, const PolygonMesh& mesh) {
   out.write(" vertices, ");
   out.write_int(mesh.faces.size());
   out.write(" faces\n");
+  for (const std::string& c : comments) {
+    out.write("# ");
+    out.write(c);
+    out.write('\n');
+  }
   for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v) {
     out.write('v');
     for (int c = 0; c < 3; ++c) {

@@ -666,6 +666,10 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
 
   std::ostringstream h;
   h << "ply\nformat binary_little_endian 1.0\ncomment written by corrlap\n";
+  for (const std::string& c : a.comments) {
+    if (c.find_first_of("\r\n") != std::string::npos) fail(path, "a header comment holds a line break");
+    h << "comment " << c << "\n";
+  }
   h << "element vertex " << nv << "\nproperty double x\nproperty double y\nproperty double z\n";
   if (a.vertex_normals.rows()) h << "property double nx\nproperty double ny\nproperty double nz\n";
   for (const auto& [name, v] : a.vertex_scalars) h << "property double " << name << "\n";

@@ -1,5 +1,6 @@
 #include "voxel_values.hpp"
 
+#include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
 #include <stdexcept>
 
@@ -71,6 +72,53 @@ Eigen::Matrix4d VolumeGeometry::affine() const {
   a.topLeftCorner<3, 3>() = direction * spacing.asDiagonal();
   a.topRightCorner<3, 1>() = origin;
   return a;
+}
+
+std::string space_name(PhysicalSpace space) {
+  switch (space) {
+    case PhysicalSpace::Unknown:
+      return "unknown";
+    case PhysicalSpace::RAS:
+      return "RAS";
+    case PhysicalSpace::LAS:
+      return "LAS";
+    case PhysicalSpace::LPS:
+      return "LPS";
+  }
+  throw std::logic_error("space_name: unknown PhysicalSpace");
+}
+
+namespace {
+
+// The signs of a known space's axes against RAS's.
+Eigen::Vector3d signs_from_ras(PhysicalSpace space) {
+  switch (space) {
+    case PhysicalSpace::LAS:
+      return {-1, 1, 1};
+    case PhysicalSpace::LPS:
+      return {-1, -1, 1};
+    default:
+      return {1, 1, 1};
+  }
+}
+
+}  // namespace
+
+Eigen::Matrix3d space_change(PhysicalSpace from, PhysicalSpace to) {
+  if (from == to) return Eigen::Matrix3d::Identity();
+  if (from == PhysicalSpace::Unknown || to == PhysicalSpace::Unknown)
+    throw InputError("cannot convert physical coordinates from the space " + space_name(from) + " to " +
+                     space_name(to) + ": an unknown space has no anatomical axes to flip");
+  return signs_from_ras(from).cwiseProduct(signs_from_ras(to)).asDiagonal();
+}
+
+VolumeGeometry VolumeGeometry::in_space(PhysicalSpace to) const {
+  const Eigen::Matrix3d flip = space_change(space, to);
+  VolumeGeometry g = *this;
+  g.origin = flip * origin;
+  g.direction = flip * direction;
+  g.space = to;
+  return g;
 }
 
 }  // namespace corrlap

@@ -36,6 +36,19 @@ struct InsideRule {
   std::string describe() const;
 };
 
+/// The anatomical space that physical coordinates are in, named by the direction in which each
+/// axis grows: RAS (x towards the patient's Right, y Anterior, z Superior: NIfTI, nibabel), LPS (Left, Posterior,
+/// Superior: DICOM, ITK, MetaImage, Slicer's files) and LAS (NRRD names it). Unknown: a space without anatomy (NRRD's
+/// scanner-xyz, 3D-right-handed, "space dimension", and every format without one). Converting between known spaces
+/// flips axes.
+enum class PhysicalSpace { Unknown, RAS, LAS, LPS };
+/// "RAS", "LAS", "LPS" or "unknown".
+std::string space_name(PhysicalSpace space);
+/// The diagonal map of physical coordinates in `from` to coordinates in `to` (x and y flipped
+/// between RAS and LPS); the identity when they are equal. InputError when one of them is Unknown
+/// and they differ: no anatomy says which way the axes go.
+Eigen::Matrix3d space_change(PhysicalSpace from, PhysicalSpace to);
+
 /// The map from voxel indices to physical coordinates (millimetres for medical formats):
 /// physical = origin + direction * diag(spacing) * index, index (i, j, k) the voxel's centre.
 /// The identity for files without one (.vol, .raw, binvox, .vox, .npy).
@@ -43,6 +56,7 @@ struct VolumeGeometry {
   Eigen::Vector3d spacing = Eigen::Vector3d::Ones();        ///< voxel side lengths along i, j, k (> 0)
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();         ///< the physical position of voxel (0, 0, 0)
   Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();  ///< columns: the unit physical axes of i, j, k
+  PhysicalSpace space = PhysicalSpace::Unknown;             ///< the space of the physical coordinates
 
   /// The 4 by 4 homogeneous map index -> physical (NIfTI's sform, nibabel's affine in RAS for
   /// NIfTI; in the file's own space for the other formats).
@@ -51,6 +65,9 @@ struct VolumeGeometry {
     return origin + direction * spacing.cwiseProduct(index);
   }
   bool isotropic() const { return spacing.maxCoeff() == spacing.minCoeff(); }
+  /// The same voxels placed in the space `to` (origin and direction flipped by space_change); throws
+  /// as space_change.
+  VolumeGeometry in_space(PhysicalSpace to) const;
 };
 
 }  // namespace corrlap

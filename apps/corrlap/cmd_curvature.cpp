@@ -22,9 +22,22 @@ struct CurvatureArgs {
   SurfaceSource source;
   NormalOptions normals;
   std::string out;
+  OutputOptions output;
   std::optional<double> radius;  // unset: default_curvature_radius of the surface
   bool constant = false;
 };
+
+// The estimates in the output units: H, k1, k2 in 1 / length, G in 1 / length^2, the principal
+// directions mapped with the positions.
+CurvatureEstimates in_units(CurvatureEstimates e, const OutputUnits& units) {
+  e.H = units.curvatures(e.H);
+  e.k1 = units.curvatures(e.k1);
+  e.k2 = units.curvatures(e.k2);
+  e.G = units.inverse_areas(e.G);
+  e.d1 = units.directions(e.d1);
+  e.d2 = units.directions(e.d2);
+  return e;
+}
 
 void write_set(const std::string& dir, const std::string& suffix, const CurvatureEstimates& e) {
   write_scalars(dir + "/H_" + suffix + ".txt", e.H);
@@ -59,15 +72,17 @@ void run(const CurvatureArgs& a) {
   const CorrectedCurvature cc = need == NormalKind::Vertex ? CorrectedCurvature::interpolated(mesh, n.vertex)
                                                            : CorrectedCurvature::constant(mesh, n.face);
   const double radius = a.radius ? *a.radius : default_curvature_radius(surface);
-  const CurvatureEstimates ef = cc.at_faces(radius);
-  const CurvatureEstimates ev = cc.at_vertices(radius);
+  const OutputUnits units = a.output.parse(surface);
+  const CurvatureEstimates ef = in_units(cc.at_faces(radius), units);
+  const CurvatureEstimates ev = in_units(cc.at_vertices(radius), units);
   write_set(out.path(), "faces", ef);
   write_set(out.path(), "vertices", ev);
   MeshAttributes attr;
   attr.face_scalars = {{"H", ef.H}, {"G", ef.G}, {"k1", ef.k1}, {"k2", ef.k2}};
   attr.vertex_scalars = {{"H", ev.H}, {"G", ev.G}, {"k1", ev.k1}, {"k2", ev.k2}};
+  attr.comments = units.comments();
   try {
-    write_mesh(out.file("curvature.ply"), mesh, attr);
+    write_mesh(out.file("curvature.ply"), units.mesh(mesh), attr);
   } catch (const Error& e) {
     // The text files above are the contract; the PLY is a convenience for viewers.
     std::cerr << "warning: curvature.ply not written: " << e.what() << "\n";
@@ -77,7 +92,8 @@ void run(const CurvatureArgs& a) {
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "curvature (" << (cc.interpolated_normals() ? "interpolated vertex normals" : "constant face normals")
             << ", r=" << radius << "): " << mesh.num_faces() << " faces, totals mu0=" << t[0] << " mu1=" << t[1]
-            << " mu2=" << t[2] << ", mean H (faces) " << ef.H.mean() << " -> " << a.out << " (" << secs << " s)\n";
+            << " mu2=" << t[2] << " (world units), mean H (faces) " << ef.H.mean() << " (" << units.name()
+            << " units) -> " << a.out << " (" << secs << " s)\n";
 }
 
 RegisterCommand reg(31, "curvature", [](CLI::App& app) {
@@ -90,11 +106,12 @@ RegisterCommand reg(31, "curvature", [](CLI::App& app) {
   args->normals.add_options(*cmd);
   cmd->add_flag("--constant", args->constant, "with --normals: use the face normals as constant per face");
   cmd->add_option("--radius", args->radius,
-                  "ball radius in world units (default " + number_text(kCurvatureRadiusFraction) +
+                  "ball radius in world units, the computation's (default " + number_text(kCurvatureRadiusFraction) +
                       " s, s = half the longest side of the surface's bounding box; for volumes and mesh files at "
                       "least " +
                       number_text(kVoxelMinCurvatureRadius) + " voxels)")
       ->check(non_negative_number());
+  args->output.add_options(*cmd);
   cmd->add_option("--out", args->out,
                   "output directory (H_faces.txt, G_, k1_, k2_, d1_, d2_ per faces/vertices, curvature.ply)")
       ->required();

@@ -18,7 +18,7 @@ namespace {
 struct DigitizeArgs {
   SurfaceSource source;
   std::string out, face_normals_out, vertex_normals_out, normals = "auto";
-  std::string output_units = OutputUnits::kDefault;
+  OutputOptions output;
   std::string volume_out;  // the voxels as a volume file (255 inside)
 };
 
@@ -62,9 +62,10 @@ void run(const DigitizeArgs& a) {
     attributes.vertex_normals = n.vertex;
   }
   if (out) {
-    const OutputUnits units = OutputUnits::parse(a.output_units, loaded);
+    const OutputUnits units = a.output.parse(loaded);
     if (attributes.face_normals.rows() > 0) attributes.face_normals = units.normals(attributes.face_normals);
     if (attributes.vertex_normals.rows() > 0) attributes.vertex_normals = units.normals(attributes.vertex_normals);
+    attributes.comments = units.comments();
     write_mesh(out->path(), units.mesh(mesh), attributes);
   }
   for (std::optional<StagedFile>* f : {&volume_out, &face_normals_out, &vertex_normals_out, &out})
@@ -83,9 +84,7 @@ RegisterCommand reg(10, "digitize", [](CLI::App& app) {
   cmd->add_option(
       "--volume-out", args->volume_out,
       "also write the voxels as a volume (.vol, .longvol: Version 3 with zlib, .nrrd, .raw; 255 inside, 0 outside)");
-  cmd->add_option("--output-units", args->output_units, OutputUnits::kHelp)
-      ->check(CLI::IsMember({"physical", "world", "voxels"}))
-      ->capture_default_str();
+  args->output.add_options(*cmd);
   cmd->add_option("--face-normals", args->face_normals_out, "write one normal per face (text, nx ny nz)");
   cmd->add_option("--vertex-normals", args->vertex_normals_out,
                   "write one normal per vertex: normalized sum of incident face normals");

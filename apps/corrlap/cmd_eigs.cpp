@@ -23,6 +23,7 @@ struct EigsArgs {
   SolverOptions solver;
   int k = 49;
   std::string out;
+  OutputOptions output;
 };
 
 void run(const EigsArgs& a) {
@@ -30,6 +31,8 @@ void run(const EigsArgs& a) {
   std::optional<StagedFile> out;  // checked before the computation
   if (!a.out.empty()) out.emplace(a.out);
   const OperatorOptions::Input in = a.options.prepare();
+  // -lambda has the units 1 / length^2: converted from the computation's world units to the output's.
+  const OutputUnits units = a.output.parse(in.frame);
   const Operators ops = a.options.assemble(in);
   if (const BoundaryCondition boundary = boundary_condition(in.mesh); !boundary.closed())
     std::cerr << "eigs: " << boundary.note() << "\n";
@@ -44,19 +47,20 @@ void run(const EigsArgs& a) {
   const EigenResult r = explain_solver_failure(ops, [&] { return eig->solve(ops.L, ops.M, a.k); });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!r.values.allFinite()) throw NumericalError("eigs: the eigen solver returned a value that is not finite");
+  const Eigen::VectorXd values = units.inverse_areas(r.values);
   if (a.out.empty()) {
-    for (Eigen::Index i = 0; i < r.values.size(); ++i) std::printf("%.17g\n", r.values[i]);
+    for (Eigen::Index i = 0; i < values.size(); ++i) std::printf("%.17g\n", values[i]);
   } else {
-    write_scalars(out->path(), r.values);
+    write_scalars(out->path(), values);
     out->commit();
   }
   // A value -lambda < 0 means L u = lambda M u with lambda > 0: L is not negative semi-definite
   // (tolerance: rounding of the dense or shift-invert solve, relative to the largest value).
-  const double scale = std::max(1.0, r.values.size() ? r.values.cwiseAbs().maxCoeff() : 0.0);
+  const double scale = std::max(1.0, r.values.size() ? r.values.cwiseAbs().maxCoeff() : 0.0);  // world units
   const Eigen::Index wrong_sign = (r.values.array() < -1e-8 * scale).count();
   if (wrong_sign > 0) {
     std::cerr << "warning: eigs: " << wrong_sign << " of the values -lambda are negative (smallest "
-              << r.values.minCoeff() << "): L is not negative semi-definite";
+              << values.minCoeff() << "): L is not negative semi-definite";
     if (!ops.contract_risk.empty())
       std::cerr << "; likely cause: " << ops.contract_risk << "; remedy: --orientation clamp (the default)";
     std::cerr << "\n";
@@ -66,7 +70,7 @@ void run(const EigsArgs& a) {
             << (r.method == "dense" ? std::string("the dense solver (cheaper at this size)")
                                     : eig->name() + " (" + config.get_string("solver", "") + ", " +
                                           std::to_string(r.iterations) + " restarts)")
-            << " in " << seconds << " s\n";
+            << " in " << seconds << " s; values in 1/length^2 of " << units.name() << " units\n";
 }
 
 RegisterCommand reg(31, "eigs", [](CLI::App& app) {
@@ -75,6 +79,7 @@ RegisterCommand reg(31, "eigs", [](CLI::App& app) {
   args->options.add_options(*cmd);
   cmd->add_option("-k", args->k, "number of eigenvalues (default 49)");
   cmd->add_option("--out", args->out, "write one value per line (ascending, %.17g) instead of printing");
+  args->output.add_options(*cmd, /*with_space=*/false);
   args->solver.add_options(*cmd, std::string("linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, "
                                              "eigen-llt, cg; default ") +
                                      kDefaultLinearSolver + "); small problems take the dense path when it is cheaper");

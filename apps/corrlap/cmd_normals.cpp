@@ -18,22 +18,25 @@ struct NormalsArgs {
   SurfaceSource source;
   NormalOptions normals;
   std::string at = "faces", out;
+  OutputOptions output;
 };
 
 void run(const NormalsArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   StagedFile out(a.out);  // checked before the computation
   const LoadedSurface surface = a.source.load();
+  const OutputUnits units = a.output.parse(surface);
   // Vertices: the normalized sum of the incident face normals (docs/math.md §1.5), as every command uses.
   const bool at_vertices = a.at == "vertices";
   const NormalFields fields =
       a.normals.resolve(surface, at_vertices ? NormalKind::Vertex : NormalKind::Face, "corrlap normals");
-  const Eigen::MatrixX3d& n = at_vertices ? fields.vertex : fields.face;
+  const Eigen::MatrixX3d n = units.normals(at_vertices ? fields.vertex : fields.face);
   write_normals(out.path(), n);
   out.commit();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << a.normals.describe(surface) << " normals of " << surface.description << ": " << n.rows() << " " << a.at
-            << " -> " << a.out << " (" << secs << " s)\n";
+            << " -> " << a.out << " (" << units.name() << " coordinates"
+            << (units.space_name().empty() ? "" : ", " + units.space_name()) << ", " << secs << " s)\n";
 }
 
 RegisterCommand reg(30, "normals", [](CLI::App& app) {
@@ -49,6 +52,7 @@ RegisterCommand reg(30, "normals", [](CLI::App& app) {
   cmd->add_option("--at", args->at, "faces (default) or vertices (normalized sum of incident face normals)")
       ->check(CLI::IsMember({"faces", "vertices"}));
   cmd->add_option("--out", args->out, "output text file")->required();
+  args->output.add_options(*cmd);
   cmd->callback([args] { run(*args); });
 });
 

@@ -46,7 +46,7 @@ struct RegularizeArgs {
   double normal_attachment = 1.0;
   SolverOptions solver;
   std::string out;
-  std::string output_units = OutputUnits::kDefault;
+  OutputOptions output;
   std::string baseline;  // "alignment": docs/math.md §9.1 instead of §9.2
   bool clamp = false;
   bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
@@ -88,15 +88,25 @@ void write_surfaces(const std::string& dir, const SurfelMesh& input, MeshAttribu
   for (auto& [name, v] : input_attr.vertex_scalars) v = units.curvatures(v);
   if (input_attr.vertex_normals.rows() > 0) input_attr.vertex_normals = units.normals(input_attr.vertex_normals);
   if (input_attr.face_normals.rows() > 0) input_attr.face_normals = units.normals(input_attr.face_normals);
+  input_attr.comments = units.comments();
   write_mesh(dir + "/input.ply", units.mesh(input), input_attr);
   MeshAttributes result_attr;
+  result_attr.comments = units.comments();
   for (auto& [name, v] : curvatures) v = units.curvatures(v);
   curvatures["displacement"] = units.lengths((result.positions - input.positions).rowwise().norm());
   result_attr.vertex_scalars = std::move(curvatures);
   const SurfelMesh out = units.mesh(result);
   result_attr.vertex_normals = geometric_vertex_normals(out);
   write_mesh(dir + "/regularized.ply", out, result_attr);
-  write_mesh(dir + "/regularized.obj", out);
+  MeshAttributes obj_attr;  // OBJ writes the comments only
+  obj_attr.comments = units.comments();
+  write_mesh(dir + "/regularized.obj", out, obj_attr);
+}
+
+// The space of the coordinates written ("RAS", "LPS", "unknown"); null for world and voxel units.
+nlohmann::json output_space_json(const OutputUnits& units) {
+  const std::string space = units.space_name();
+  return space.empty() ? nlohmann::json(nullptr) : nlohmann::json(space);
 }
 
 void write_metrics(const std::string& dir, const nlohmann::json& m) {
@@ -125,7 +135,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   result.positions = r.positions;
   MeshAttributes input_attr;
   input_attr.face_normals = normals.face;
-  const OutputUnits units = OutputUnits::parse(a.output_units, surface);
+  const OutputUnits units = a.output.parse(surface);
   write_surfaces(dir, mesh, input_attr, result, {}, units);
   stages["write_s"] = t.lap();
   if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, result, "", {}, {});
@@ -133,6 +143,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   nlohmann::json m;
   m["surface"] = description;
   m["output_units"] = units.name();
+  m["output_space"] = output_space_json(units);
   m["vertices"] = mesh.num_vertices();
   m["faces"] = mesh.num_faces();
   m["h"] = mesh.grid_step();
@@ -183,7 +194,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
   input_attr.vertex_scalars = {{"H", r.H}};
-  const OutputUnits units = OutputUnits::parse(a.output_units, surface);
+  const OutputUnits units = a.output.parse(surface);
   write_surfaces(dir, mesh, input_attr, r.mesh, {{"H", r.H}}, units);
   stages["write_s"] = t.lap();
   if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, r.mesh, "H", r.H, r.H);
@@ -203,6 +214,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   m["h_scale"] = a.h_scale;
   m["h_clamp"] = a.h_clamp ? nlohmann::json(*a.h_clamp) : nlohmann::json(nullptr);
   m["output_units"] = units.name();
+  m["output_space"] = output_space_json(units);
   m["k1_edit"] = o.k1_edit.describe();
   m["k2_edit"] = o.k2_edit.describe();
   if (o.k1_edit.active() || o.k2_edit.active()) {
@@ -348,9 +360,7 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");
-  cmd->add_option("--output-units", args->output_units, OutputUnits::kHelp)
-      ->check(CLI::IsMember({"physical", "world", "voxels"}))
-      ->capture_default_str();
+  args->output.add_options(*cmd);
   cmd->add_option("--out", args->out,
                   "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png)")
       ->required();

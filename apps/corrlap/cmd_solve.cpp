@@ -34,6 +34,7 @@ struct SolveArgs {
   std::string rhs = "x2";
   SolverOptions solver;
   std::string out;
+  OutputOptions output;
   std::string system = "poisson";
   double dt_factor = 0.035;
   bool json = false;
@@ -55,6 +56,8 @@ void run(const SolveArgs& a) {
   const Stopwatch watch;
   const LoadedSurface surface = a.source.load();
   const SurfelMesh& mesh = surface.mesh;
+  // Laplacians (b, X) are in 1 / length^2 of these units; potentials and functions (g, u) have no units.
+  const OutputUnits units = a.output.parse(surface);
   // The normals of `corrlap operators` for the same options (docs/math.md §1.5, resolve_normals).
   const NormalFields normals = a.normals.resolve(surface, method->required_normals(), a.method.method);
   const std::string kind = method->required_normals() == NormalKind::None ? "none" : a.normals.describe(surface);
@@ -83,6 +86,8 @@ void run(const SolveArgs& a) {
     if (from_file.size() != n)
       throw InputError("right-hand side file '" + a.rhs + "' has " + std::to_string(from_file.size()) +
                        " values, the mesh has " + std::to_string(n) + " vertices");
+    // Poisson's b is a Laplacian in the output units: into the computation's world units.
+    if (a.system != "heat") from_file *= units.length_scale() * units.length_scale();
   }
   Eigen::VectorXd g;
   double residual = 0.0, dt = 0.0;
@@ -113,7 +118,8 @@ void run(const SolveArgs& a) {
   }
   const SolverReport report = solver->info();
   if (out) {
-    write_scalars(out->path(), g);
+    // heat: X is a Laplacian, in 1 / length^2 of the output units; poisson: g is a potential.
+    write_scalars(out->path(), a.system == "heat" ? units.inverse_areas(g) : g);
     out->commit();
   }
 
@@ -121,6 +127,7 @@ void run(const SolveArgs& a) {
     nlohmann::json j;
     j["solver"] = solver_name;
     j["system"] = a.system;
+    j["output_units"] = units.name();
     if (a.system == "heat") j["dt"] = dt;
     j["method"] = a.method.method;
     j["surface"] = a.source.describe();
@@ -185,7 +192,7 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
          "--rhs", args->rhs,
          names +
              " (docs/math.md §10.2, sampled at the projected vertices; poisson: b = Laplacian of f, heat: u = f) or a "
-             "file of one value per vertex (b or u)")
+             "file of one value per vertex (b, in 1/length^2 of --output-units, or u)")
       ->capture_default_str();
   args->solver.add_options(
       *cmd, std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")",
@@ -199,7 +206,9 @@ RegisterCommand reg(40, "solve", [](CLI::App& app) {
   auto* dt_factor = cmd->add_option("--dt-factor", args->dt_factor, "heat: dt = dt-factor * h (h: the grid step)")
                         ->check(CLI::PositiveNumber)
                         ->capture_default_str();
-  cmd->add_option("--out", args->out, "write the solution g (poisson) or X (heat), one value per vertex");
+  cmd->add_option("--out", args->out,
+                  "write the solution g (poisson) or X (heat, in 1/length^2 of --output-units), one value per vertex");
+  args->output.add_options(*cmd, /*with_space=*/false);
   cmd->add_flag("--json", args->json, "print one JSON object");
   cmd->callback([args, dt_factor] {
     if (dt_factor->count() > 0 && args->system != "heat")

@@ -25,6 +25,7 @@ OperatorOptions::Input OperatorOptions::prepare(bool extras) const {
   // The one normal resolution of the library (docs/math.md §1.5): the same field for every command.
   in.normals = normals.resolve(surface, disc->required_normals(), method.method);
   in.mesh = std::move(surface.mesh);
+  in.frame = surface.frame;
   in.params = method.config();
   if (extras) {
     if (disc->parameters().find("extras"))

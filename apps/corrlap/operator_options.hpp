@@ -27,6 +27,7 @@ struct OperatorOptions {
     SurfelMesh mesh;
     NormalFields normals;
     Config params;
+    VoxelFrame frame;  ///< the surface's world -> physical map (OutputUnits)
   };
   /// `extras`: also request D0/sharp/flat/M1/M_lumped when the method supports it.
   Input prepare(bool extras = false) const;

@@ -1,5 +1,7 @@
 #include "surface_source.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <corrlap/core/error.hpp>
 #include <iostream>
 
@@ -110,9 +112,9 @@ InsideRule SurfaceSource::inside() const {
   return InsideRule::nonzero();
 }
 
-OutputUnits OutputUnits::parse(const std::string& name, const LoadedSurface& surface) {
+OutputUnits OutputUnits::parse(const std::string& name, const VoxelFrame& frame, const std::string& space) {
   OutputUnits u;
-  u.frame = surface.frame;
+  u.frame = frame;
   if (name == "physical")
     u.kind = Kind::Physical;
   else if (name == "world")
@@ -120,9 +122,31 @@ OutputUnits OutputUnits::parse(const std::string& name, const LoadedSurface& sur
   else if (name == "voxels")
     u.kind = Kind::Voxels;
   else
-    throw InputError("--output-units '" + name + "': expected physical, world or voxels");
+    throw InputError("--output-units '" + name + "': expected physical, world or voxels", "output_units");
   if (u.kind != Kind::World && !(u.frame.h() > 0.0))
-    throw InputError("--output-units " + name + ": the surface has no grid step");
+    throw InputError("--output-units " + name + ": the surface has no grid step", "output_units");
+  const PhysicalSpace input = frame.geometry() ? frame.geometry()->space : PhysicalSpace::Unknown;
+  std::string wanted = space;
+  std::transform(wanted.begin(), wanted.end(), wanted.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (wanted == "file") {
+    u.space = input;
+    return u;
+  }
+  if (wanted != "ras" && wanted != "lps")
+    throw InputError("--output-space '" + space + "': expected file, ras or lps", "output_space");
+  if (u.kind != Kind::Physical)
+    throw InputError("--output-space " + space + " applies to --output-units physical (" + name +
+                         " coordinates have no anatomical space)",
+                     "output_space");
+  if (input == PhysicalSpace::Unknown)
+    throw InputError("--output-space " + space + ": the input's physical space is unknown (" +
+                         (frame.geometry() ? "the volume file names none: NIfTI is RAS, MetaImage LPS, an NRRD names "
+                                             "its 'space'; .vol, .raw, binvox, .vox, .npy and TIFF have none"
+                                           : "shapes and mesh files have no anatomical space") +
+                         "); omit --output-space to write the input's own coordinates",
+                     "output_space");
+  u.space = wanted == "ras" ? PhysicalSpace::RAS : PhysicalSpace::LPS;
+  u.flip = space_change(input, u.space);
   return u;
 }
 
@@ -136,6 +160,13 @@ const char* OutputUnits::name() const {
       return "voxels";
   }
   return "physical";
+}
+
+std::string OutputUnits::space_name() const { return kind == Kind::Physical ? corrlap::space_name(space) : ""; }
+
+std::vector<std::string> OutputUnits::comments() const {
+  if (kind != Kind::Physical || space == PhysicalSpace::Unknown) return {};
+  return {"SPACE=" + corrlap::space_name(space)};
 }
 
 double OutputUnits::length_scale() const {
@@ -153,14 +184,51 @@ double OutputUnits::length_scale() const {
 SurfelMesh OutputUnits::mesh(const SurfelMesh& m) const {
   if (kind == Kind::World) return m;
   SurfelMesh out = m;
-  out.positions = kind == Kind::Voxels ? frame.to_index(m.positions) : frame.to_physical(m.positions);
+  out.positions = kind == Kind::Voxels ? frame.to_index(m.positions) : frame.to_physical(m.positions) * flip;
   if (out.h > 0) out.h = m.h * length_scale();
-  if (kind == Kind::Physical && frame.mirrors()) out.faces = out.faces.rowwise().reverse().eval();
+  // flip is diagonal (its own transpose); it mirrors when it flips one axis (RAS <-> LAS).
+  const bool mirrors = kind == Kind::Physical && frame.mirrors() != (flip.determinant() < 0.0);
+  if (mirrors) out.faces = out.faces.rowwise().reverse().eval();
   return out;
 }
 
+namespace {
+
+// False when physical vectors are the world ones: the voxel axes are the physical axes (cubic
+// voxels scale lengths only) and no space flip; the unit vectors are then kept bit for bit.
+bool turns_vectors(const OutputUnits& u) {
+  return u.kind == OutputUnits::Kind::Physical &&
+         ((u.frame.geometry() && u.frame.geometry()->direction != Eigen::Matrix3d::Identity()) ||
+          u.flip != Eigen::Matrix3d::Identity());
+}
+
+}  // namespace
+
 Eigen::MatrixX3d OutputUnits::normals(const Eigen::MatrixX3d& n) const {
-  return kind == Kind::Physical ? frame.normals_to_physical(n) : n;
+  return turns_vectors(*this) ? Eigen::MatrixX3d(frame.normals_to_physical(n) * flip) : n;
+}
+
+Eigen::MatrixX3d OutputUnits::directions(const Eigen::MatrixX3d& d) const {
+  if (!turns_vectors(*this)) return d;
+  // Tangent vectors follow the linear part of the map (normals its inverse transpose); the
+  // resampled voxels are cubes, so the direction matrix alone is that part up to scale.
+  const Eigen::Matrix3d direction = frame.geometry() ? frame.geometry()->direction : Eigen::Matrix3d::Identity();
+  Eigen::MatrixX3d out = d * direction.transpose() * flip;
+  for (Eigen::Index i = 0; i < out.rows(); ++i) {
+    const double norm = out.row(i).norm();
+    if (norm > 0.0) out.row(i) /= norm;
+  }
+  return out;
+}
+
+void OutputOptions::add_options(CLI::App& cmd, bool with_space) {
+  cmd.add_option("--output-units", units, OutputUnits::kHelp)
+      ->check(CLI::IsMember({"physical", "world", "voxels"}))
+      ->capture_default_str();
+  if (with_space)
+    cmd.add_option("--output-space", space, OutputUnits::kSpaceHelp)
+        ->check(CLI::IsMember({"file", "ras", "lps"}, CLI::ignore_case))
+        ->capture_default_str();
 }
 
 std::string SurfaceSource::describe() const { return corrlap::describe(input()); }

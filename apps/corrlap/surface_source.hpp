@@ -19,27 +19,64 @@ namespace corrlap::cli {
 /// world: the normalized coordinates of the computation (a volume centred, its longest side spanning 2);
 /// voxels: the voxel indices (pointels at half-integers; digital coordinates for other sources).
 /// Lengths and curvatures (H, displacement) scale with the positions; normals follow them.
+/// --output-space: the anatomical space of physical coordinates: the input file's own (default, so
+/// that the outputs overlay the scan in the program that wrote it), or RAS or LPS, converted by
+/// flipping axes (docs/io.md, "Anatomical spaces").
 struct OutputUnits {
   enum class Kind { Physical, World, Voxels };
   Kind kind = Kind::Physical;
   VoxelFrame frame;
+  /// Physical output: the space written, and the map from the input's space into it.
+  PhysicalSpace space = PhysicalSpace::Unknown;
+  Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
 
   static constexpr const char* kDefault = "physical";
+  static constexpr const char* kDefaultSpace = "file";
   static constexpr const char* kHelp =
-      "coordinates of the meshes written: physical (the volume file's physical coordinates, e.g. millimetres; "
+      "coordinates of the outputs: physical (the volume file's physical coordinates, e.g. millimetres; "
       "voxel indices for a volume without geometry; a shape's or mesh file's own units), world (the normalized "
       "coordinates of the computation: volumes centred, the longest side spanning 2) or voxels (voxel indices, "
-      "pointels at half-integers); lengths and curvatures scale with them (docs/io.md)";
-  /// "physical", "world" or "voxels"; anything else is an InputError.
-  static OutputUnits parse(const std::string& name, const LoadedSurface& surface);
+      "pointels at half-integers); lengths, curvatures and eigenvalues scale with them (docs/io.md)";
+  static constexpr const char* kSpaceHelp =
+      "anatomical space of physical outputs: file (the volume file's own: RAS for NIfTI, LPS for MetaImage, the "
+      "'space' of an NRRD), ras or lps (x and y flipped from the file's space; an error when the file names no "
+      "space)";
+  /// `name`: "physical", "world" or "voxels"; `space`: "file", "ras" or "lps" (any case). InputError
+  /// for anything else, and for ras/lps with other units than physical or an input in an unknown space.
+  static OutputUnits parse(const std::string& name, const VoxelFrame& frame, const std::string& space = kDefaultSpace);
+  static OutputUnits parse(const std::string& name, const LoadedSurface& surface,
+                           const std::string& space = kDefaultSpace) {
+    return parse(name, surface.frame, space);
+  }
   const char* name() const;
+  /// The space of the coordinates written: "RAS", "LPS", "LAS" or "unknown" for physical units, ""
+  /// for world and voxel units (no anatomy).
+  std::string space_name() const;
+  /// The header comments of a mesh file that name its space ("SPACE=LPS", which 3D Slicer reads from
+  /// OBJ and PLY files); none when the space is unknown.
+  std::vector<std::string> comments() const;
   /// Positions (and h) in these units; faces reversed where the map mirrors, to keep facing outwards.
   SurfelMesh mesh(const SurfelMesh& m) const;
   /// One world length in these units.
   double length_scale() const;
   Eigen::VectorXd lengths(const Eigen::VectorXd& v) const { return v * length_scale(); }
   Eigen::VectorXd curvatures(const Eigen::VectorXd& v) const { return v / length_scale(); }
+  /// Gaussian curvatures, eigenvalues of the Laplacian: 1 / length^2.
+  Eigen::VectorXd inverse_areas(const Eigen::VectorXd& v) const { return v / (length_scale() * length_scale()); }
+  /// Unit normals (rows) of the surface in these units.
   Eigen::MatrixX3d normals(const Eigen::MatrixX3d& n) const;
+  /// Unit tangent directions (rows, e.g. principal directions) in these units.
+  Eigen::MatrixX3d directions(const Eigen::MatrixX3d& d) const;
+};
+
+/// --output-units (and --output-space, for commands that write positions or vectors), the same
+/// flags, help and defaults on every command.
+struct OutputOptions {
+  std::string units = OutputUnits::kDefault;
+  std::string space = OutputUnits::kDefaultSpace;
+  void add_options(CLI::App& cmd, bool with_space = true);
+  OutputUnits parse(const LoadedSurface& surface) const { return OutputUnits::parse(units, surface, space); }
+  OutputUnits parse(const VoxelFrame& frame) const { return OutputUnits::parse(units, frame, space); }
 };
 
 struct SurfaceSource {

@@ -132,25 +132,34 @@ def digitize_volume(volume, h=None, threshold=0.0):
     return _core.digitize_volume(volume, _real(h, "h"), _real(threshold, "threshold", required=True))
 
 
-def read_volume(path):
+def read_volume(path, space=None, return_space=False):
     """Reads a volume file (every format of docs/io.md) as it is. Returns (array, affine): array is
     indexed [i, j, k] in the file's own dtype (bool, int8 ... uint64, float32, float64; Fortran
     order, i fastest, as the file stores it), affine the 4 by 4 map from (i, j, k, 1) to physical
-    coordinates (millimetres for NIfTI, NRRD, MetaImage; nibabel's affine for NIfTI; the identity
-    for files without geometry). An unreadable file raises ValueError naming it."""
-    return _core.read_volume(str(path))
+    coordinates (millimetres for NIfTI, NRRD, MetaImage; the identity for files without geometry).
+
+    The affine is in the file's own anatomical space: RAS for NIfTI (nibabel's affine), LPS for
+    MetaImage (ITK's), the 'space' an NRRD names (LPS for 3D Slicer's .seg.nrrd). space='RAS' or
+    'LPS' converts it (x and y flipped between the two; ValueError for a file that names no space).
+    return_space=True returns (array, affine, space_name) with the space of that affine: 'RAS',
+    'LPS', 'LAS' or None (unknown). An unreadable file raises ValueError naming it."""
+    array, affine, name = _core.read_volume(str(path), "" if space is None else str(space))
+    return (array, affine, name) if return_space else (array, affine)
 
 
-def write_volume(path, array, affine=None):
+def write_volume(path, array, affine=None, space=None):
     """Writes a 3D array indexed [i, j, k] as a volume file chosen by extension (docs/io.md), in
     its own dtype where the format has it, with the 4 by 4 affine (index -> physical; None: the
-    identity) where the format has a geometry."""
+    identity) where the format has a geometry. space: the anatomical space of the affine ('RAS',
+    'LPS', 'LAS'; None: unknown). A known space is converted into the format's (NIfTI: RAS,
+    MetaImage: LPS) and named in an NRRD; an unknown one is written as it is."""
     a = _np.asarray(array)
     if a.ndim != 3:
         raise ValueError(f"array: expected a 3D array, got {a.ndim} dimensions")
     # The C++ side takes the bytes as they are: native byte order, i fastest.
     a = _np.asfortranarray(a.astype(a.dtype.newbyteorder("="), copy=False))
-    _core.write_volume(str(path), a, None if affine is None else _np.asarray(affine, dtype=_np.float64))
+    _core.write_volume(str(path), a, None if affine is None else _np.asarray(affine, dtype=_np.float64),
+                       "" if space is None else str(space))
 
 
 def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0=10.0,

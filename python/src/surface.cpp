@@ -2,6 +2,7 @@
 // read_mesh, write_mesh.
 #include <pybind11/stl.h>
 
+#include <cctype>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
@@ -60,6 +61,16 @@ VolumeArrayInput array_input(py::handle volume, std::optional<double> h, const I
   in.inside = inside;
   in.h = h;
   return in;
+}
+
+// "RAS", "LPS" or "LAS" (any case) as a space; "" for none (Unknown). ValueError otherwise.
+PhysicalSpace space_arg(const std::string& name, const char* what) {
+  std::string upper = name;
+  for (char& c : upper) c = char(std::toupper(static_cast<unsigned char>(c)));
+  if (upper.empty()) return PhysicalSpace::Unknown;
+  for (const PhysicalSpace s : {PhysicalSpace::RAS, PhysicalSpace::LPS, PhysicalSpace::LAS})
+    if (upper == space_name(s)) return s;
+  throw py::value_error(std::string(what) + "='" + name + "': expected 'RAS', 'LPS', 'LAS' or None");
 }
 
 // A 4 by 4 affine (nibabel's, index -> physical) as spacing, unit direction columns and origin.
@@ -129,19 +140,32 @@ void bind_surface(py::module_& m) {
       py::arg("volume"), py::arg("h"), py::arg("threshold"));
   m.def(
       "read_volume",
-      [](const std::string& path) {
+      [](const std::string& path, const std::string& space) {
         VolumeData volume;
         {
           py::gil_scoped_release release;
           volume = read_volume_data(path);
         }
+        const PhysicalSpace wanted = space_arg(space, "space");
+        if (space.empty()) {
+          // the file's own space
+        } else if (volume.geometry.space == PhysicalSpace::Unknown) {
+          throw py::value_error("space='" + space + "': the volume file '" + path +
+                                "' names no anatomical space (NIfTI is RAS, MetaImage LPS, an NRRD names its "
+                                "'space'); omit space to get the file's own affine");
+        } else {
+          volume.geometry = volume.geometry.in_space(wanted);
+        }
         const Eigen::Matrix4d affine = volume.geometry.affine();
-        return py::make_tuple(volume_to_numpy(std::move(volume)), to_numpy(Eigen::MatrixXd(affine)));
+        const py::object name = volume.geometry.space == PhysicalSpace::Unknown
+                                    ? py::object(py::none())
+                                    : py::object(py::str(space_name(volume.geometry.space)));
+        return py::make_tuple(volume_to_numpy(std::move(volume)), to_numpy(Eigen::MatrixXd(affine)), name);
       },
-      py::arg("path"));
+      py::arg("path"), py::arg("space"));
   m.def(
       "write_volume",
-      [](const std::string& path, py::handle array, py::handle affine) {
+      [](const std::string& path, py::handle array, py::handle affine, const std::string& space) {
         // The Python side passes a native-order Fortran array: its bytes are the file's order.
         py::array values = numeric_array(array, "array", /*allow_bool=*/true);
         if (values.ndim() != 3)
@@ -156,10 +180,11 @@ void bind_surface(py::module_& m) {
         const auto* begin = static_cast<const std::uint8_t*>(values.data());
         volume.bytes.assign(begin, begin + values.nbytes());
         if (!affine.is_none()) volume.geometry = geometry_arg(affine);
+        volume.geometry.space = space_arg(space, "space");
         py::gil_scoped_release release;
         write_volume_data(path, volume);
       },
-      py::arg("path"), py::arg("array"), py::arg("affine"));
+      py::arg("path"), py::arg("array"), py::arg("affine"), py::arg("space"));
   m.def(
       "regularize_volume",
       [](py::handle volume, std::optional<double> label, std::optional<double> threshold, py::handle affine,

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <bit>
 #include <corrlap/core/error.hpp>
+#include <corrlap/io/detail/inside_test.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <cstring>
 #include <fstream>
@@ -89,6 +90,16 @@ void check_error(const std::string& path, const std::string& fragment) {
   CHECK_MESSAGE(what.find(path) != std::string::npos, what);
 }
 
+// Each (file content, a fragment of its error) written to a file with `extension` and read.
+void check_errors(const std::vector<std::pair<std::string, std::string>>& cases, const std::string& extension) {
+  int i = 0;
+  for (const auto& [content, fragment] : cases) {
+    const std::string p = scratch("bad" + std::to_string(i++) + "." + extension);
+    write_text(p, content);
+    check_error(p, fragment);
+  }
+}
+
 std::string bytes_of(const std::string& path) { return read_text(path); }
 
 template <class T>
@@ -123,69 +134,14 @@ std::vector<double> read_numbers(const std::string& path) {
 
 std::vector<double> values_as_double(const VolumeData& v) {
   std::vector<double> out;
-  const std::size_t size = value_bytes(v.type);
-  for (std::size_t i = 0; i < v.bytes.size(); i += size) {
-    const std::uint8_t* p = v.bytes.data() + i;
-    double d = 0;
-    switch (v.type) {
-      case VoxelValueType::UInt8:
-        d = *p;
-        break;
-      case VoxelValueType::Int8:
-        d = double(std::int8_t(*p));
-        break;
-      case VoxelValueType::Int16: {
-        std::int16_t x;
-        std::memcpy(&x, p, 2);
-        d = x;
-        break;
-      }
-      case VoxelValueType::UInt16: {
-        std::uint16_t x;
-        std::memcpy(&x, p, 2);
-        d = x;
-        break;
-      }
-      case VoxelValueType::Int32: {
-        std::int32_t x;
-        std::memcpy(&x, p, 4);
-        d = x;
-        break;
-      }
-      case VoxelValueType::UInt32: {
-        std::uint32_t x;
-        std::memcpy(&x, p, 4);
-        d = x;
-        break;
-      }
-      case VoxelValueType::Int64: {
-        std::int64_t x;
-        std::memcpy(&x, p, 8);
-        d = double(x);
-        break;
-      }
-      case VoxelValueType::UInt64: {
-        std::uint64_t x;
-        std::memcpy(&x, p, 8);
-        d = double(x);
-        break;
-      }
-      case VoxelValueType::Float32: {
-        float x;
-        std::memcpy(&x, p, 4);
-        d = x;
-        break;
-      }
-      case VoxelValueType::Float64: {
-        std::memcpy(&d, p, 8);
-        break;
-      }
-      case VoxelValueType::Bool:
-        d = *p != 0;
-        break;
+  io_detail::visit_value_type(v.type, [&](auto t) {
+    using T = decltype(t);
+    for (std::size_t i = 0; i + sizeof(T) <= v.bytes.size(); i += sizeof(T)) {
+      T x;
+      std::memcpy(&x, v.bytes.data() + i, sizeof(T));
+      out.push_back(double(x));
     }
-    out.push_back(d);
-  }
+  });
   return out;
 }
 
@@ -204,22 +160,36 @@ const VoxelValueType kTypes[] = {VoxelValueType::UInt8,  VoxelValueType::Int8,  
 
 }  // namespace
 
-TEST_CASE("NIfTI-1 round trips keep every value type and the geometry (.nii and .nii.gz)") {
-  for (const char* ext : {"nii", "nii.gz"}) {
+// Each writer of a typed format and the affine it gives back: NIfTI-1 holds it in float32 fields
+// (equal to the rounded one up to the norm/normalize), the text headers with 17 digits (exactly).
+struct RoundTripFormat {
+  const char* extension;
+  bool float_affine;
+};
+constexpr RoundTripFormat kRoundTripFormats[] = {{"nii", true},  {"nii.gz", true}, {"mha", false},
+                                                 {"mhd", false}, {"nrrd", false},  {"nhdr", false}};
+
+TEST_CASE("NIfTI, MetaImage and NRRD round trips keep every value type and the geometry") {
+  for (const RoundTripFormat& format : kRoundTripFormats) {
     for (const VoxelValueType type : kTypes) {
-      CAPTURE(ext);
+      CAPTURE(format.extension);
       CAPTURE(value_type_name(type));
       const VolumeData v = pattern_volume(type);
-      const std::string p = scratch(std::string("round.") + ext);
+      const std::string p = scratch(std::string("round.") + format.extension);
       write_volume_data(p, v);
       const VolumeData back = read_volume_data(p);
       CHECK(back.size == v.size);
       CHECK(back.type == type);
       CHECK(back.bytes == v.bytes);
-      // NIfTI-1 holds the affine in float32: equal to the rounded one up to the norm/normalize.
-      CHECK((back.geometry.affine() - float_rounded(v.geometry.affine())).cwiseAbs().maxCoeff() < 1e-12);
+      const Eigen::Matrix4d expected = format.float_affine ? float_rounded(v.geometry.affine()) : v.geometry.affine();
+      CHECK((back.geometry.affine() - expected).cwiseAbs().maxCoeff() < 1e-12);
     }
   }
+  // .mhd names its data file beside it; .mha is zlib-compressed when corrlap has zlib.
+  CHECK(
+      read_text(scratch("round.mhd")).find("ElementDataFile = medical_" + std::to_string(::getpid()) + "_round.raw") !=
+      std::string::npos);
+  if (nrrd_gzip_supported()) CHECK(read_text(scratch("round.mha")).find("CompressedData = True") != std::string::npos);
   // A .nii.gz is gzip, and much smaller than the values of a label map.
   VolumeData labels = pattern_volume(VoxelValueType::Int16, Eigen::Vector3i(40, 40, 40));
   std::fill(labels.bytes.begin(), labels.bytes.end(), 0);
@@ -395,26 +365,6 @@ print(nib.load(d + '/n2.nii').header.sizeof_hdr, nib.load(d + '/big.nii').header
       1e-12);
 }
 
-TEST_CASE("MetaImage round trips: .mha (zlib) and .mhd + .raw, every value type, the geometry exactly") {
-  for (const char* ext : {"mha", "mhd"}) {
-    for (const VoxelValueType type : kTypes) {
-      CAPTURE(ext);
-      CAPTURE(value_type_name(type));
-      const VolumeData v = pattern_volume(type);
-      const std::string p = scratch(std::string("round.") + ext);
-      write_volume_data(p, v);
-      const VolumeData back = read_volume_data(p);
-      CHECK(back.type == type);
-      CHECK(back.bytes == v.bytes);
-      CHECK((back.geometry.affine() - v.geometry.affine()).cwiseAbs().maxCoeff() < 1e-12);
-    }
-  }
-  CHECK(
-      read_text(scratch("round.mhd")).find("ElementDataFile = medical_" + std::to_string(::getpid()) + "_round.raw") !=
-      std::string::npos);
-  if (nrrd_gzip_supported()) CHECK(read_text(scratch("round.mha")).find("CompressedData = True") != std::string::npos);
-}
-
 TEST_CASE("MetaImage headers as ITK writes them: TransformMatrix triples are the axes, byte order, synonyms") {
   const std::string p = scratch("itk.mha");
   // Big-endian int16, axis i along +y, axis j along -x: ITK lists the direction of each axis in turn.
@@ -472,12 +422,7 @@ TEST_CASE("MetaImage bad inputs are named errors") {
       {head + "ElementType = MET_UCHAR\nBinaryDataByteOrderMSB = maybe\nElementDataFile = LOCAL\n12345678",
        "expected True or False"},
   };
-  int i = 0;
-  for (const auto& [content, fragment] : cases) {
-    const std::string p = scratch("bad" + std::to_string(i++) + ".mha");
-    write_text(p, content);
-    check_error(p, fragment);
-  }
+  check_errors(cases, "mha");
 }
 
 TEST_CASE("MetaImage files written by VTK are read with their values and geometry, and VTK reads ours") {
@@ -529,22 +474,6 @@ np.savetxt(d + '/ours.geometry', list(out.GetSpacing()) + list(out.GetOrigin()),
   REQUIRE(g.size() == 6);
   CHECK((Eigen::Vector3d(g[0], g[1], g[2]) - ours.geometry.spacing).norm() < 1e-12);
   CHECK((Eigen::Vector3d(g[3], g[4], g[5]) - ours.geometry.origin).norm() < 1e-12);
-}
-
-TEST_CASE("NRRD round trips: every value type, attached (.nrrd) and detached (.nhdr + .raw), the geometry exactly") {
-  for (const char* ext : {"nrrd", "nhdr"}) {
-    for (const VoxelValueType type : kTypes) {
-      CAPTURE(ext);
-      CAPTURE(value_type_name(type));
-      const VolumeData v = pattern_volume(type);
-      const std::string p = scratch(std::string("round.") + ext);
-      write_volume_data(p, v);
-      const VolumeData back = read_volume_data(p);
-      CHECK(back.type == type);
-      CHECK(back.bytes == v.bytes);
-      CHECK((back.geometry.affine() - v.geometry.affine()).cwiseAbs().maxCoeff() < 1e-12);
-    }
-  }
 }
 
 TEST_CASE("NRRD headers as Slicer and teem write them: space, space directions, origin, big-endian, gzip, ascii") {
@@ -607,12 +536,7 @@ TEST_CASE("NRRD bad inputs of the typed reader are named errors") {
       {head + "endian: little\ndata file: missing.raw\n\n", "cannot open its data file"},
       {"NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 2\nencoding: ascii\n\n1 2 3 4 5 6 7 40000", "out of range"},
   };
-  int i = 0;
-  for (const auto& [content, fragment] : cases) {
-    const std::string p = scratch("bad" + std::to_string(i++) + ".nrrd");
-    write_text(p, content);
-    check_error(p, fragment);
-  }
+  check_errors(cases, "nrrd");
 }
 
 TEST_CASE("NRRD and MetaImage data files must be regular files (a device has no length and may never end)") {
@@ -621,4 +545,67 @@ TEST_CASE("NRRD and MetaImage data files must be regular files (a device has no 
   check_error(nrrd, "is not a regular file");
   write_text(mhd, "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementDataFile = /dev/zero\n");
   check_error(mhd, "is not a regular file");
+}
+
+TEST_CASE("Physical spaces: NIfTI is RAS, MetaImage LPS, NRRD its 'space' field, and the writers convert") {
+  // The spaces NRRD names, long and short, and those without anatomy.
+  const std::pair<const char*, PhysicalSpace> nrrd_spaces[] = {
+      {"right-anterior-superior", PhysicalSpace::RAS}, {"RAS", PhysicalSpace::RAS},
+      {"left-anterior-superior", PhysicalSpace::LAS},  {"LAS", PhysicalSpace::LAS},
+      {"left-posterior-superior", PhysicalSpace::LPS}, {"LPS", PhysicalSpace::LPS},
+      {"scanner-xyz", PhysicalSpace::Unknown},         {"3D-right-handed", PhysicalSpace::Unknown},
+      {"3D-left-handed", PhysicalSpace::Unknown}};
+  const std::string named = scratch("named.nrrd");
+  for (const auto& [name, space] : nrrd_spaces) {
+    CAPTURE(name);
+    write_text(named, std::string("NRRD0004\ntype: uint8\ndimension: 3\nspace: ") + name +
+                          "\nsizes: 1 1 1\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nencoding: raw\n\n\1");
+    CHECK(read_volume_data(named).geometry.space == space);
+  }
+  write_text(named, "NRRD0004\ntype: uint8\ndimension: 3\nspace dimension: 3\nsizes: 1 1 1\nencoding: raw\n\n\1");
+  CHECK(read_volume_data(named).geometry.space == PhysicalSpace::Unknown);
+
+  // A segmentation in LPS, as 3D Slicer saves a .seg.nrrd.
+  VolumeData lps = pattern_volume(VoxelValueType::UInt8);
+  lps.geometry.space = PhysicalSpace::LPS;
+  const Eigen::Matrix4d flip_xy = Eigen::Vector4d(-1, -1, 1, 1).asDiagonal();
+  // NRRD names the space and keeps the numbers.
+  write_volume_data(scratch("lps.nrrd"), lps);
+  CHECK(read_text(scratch("lps.nrrd")).find("space: left-posterior-superior\n") != std::string::npos);
+  const VolumeGeometry as_nrrd = read_volume_data(scratch("lps.nrrd")).geometry;
+  CHECK(as_nrrd.space == PhysicalSpace::LPS);
+  CHECK((as_nrrd.affine() - lps.geometry.affine()).cwiseAbs().maxCoeff() < 1e-12);
+  // NIfTI is RAS: the same voxels at the same anatomy, x and y flipped.
+  write_volume_data(scratch("lps.nii.gz"), lps);
+  const VolumeGeometry as_nifti = read_volume_data(scratch("lps.nii.gz")).geometry;
+  CHECK(as_nifti.space == PhysicalSpace::RAS);
+  CHECK((as_nifti.affine() - float_rounded(flip_xy * lps.geometry.affine())).cwiseAbs().maxCoeff() < 1e-12);
+  // MetaImage is LPS: a RAS geometry is flipped into it, with ITK's letters for the axes.
+  VolumeData ras = lps;
+  ras.geometry = lps.geometry.in_space(PhysicalSpace::RAS);
+  CHECK((ras.geometry.affine() - flip_xy * lps.geometry.affine()).cwiseAbs().maxCoeff() < 1e-12);
+  write_volume_data(scratch("ras.mha"), ras);
+  const VolumeGeometry as_meta = read_volume_data(scratch("ras.mha")).geometry;
+  CHECK(as_meta.space == PhysicalSpace::LPS);
+  CHECK((as_meta.affine() - lps.geometry.affine()).cwiseAbs().maxCoeff() < 1e-12);
+  VolumeData axes = lps;
+  axes.geometry.direction = Eigen::Vector3d(1, -1, 1).asDiagonal();  // i to the left, j anterior, k superior
+  write_volume_data(scratch("axes.mha"), axes);
+  CHECK(read_text(scratch("axes.mha")).find("AnatomicalOrientation = RPI\n") != std::string::npos);
+  // An unknown space is written as it is, and not named.
+  write_volume_data(scratch("unknown.nrrd"), pattern_volume(VoxelValueType::UInt8));
+  CHECK(read_text(scratch("unknown.nrrd")).find("space dimension: 3\n") != std::string::npos);
+  CHECK(read_volume_data(scratch("unknown.nrrd")).geometry.space == PhysicalSpace::Unknown);
+  write_volume_data(scratch("unknown.mha"), pattern_volume(VoxelValueType::UInt8));
+  CHECK(read_text(scratch("unknown.mha")).find("AnatomicalOrientation") == std::string::npos);
+
+  // Conversions: between known spaces by flips, refused from or to an unknown one.
+  CHECK(space_change(PhysicalSpace::LPS, PhysicalSpace::RAS) ==
+        Eigen::Matrix3d(Eigen::Vector3d(-1, -1, 1).asDiagonal()));
+  CHECK(space_change(PhysicalSpace::LAS, PhysicalSpace::LPS) ==
+        Eigen::Matrix3d(Eigen::Vector3d(1, -1, 1).asDiagonal()));
+  CHECK(space_change(PhysicalSpace::Unknown, PhysicalSpace::Unknown) == Eigen::Matrix3d::Identity());
+  CHECK_THROWS_WITH_AS(space_change(PhysicalSpace::Unknown, PhysicalSpace::RAS),
+                       doctest::Contains("an unknown space has no anatomical axes"), InputError);
+  CHECK(space_name(PhysicalSpace::LPS) == "LPS");
 }

@@ -64,6 +64,31 @@ def test_the_affine_round_trips(tmp_path):
     np.testing.assert_allclose(back_affine, affine)
 
 
+def test_spaces_are_named_and_converted(tmp_path):
+    """An LPS affine (3D Slicer's .seg.nrrd) written as NRRD keeps it and names it; as NIfTI it is
+    flipped into RAS, nibabel's; space= converts on reading, return_space= names the affine's space."""
+    values, affine = ellipsoid((1.0, 1.0, 2.5))
+    affine[:3, 3] += [10.0, -20.0, 5.0]
+    flip = np.diag([-1.0, -1.0, 1.0, 1.0])
+    corrlap.write_volume(tmp_path / "s.nrrd", values, affine, space="LPS")
+    corrlap.write_volume(tmp_path / "s.nii", values, affine, space="lps")
+    back, lps, name = corrlap.read_volume(tmp_path / "s.nrrd", return_space=True)
+    assert name == "LPS"
+    np.testing.assert_allclose(lps, affine)
+    _, ras, name = corrlap.read_volume(tmp_path / "s.nii", return_space=True)
+    assert name == "RAS"
+    np.testing.assert_allclose(ras, flip @ affine, atol=1e-5)  # NIfTI-1 holds float32
+    np.testing.assert_allclose(corrlap.read_volume(tmp_path / "s.nrrd", space="RAS")[1], flip @ affine)
+    np.testing.assert_allclose(corrlap.read_volume(tmp_path / "s.nii", space="LPS")[1], affine, atol=1e-5)
+    # Without a space: the affine as it is, and no conversion to ask for.
+    corrlap.write_volume(tmp_path / "u.nrrd", values, affine)
+    assert corrlap.read_volume(tmp_path / "u.nrrd", return_space=True)[2] is None
+    with pytest.raises(ValueError, match="names no anatomical space"):
+        corrlap.read_volume(tmp_path / "u.nrrd", space="RAS")
+    with pytest.raises(ValueError, match="expected 'RAS', 'LPS', 'LAS' or None"):
+        corrlap.write_volume(tmp_path / "x.nrrd", values, affine, space="up")
+
+
 def test_regularize_volume_returns_millimetres_for_anisotropic_voxels():
     values, affine = ellipsoid((1.0, 1.0, 2.5))
     V, F = corrlap.regularize_volume(values, affine=affine, h=1.0)
