@@ -163,7 +163,8 @@ def project(shape, points, max_iterations=60):
     gn = np.linalg.norm(g, axis=1)
     off_surface = np.abs(shape.f(x)) / gn
     dist = np.linalg.norm(x - p, axis=1)
-    bad = (off_surface > 1e-9 * scale) | (dist > np.linalg.norm(first - p, axis=1) + 1e-9 * scale)
+    # Written as 'not good' so that a NaN (a zero gradient on the way) counts as a failure.
+    bad = ~((off_surface <= 1e-9 * scale) & (dist <= np.linalg.norm(first - p, axis=1) + 1e-9 * scale))
     if bad.any():
         raise RuntimeError("projection onto %s: %d of %d points did not converge (first: %s); "
                            "the points must lie near the surface" %
