@@ -97,12 +97,17 @@ def _goursat():
         a = (u ** 4).sum(1)
         return np.sqrt((2.0 + np.sqrt(4.0 + 32.0 * c * a)) / (2.0 * c * a))
 
+    # The box is not reached along an axis but off it: the largest x over the directions
+    # (1, a, b), |a|, |b| <= 1, on a grid fine enough for a relative error of 1e-6 at the maximum.
+    a, b = np.meshgrid(np.linspace(0.0, 1.0, 801), np.linspace(0.0, 1.0, 801), indexing="ij")
+    u = np.stack([np.ones(a.size), a.ravel(), b.ravel()], axis=1)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    half_extent = float((radius(u) * u[:, 0]).max())
     return Shape("goursat",
                  f=lambda p: c * (p ** 4).sum(1) - 2.0 * (p * p).sum(1) - 8.0,
                  grad=lambda p: 4.0 * c * p ** 3 - 4.0 * p,
                  hess=lambda p: np.einsum("ni,ij->nij", 12.0 * c * p * p - 4.0, np.eye(3)),
-                 half_extent=float(radius(np.array([[1.0, 0.0, 0.0]]))[0]),
-                 radius=radius)
+                 half_extent=half_extent, radius=radius)
 
 
 SHAPES = {s.name: s for s in (_sphere(), _ellipsoid(), _torus(), _goursat())}
