@@ -450,10 +450,11 @@ def summary(rows):
                     fmt(r["volume_change"], "+.2%"), fmt(r["wall_s"], ".2f"), fmt(r["core_s"], ".2f"),
                     fmt(r["peak_mb"], ".0f")))
     out += ["", "## corrlap (defaults) against the best setting of each tool", "",
-            "Ratios corrlap / tool: mean distance (the goal: at most 0.5), normal angle, time against "
+            "Ratios corrlap / tool: mean distance and normal angle (the goal: at most 0.5 and below 1 on "
+            "the analytic shapes, at most 1 on a voxelized model), time against "
             "Slicer's default f = 0.5 (whole process, and compute alone), whole-process time against the "
             "best setting of each tool.", "",
-            "| input | N | best VTK | best skimage | mean dist ratio vs VTK | vs skimage | goal (≤ 0.5 both) | "
+            "| input | N | best VTK | best skimage | mean dist ratio vs VTK | vs skimage | goal met | "
             "angle ratio vs VTK | vs skimage | wall ratio vs VTK f=0.5 | core ratio vs VTK f=0.5 | "
             "wall ratio vs best VTK | vs best skimage |",
             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -465,17 +466,30 @@ def summary(rows):
             if c is None or bv is None or bs is None:
                 continue
             qv, qs = c["mean_dist"] / bv["mean_dist"], c["mean_dist"] / bs["mean_dist"]
-            goal = "yes" if qv <= 0.5 and qs <= 0.5 else "no"
+            av, ask = c["normal_angle_deg"] / bv["normal_angle_deg"], c["normal_angle_deg"] / bs["normal_angle_deg"]
+            # The goal: half the distance and a smaller angle on the analytic shapes; on a voxelized
+            # model, at least as close to the source mesh.
+            limit = 0.5 if inp in st.SHAPES else 1.0
+            goal = "yes" if qv <= limit and qs <= limit and (limit == 1.0 or (av < 1 and ask < 1)) else "no"
             out.append("| %s | %d | %s | %s | %.2f | %.2f | %s | %.2f | %.2f | %s | %s | %.1f | %.1f |" % (
                 inp, n, bv["setting"], bs["setting"], qv, qs, goal,
-                c["normal_angle_deg"] / bv["normal_angle_deg"], c["normal_angle_deg"] / bs["normal_angle_deg"],
-                fmt(c["wall_s"] / v05["wall_s"], ".1f") if v05 else "—",
+                av, ask, fmt(c["wall_s"] / v05["wall_s"], ".1f") if v05 else "—",
                 fmt(c["core_s"] / v05["core_s"], ".1f") if v05 else "—",
                 c["wall_s"] / bv["wall_s"], c["wall_s"] / bs["wall_s"]))
     return "\n".join(out) + "\n"
 
 
 TOOL_COLOURS = {"vtk": "tab:blue", "skimage": "tab:green", "corrlap": "tab:red"}
+LINESTYLES = ["-", "--", ":", "-.", (0, (5, 1))]
+MARKERS = ["o", "s", "^", "v", "D"]
+
+
+def panels(plt, count):
+    """One panel per input, three to a row; returns the figure and the flat list of axes."""
+    cols = min(3, count)
+    rows = (count + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.9 * rows), squeeze=False)
+    return fig, list(axes.ravel())
 
 
 def plots(rows, out_dir):
@@ -486,21 +500,25 @@ def plots(rows, out_dir):
     inputs = list(dict.fromkeys(r["input"] for r in rows))
     ok = [r for r in rows if r["status"] == "ok"]
     paths = []
-    fig, axes = plt.subplots(1, len(inputs), figsize=(4.2 * len(inputs), 3.8), squeeze=False)
-    for ax, inp in zip(axes[0], inputs):
+    fig, axes = panels(plt, len(inputs))
+    for ax, inp in zip(axes, inputs):
         series = list(dict.fromkeys((r["tool"], r["setting"]) for r in ok if r["input"] == inp))
+        rank = {}
         for tool, setting in series:
             pts = sorted((r["voxels"], r["mean_dist_vox"]) for r in ok
                          if (r["input"], r["tool"], r["setting"]) == (inp, tool, setting))
-            style = "-o" if tool == "corrlap" else "--."
-            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, color=TOOL_COLOURS[tool],
-                    alpha=1.0 if tool == "corrlap" else 0.6, label="%s %s" % (tool, setting))
+            k = rank[tool] = rank.get(tool, -1) + 1
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], linestyle=LINESTYLES[k % len(LINESTYLES)],
+                    marker=MARKERS[k % len(MARKERS)], color=TOOL_COLOURS[tool], ms=4,
+                    lw=1.6 if tool == "corrlap" else 1.0, label="%s %s" % (tool, setting))
         ax.set_xscale("log", base=2)
         ax.set_yscale("log")
         ax.set_title(inp)
         ax.set_xlabel("voxels across")
         ax.set_ylabel("mean distance to the truth (voxels)")
-    axes[0][-1].legend(fontsize=6, loc="best")
+    axes[0].legend(fontsize=6, loc="best")
+    for ax in axes[len(inputs):]:
+        ax.set_visible(False)
     fig.tight_layout()
     p = os.path.join(out_dir, "comparison_error_vs_voxels.png")
     fig.savefig(p, dpi=110)
@@ -508,31 +526,34 @@ def plots(rows, out_dir):
     paths.append(p)
 
     top = max(r["voxels"] for r in ok)
-    fig, axes = plt.subplots(1, len(inputs), figsize=(4.2 * len(inputs), 3.8), squeeze=False)
-    for ax, inp in zip(axes[0], inputs):
-        sel = [r for r in ok if r["input"] == inp and r["voxels"] == top]
-        for r in sel:
-            ax.scatter(r["wall_s"], r["mean_dist_vox"], color=TOOL_COLOURS[r["tool"]], s=18)
-            ax.annotate("%s %s" % (r["tool"], r["setting"]), (r["wall_s"], r["mean_dist_vox"]), fontsize=5)
-        # Pareto front: no other run both faster and closer.
-        front = sorted((r["wall_s"], r["mean_dist_vox"]) for r in sel)
-        best, fx, fy = float("inf"), [], []
-        for x, y in front:
-            if y < best:
-                best = y
-                fx.append(x)
-                fy.append(y)
-        ax.step(fx, fy, where="post", color="grey", lw=0.8)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_title("%s, %d voxels across" % (inp, top))
-        ax.set_xlabel("wall time, whole process (s)")
-        ax.set_ylabel("mean distance (voxels)")
-    fig.tight_layout()
-    p = os.path.join(out_dir, "comparison_pareto.png")
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    paths.append(p)
+    for key, label, name in (("wall_s", "wall time, whole process (s)", "comparison_pareto.png"),
+                             ("core_s", "compute time, in the process (s)", "comparison_pareto_compute.png")):
+        fig, axes = panels(plt, len(inputs))
+        for ax, inp in zip(axes, inputs):
+            sel = [r for r in ok if r["input"] == inp and r["voxels"] == top]
+            for r in sel:
+                ax.scatter(r[key], r["mean_dist_vox"], color=TOOL_COLOURS[r["tool"]], s=18)
+                ax.annotate("%s %s" % (r["tool"], r["setting"]), (r[key], r["mean_dist_vox"]), fontsize=5)
+            # Pareto front: no other run both faster and closer.
+            best, fx, fy = float("inf"), [], []
+            for x, y in sorted((r[key], r["mean_dist_vox"]) for r in sel):
+                if y < best:
+                    best = y
+                    fx.append(x)
+                    fy.append(y)
+            ax.step(fx, fy, where="post", color="grey", lw=0.8)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_title("%s, %d voxels across" % (inp, top))
+            ax.set_xlabel(label)
+            ax.set_ylabel("mean distance (voxels)")
+        for ax in axes[len(inputs):]:
+            ax.set_visible(False)
+        fig.tight_layout()
+        p = os.path.join(out_dir, name)
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
     return paths
 
 

@@ -180,5 +180,6 @@ def test_quick_run(tmp_path):
     # Every smoothing brings the staircase closer to the sphere.
     for key in [("vtk", "f=0.5"), ("skimage", "taubin=10"), ("corrlap", "defaults")]:
         assert by[key] < by[("vtk", "f=0")]
-    for name in ("summary.md", "comparison_error_vs_voxels.png", "comparison_pareto.png"):
+    for name in ("summary.md", "comparison_error_vs_voxels.png", "comparison_pareto.png",
+                 "comparison_pareto_compute.png"):
         assert os.path.getsize(os.path.join(out, name)) > 0
