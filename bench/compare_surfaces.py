@@ -582,8 +582,8 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true",
                     help="sphere1 at 64 voxels across, two settings per tool (under a minute)")
     ap.add_argument("--shapes", nargs="*", default=list(st.SHAPES), choices=list(st.SHAPES))
-    ap.add_argument("--resolutions", nargs="+", type=int, default=[64, 128, 256], metavar="N",
-                    help="voxels across the longest side of each shape")
+    ap.add_argument("--resolutions", nargs="+", type=int, default=None, metavar="N",
+                    help="voxels across the longest side of each shape (default 64 128 256; --quick: 64)")
     bunny = os.path.join(ROOT, "data", "bunny", "bunny.obj")
     ap.add_argument("--bunny", default=bunny if os.path.exists(bunny) else "",
                     help="closed triangle mesh voxelized as the model input (default: data/bunny/bunny.obj "
@@ -592,7 +592,12 @@ def main(argv=None):
     ap.add_argument("--report-only", action="store_true", help="redo summary.md and the plots from results.csv")
     args = ap.parse_args(argv)
     if args.quick:
-        args.shapes, args.resolutions, args.bunny = ["sphere1"], [64], ""
+        args.shapes, args.bunny = ["sphere1"], ""
+    if args.resolutions is None:
+        args.resolutions = [64] if args.quick else [64, 128, 256]
+    if min(args.resolutions) < 8:
+        ap.error("--resolutions: %d voxels across is too coarse for any of the tools (at least 8)"
+                 % min(args.resolutions))
     if not args.report_only:
         if not os.path.exists(args.corrlap):
             ap.error("--corrlap: %s not found (build it with `make build`, or pass the binary)" % args.corrlap)
