@@ -115,21 +115,29 @@ def child_skimage(volume_path, iterations, out_path):
 # Running a tool
 
 
+GNU_TIME = "/usr/bin/time"
+
+
 def run_tool(cmd):
-    """Runs cmd; returns its exit code, stdout, stderr, wall seconds and peak resident MB. The output
-    goes to files so that the child is reaped by os.wait4 here, which gives that one process's
-    rusage (RUSAGE_CHILDREN would be the largest of every child so far)."""
+    """Runs cmd; returns its exit code, stdout, stderr, wall seconds and peak resident MB.
+    The peak comes from GNU time around the tool: a process's own rusage (os.wait4) would not do,
+    since Linux carries the high-water mark of the process that forked it (this script, holding the
+    measured meshes) across exec into the child's. Without GNU time the peak is NaN."""
     import tempfile
 
-    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
-        t0 = time.perf_counter()
-        proc = subprocess.Popen(cmd, stdout=out, stderr=err, text=True)
-        _, status, usage = os.wait4(proc.pid, 0)
-        wall = time.perf_counter() - t0
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        out.seek(0)
-        err.seek(0)
-        return proc.returncode, out.read(), err.read(), wall, usage.ru_maxrss / 1024.0
+    with tempfile.TemporaryDirectory() as tmp:
+        out_path, err_path, rss_path = (os.path.join(tmp, n) for n in ("out", "err", "rss"))
+        wrapped = [GNU_TIME, "-f", "%M", "-o", rss_path] + cmd if os.path.exists(GNU_TIME) else cmd
+        with open(out_path, "w") as out, open(err_path, "w") as err:
+            t0 = time.perf_counter()
+            rc = subprocess.call(wrapped, stdout=out, stderr=err)
+            wall = time.perf_counter() - t0
+        peak = float("nan")
+        if os.path.exists(rss_path):
+            lines = [ln for ln in open(rss_path).read().splitlines() if ln.strip()]
+            peak = float(lines[-1]) / 1024.0  # KB; an exit status line, if any, comes before
+        with open(out_path) as fo, open(err_path) as fe:
+            return rc, fo.read(), fe.read(), wall, peak
 
 
 def last_line(text):
