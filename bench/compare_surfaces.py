@@ -16,7 +16,7 @@ measured against the exact surface (closest points by projection), and a voxeliz
 
 Writes DIR/results.csv (one row per tool x setting x input x resolution), DIR/summary.md (the
 tables of docs/comparison.md) and DIR/comparison_*.png. Wall time and peak memory are those of the
-whole tool process (start, read, compute, write), from os.wait4; core_s is the compute alone as the
+whole tool process (start, read, compute, write; the peak from GNU time); core_s is the compute alone as the
 tool reports it (Python tools: after the imports and the read, before the write; corrlap: the
 stages of metrics.json's time_s except write_s).
 """
