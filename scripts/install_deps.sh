@@ -2,6 +2,9 @@
 # Installs the Debian packages corrlap needs, only those missing. Needs root (or sudo).
 # --vtk also installs VTK's Python module (large), which the MetaImage cross-checks with VTK use;
 # without it those checks skip with a message. CI asks for it.
+# --bench also installs what bench/compare_surfaces.py runs against (VTK, scikit-image, Open3D)
+# and GNU time (its peak-memory figures);
+# `make test` does not need them (their test skips with a message).
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config python3
           libeigen3-dev libsuitesparse-dev libopenblas-dev libspectra-dev libtbb-dev
@@ -12,7 +15,8 @@ packages=(cmake ninja-build g++ ccache pkg-config python3
 for arg in "$@"; do
   case "$arg" in
     --vtk) packages+=(python3-vtk9) ;;
-    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk)" >&2; exit 2 ;;
+    --bench) packages+=(python3-vtk9 python3-skimage python3-open3d time) ;;
+    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk, --bench)" >&2; exit 2 ;;
   esac
 done
 missing=()
