@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -461,16 +462,41 @@ ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radi
 
   const std::vector<KernelRow> kernel = kernel_rows(digital_radius, h);
   const std::vector<KernelPlane> planes = kernel_planes(kernel);
+  // The components' bounding boxes: a ball whose kernel cube meets no other component's box needs
+  // no label (the common case for a few objects apart). Many components (noise in a scan) are not
+  // worth testing one by one: every ball then reads the labels.
+  constexpr std::int32_t kBoxedComponents = 64;
+  std::vector<Eigen::AlignedBox3i> box(std::size_t(std::min(components, kBoxedComponents + 1)));
+  if (components > 1 && components <= kBoxedComponents)
+    for (int lz = 0; lz < rr.size.z(); ++lz)
+      for (int ly = 0; ly < rr.size.y(); ++ly) {
+        const int y = rr.lower.y() + ly, z = rr.lower.z() + lz;
+        const std::size_t ri = rr.row_index(y, z);
+        for (std::int64_t j = rr.offset[ri]; j < rr.offset[ri + 1]; j += 2) {
+          Eigen::AlignedBox3i& b = box[std::size_t(labels[std::size_t(j / 2)])];
+          b.extend(Eigen::Vector3i(rr.runs[std::size_t(j)], y, z));
+          b.extend(Eigen::Vector3i(rr.runs[std::size_t(j) + 1], y, z));
+        }
+      }
+  const int reach = int(std::ceil(digital_radius)) + 1;
+  const auto alone = [&](const Eigen::Vector3i& c, std::int32_t label) {
+    if (components == 1) return true;
+    if (components > kBoxedComponents) return false;
+    const Eigen::AlignedBox3i cube(c - Eigen::Vector3i::Constant(reach), c + Eigen::Vector3i::Constant(reach));
+    for (std::int32_t k = 0; k < components; ++k)
+      if (k != label && cube.intersects(box[std::size_t(k)])) return false;
+    return true;
+  };
   out.moments.resize(groups);
   std::atomic<std::int64_t> done{0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t g = range.begin(); g != range.end(); ++g) {
       const Key& first = order[group[g]];
       const Eigen::Vector3i& c = balls[first.ball].centre;
-      // One component: every run counts, the sweep of ii_moments.
+      // No other component within reach: every run counts, the sweep of ii_moments.
       if (first.label < 0)
         out.moments[g] = BallMoments{};
-      else if (components == 1)
+      else if (alone(c, first.label))
         out.moments[g] = sweep_ball<false>(rr, kernel, planes, c);
       else
         out.moments[g] = sweep_ball<true>(rr, kernel, planes, c, labels.data(), first.label);

@@ -128,8 +128,8 @@ TEST_CASE("gallery: a checkerboard corner (non-manifold edges and vertices) regu
   check_gallery("checkerboard", v);
   // Four blocks touching along edges: four closed sheets (docs/math.md §1.4), each with the II
   // normals of a block alone (§7.1). The regularized surface stays on the staircase: every vertex
-  // within 1.5 voxels of the input surface (it rounds the blocks' edges and corners, which recede by
-  // about 1 voxel along the diagonal of a corner of a 10-voxel cube), and no face turns over.
+  // within 1.5 voxels of the input surface (the regularization rounds the blocks' edges and corners,
+  // by less than that), and no face turns over.
   const std::string dir = tmp_path("gallery_checkerboard") + "/out";
   std::ifstream metrics(dir + "/metrics.json");
   CHECK(nlohmann::json::parse(metrics)["components"] == 4);
