@@ -434,7 +434,12 @@ ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radi
   // Each ball's component; -1 (zero moments) when its seed is not in X.
   std::vector<std::int32_t> label(balls.size());
   tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
-    const std::int64_t r = run_of(rr, balls[i].seed);
+    const Eigen::Vector3i& v = balls[i].seed;
+    if (components == 1) {
+      label[i] = grid.get(v.x(), v.y(), v.z()) ? 0 : -1;
+      return;
+    }
+    const std::int64_t r = run_of(rr, v);
     label[i] = r < 0 ? -1 : labels[std::size_t(r)];
   });
   // Balls grouped by (centre, component), neighbouring surfels sharing voxels: sorted by the
