@@ -78,7 +78,8 @@ struct ComponentMoments {
 /// Equal to ii_component_moments_brute_force, fast: the 6-components of X are labelled run by run
 /// (a union-find over the runs of ii_moments that overlap on neighbouring rows), balls are grouped by
 /// centre and component, and each group is one sweep of ii_moments over the runs of its component.
-/// When X is one component, that is ii_moments itself. Integer exact, parallel (TBB).
+/// When X is one component, or no other component's bounding box is within reach of the ball,
+/// that is the sweep of ii_moments itself. Integer exact, parallel (TBB).
 ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radius, double h,
                                       const std::vector<IIBall>& balls, const ProgressFn& progress = {});
 
