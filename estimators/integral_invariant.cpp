@@ -4,11 +4,13 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -187,11 +189,19 @@ std::vector<KernelPlane> kernel_planes(const std::vector<KernelRow>& rows) {
   return planes;
 }
 
-BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& kernel,
-                            const std::vector<KernelPlane>& planes, const Eigen::Vector3i& c) {
+/// Sums the moments of B(c, R) ∩ X chord by chord (docs/math.md §7 step 3). With `labels` (one per
+/// run), only the runs labelled `label` count: B(c, R) ∩ K for the component K of docs/math.md §7.1.
+template <bool Labelled>
+BallMoments sweep_ball(const RowRuns& rr, const std::vector<KernelRow>& kernel, const std::vector<KernelPlane>& planes,
+                       const Eigen::Vector3i& c, const std::int32_t* labels = nullptr, std::int32_t label = 0) {
   const int ylo = rr.lower.y(), yhi = rr.lower.y() + rr.size.y() - 1;
   const int zlo = rr.lower.z(), zhi = rr.lower.z() + rr.size.z() - 1;
   const std::int32_t* runs = rr.runs.data();
+  // The run starting at r is labelled labels[(r - runs) / 2].
+  const auto other = [&](const std::int32_t* r) {
+    if constexpr (Labelled) return labels[(r - runs) / 2] != label;
+    return false;
+  };
   std::int64_t m0 = 0, sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
   for (const KernelPlane& pl : planes) {
     const int z = c.z() + pl.dz;
@@ -211,12 +221,14 @@ BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& ker
       std::int64_t s0, s1, s2;
       if (r[0] <= lo && r[1] >= hi) {
         // Chord entirely inside one run (the common case away from the surface): closed form.
+        if (other(r)) continue;
         s0 = 2 * std::int64_t(kr.w) + 1;
         s1 = 0;
         s2 = 2 * G(kr.w);
       } else {
         s0 = s1 = s2 = 0;
         for (; r != rend && r[0] <= hi; r += 2) {
+          if (other(r)) continue;
           const std::int64_t p = std::max<int>(r[0], lo) - c.x();
           const std::int64_t q = std::min<int>(r[1], hi) - c.x();
           const std::int64_t n = q - p + 1;
@@ -252,6 +264,58 @@ BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& ker
   return m;
 }
 
+BallMoments moments_by_rows(const RowRuns& rr, const std::vector<KernelRow>& kernel,
+                            const std::vector<KernelPlane>& planes, const Eigen::Vector3i& c) {
+  return sweep_ball<false>(rr, kernel, planes, c);
+}
+
+/// The 6-components of X (docs/math.md §7.1), one label per run of `rr`, numbered 0, 1, ... in
+/// run order: runs join when they share an x on the neighbouring row (y + 1 or z + 1).
+std::vector<std::int32_t> label_runs(const RowRuns& rr, std::int32_t& count) {
+  const std::size_t nruns = rr.runs.size() / 2;
+  std::vector<std::size_t> parent(nruns);
+  for (std::size_t i = 0; i < nruns; ++i) parent[i] = i;
+  const auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  // Runs of rows a and b (each sorted by x) that share an x are 6-adjacent.
+  const auto unite_overlapping = [&](std::size_t a, std::size_t b) {
+    std::int64_t i = rr.offset[a], j = rr.offset[b];
+    while (i < rr.offset[a + 1] && j < rr.offset[b + 1]) {
+      const std::int32_t* p = rr.runs.data() + i;
+      const std::int32_t* q = rr.runs.data() + j;
+      if (p[0] <= q[1] && q[0] <= p[1]) {
+        const std::size_t u = find(std::size_t(i / 2)), v = find(std::size_t(j / 2));
+        if (u != v) parent[std::max(u, v)] = std::min(u, v);
+      }
+      if (p[1] < q[1])
+        i += 2;
+      else
+        j += 2;
+    }
+  };
+  for (int lz = 0; lz < rr.size.z(); ++lz)
+    for (int ly = 0; ly < rr.size.y(); ++ly) {
+      const int y = rr.lower.y() + ly, z = rr.lower.z() + lz;
+      if (ly > 0) unite_overlapping(rr.row_index(y - 1, z), rr.row_index(y, z));
+      if (lz > 0) unite_overlapping(rr.row_index(y, z - 1), rr.row_index(y, z));
+    }
+  std::vector<std::int32_t> label(nruns);
+  count = 0;
+  for (std::size_t i = 0; i < nruns; ++i) label[i] = parent[i] == i ? count++ : label[find(i)];
+  return label;
+}
+
+/// The run of `rr` holding voxel v, or -1 when v is outside X.
+std::int64_t run_of(const RowRuns& rr, const Eigen::Vector3i& v) {
+  if ((v - rr.lower).minCoeff() < 0 || (v - rr.lower - rr.size).maxCoeff() >= 0) return -1;
+  const std::size_t ri = rr.row_index(v.y(), v.z());
+  for (std::int64_t j = rr.offset[ri]; j < rr.offset[ri + 1]; j += 2)
+    if (rr.runs[std::size_t(j)] <= v.x() && v.x() <= rr.runs[std::size_t(j) + 1]) return j / 2;
+  return -1;
+}
+
 }  // namespace
 
 std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double digital_radius, double h,
@@ -278,6 +342,66 @@ std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double di
   return out;
 }
 
+std::vector<BallMoments> ii_component_moments_brute_force(const VoxelGrid& grid, double digital_radius, double h,
+                                                          const std::vector<IIBall>& balls) {
+  // Each voxel of X gets the number of its 6-component (flood fill); -1 outside X.
+  const Eigen::Vector3i lo = grid.lower(), size = grid.size();
+  const auto slot = [&](const Eigen::Vector3i& v) {
+    const Eigen::Vector3i l = v - lo;
+    return (std::size_t(l.z()) * std::size_t(size.y()) + std::size_t(l.y())) * std::size_t(size.x()) +
+           std::size_t(l.x());
+  };
+  std::vector<std::int32_t> component(std::size_t(size.prod()), -1);
+  std::int32_t count = 0;
+  std::vector<Eigen::Vector3i> stack;
+  for (int z = lo.z(); z <= grid.upper().z(); ++z)
+    for (int y = lo.y(); y <= grid.upper().y(); ++y)
+      for (int x = lo.x(); x <= grid.upper().x(); ++x) {
+        if (!grid.get(x, y, z) || component[slot({x, y, z})] >= 0) continue;
+        component[slot({x, y, z})] = count;
+        stack.push_back({x, y, z});
+        while (!stack.empty()) {
+          const Eigen::Vector3i v = stack.back();
+          stack.pop_back();
+          for (int a = 0; a < 3; ++a)
+            for (const int s : {-1, 1}) {
+              Eigen::Vector3i u = v;
+              u[a] += s;
+              if (grid.get(u.x(), u.y(), u.z()) && component[slot(u)] < 0) {
+                component[slot(u)] = count;
+                stack.push_back(u);
+              }
+            }
+        }
+        ++count;
+      }
+  const auto component_of = [&](const Eigen::Vector3i& v) {
+    return grid.get(v.x(), v.y(), v.z()) ? component[slot(v)] : -1;
+  };
+  // The brute-force ball of ii_moments_brute_force over the seed's component.
+  const double R = digital_radius * h;
+  const int n = int(std::ceil(digital_radius)) + 1;
+  std::vector<BallMoments> out(balls.size());
+  tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
+    BallMoments m;
+    const Eigen::Vector3i& c = balls[i].centre;
+    const std::int32_t label = component_of(balls[i].seed);
+    if (label >= 0)
+      for (int dz = -n; dz <= n; ++dz)
+        for (int dy = -n; dy <= n; ++dy)
+          for (int dx = -n; dx <= n; ++dx) {
+            if (!in_kernel(dx, dy, dz, R, h) || component_of(c + Eigen::Vector3i(dx, dy, dz)) != label) continue;
+            const std::int64_t d[3] = {dx, dy, dz};
+            ++m.m0;
+            for (int a = 0; a < 3; ++a) m.m1[a] += d[a];
+            m.m2[0] += d[0] * d[0], m.m2[1] += d[0] * d[1], m.m2[2] += d[0] * d[2];
+            m.m2[3] += d[1] * d[1], m.m2[4] += d[1] * d[2], m.m2[5] += d[2] * d[2];
+          }
+    out[i] = m;
+  });
+  return out;
+}
+
 std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius, double h,
                                     const std::vector<Eigen::Vector3i>& centres, const ProgressFn& progress) {
   const RowRuns rr = encode_runs(grid);
@@ -295,6 +419,99 @@ std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius
   return out;
 }
 
+ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radius, double h,
+                                      const std::vector<IIBall>& balls, const ProgressFn& progress) {
+  ComponentMoments out;
+  if (balls.size() >= std::size_t(std::numeric_limits<std::uint32_t>::max()))
+    throw InputError("II normals: " + std::to_string(balls.size()) + " balls, more than this estimator indexes (" +
+                         std::to_string(std::numeric_limits<std::uint32_t>::max()) + "); use a coarser resolution",
+                     "resolution");
+  out.index.assign(balls.size(), 0);
+  if (balls.empty()) return out;
+  const RowRuns rr = encode_runs(grid);
+  std::int32_t components = 0;
+  const std::vector<std::int32_t> labels = label_runs(rr, components);
+  // Each ball's component; -1 (zero moments) when its seed is not in X.
+  std::vector<std::int32_t> label(balls.size());
+  tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
+    const Eigen::Vector3i& v = balls[i].seed;
+    if (components == 1) {
+      label[i] = grid.get(v.x(), v.y(), v.z()) ? 0 : -1;
+      return;
+    }
+    const std::int64_t r = run_of(rr, v);
+    label[i] = r < 0 ? -1 : labels[std::size_t(r)];
+  });
+  // Balls grouped by (centre, component), neighbouring surfels sharing voxels: sorted by the
+  // centre's index in the centres' bounding box, then the component.
+  Eigen::Vector3i lo = balls[0].centre, hi = lo;
+  for (const IIBall& b : balls) lo = lo.cwiseMin(b.centre), hi = hi.cwiseMax(b.centre);
+  const Eigen::Matrix<std::int64_t, 3, 1> sz = (hi - lo + Eigen::Vector3i::Ones()).cast<std::int64_t>();
+  struct Key {
+    std::int64_t centre;
+    std::int32_t label;
+    std::uint32_t ball;
+    bool operator<(const Key& o) const { return centre != o.centre ? centre < o.centre : label < o.label; }
+  };
+  std::vector<Key> order(balls.size());
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    const Eigen::Matrix<std::int64_t, 3, 1> d = (balls[i].centre - lo).cast<std::int64_t>();
+    order[i] = {(d.z() * sz.y() + d.y()) * sz.x() + d.x(), label[i], std::uint32_t(i)};
+  }
+  std::sort(order.begin(), order.end());
+  std::vector<std::size_t> group{0};
+  for (std::size_t i = 1; i < order.size(); ++i)
+    if (order[i].centre != order[i - 1].centre || order[i].label != order[i - 1].label) group.push_back(i);
+  group.push_back(order.size());
+  const std::size_t groups = group.size() - 1;
+
+  const std::vector<KernelRow> kernel = kernel_rows(digital_radius, h);
+  const std::vector<KernelPlane> planes = kernel_planes(kernel);
+  // The components' bounding boxes: a ball whose kernel cube meets no other component's box needs
+  // no label (the common case for a few objects apart). Many components (noise in a scan) are not
+  // worth testing one by one: every ball then reads the labels.
+  constexpr std::int32_t kBoxedComponents = 64;
+  std::vector<Eigen::AlignedBox3i> box(std::size_t(std::min(components, kBoxedComponents + 1)));
+  if (components > 1 && components <= kBoxedComponents)
+    for (int lz = 0; lz < rr.size.z(); ++lz)
+      for (int ly = 0; ly < rr.size.y(); ++ly) {
+        const int y = rr.lower.y() + ly, z = rr.lower.z() + lz;
+        const std::size_t ri = rr.row_index(y, z);
+        for (std::int64_t j = rr.offset[ri]; j < rr.offset[ri + 1]; j += 2) {
+          Eigen::AlignedBox3i& b = box[std::size_t(labels[std::size_t(j / 2)])];
+          b.extend(Eigen::Vector3i(rr.runs[std::size_t(j)], y, z));
+          b.extend(Eigen::Vector3i(rr.runs[std::size_t(j) + 1], y, z));
+        }
+      }
+  const int reach = int(std::ceil(digital_radius)) + 1;
+  const auto alone = [&](const Eigen::Vector3i& c, std::int32_t label) {
+    if (components == 1) return true;
+    if (components > kBoxedComponents) return false;
+    const Eigen::AlignedBox3i cube(c - Eigen::Vector3i::Constant(reach), c + Eigen::Vector3i::Constant(reach));
+    for (std::int32_t k = 0; k < components; ++k)
+      if (k != label && cube.intersects(box[std::size_t(k)])) return false;
+    return true;
+  };
+  out.moments.resize(groups);
+  std::atomic<std::int64_t> done{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const Key& first = order[group[g]];
+      const Eigen::Vector3i& c = balls[first.ball].centre;
+      // No other component within reach: every run counts, the sweep of ii_moments.
+      if (first.label < 0)
+        out.moments[g] = BallMoments{};
+      else if (alone(c, first.label))
+        out.moments[g] = sweep_ball<false>(rr, kernel, planes, c);
+      else
+        out.moments[g] = sweep_ball<true>(rr, kernel, planes, c, labels.data(), first.label);
+      for (std::size_t j = group[g]; j < group[g + 1]; ++j) out.index[order[j].ball] = std::uint32_t(g);
+    }
+    if (progress) progress(done += std::int64_t(range.size()), std::int64_t(groups));
+  });
+  return out;
+}
+
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params, IIMethod method,
                                  const ProgressFn& progress) {
   if (!mesh.has_surfels())
@@ -305,38 +522,26 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
   const double rd = ii_digital_radius(h, params);
   check_radius(grid, rd);
   check_radius_fits_object(mesh, h, rd);
-  // Distinct centres: inner and outer voxels of all surfels (docs/math.md §7 step 3), shared by neighbours.
-  const Eigen::Vector3i lo = grid.lower();
-  const Eigen::Vector3i sz = grid.size() + Eigen::Vector3i::Constant(2);  // outer voxels may be 1 outside
-  auto key = [&](const Eigen::Vector3i& v) {
-    return (std::int64_t(v.z() - lo.z() + 1) * sz.y() + (v.y() - lo.y() + 1)) * sz.x() + (v.x() - lo.x() + 1);
-  };
+  // docs/math.md §7.1: both balls of a surfel keep the 6-component of X of its inner voxel.
   const std::size_t F = mesh.surfels.size();
-  std::vector<std::int64_t> keys(2 * F);
+  std::vector<IIBall> balls(2 * F);
   for (std::size_t f = 0; f < F; ++f) {
-    keys[2 * f] = key(mesh.surfels[f].inner_voxel());
-    keys[2 * f + 1] = key(mesh.surfels[f].outer_voxel());
+    const Eigen::Vector3i inner = mesh.surfels[f].inner_voxel();
+    balls[2 * f] = {inner, inner};
+    balls[2 * f + 1] = {mesh.surfels[f].outer_voxel(), inner};
   }
-  std::vector<std::int64_t> uniq = keys;
-  std::sort(uniq.begin(), uniq.end());
-  uniq.erase(std::unique(uniq.begin(), uniq.end()), uniq.end());
-  std::vector<Eigen::Vector3i> centres(uniq.size());
-  for (std::size_t i = 0; i < uniq.size(); ++i) {
-    std::int64_t k = uniq[i];
-    const int x = int(k % sz.x());
-    k /= sz.x();
-    const int y = int(k % sz.y());
-    k /= sz.y();
-    centres[i] = Eigen::Vector3i(x, y, int(k)) + lo - Eigen::Vector3i::Ones();
+  ComponentMoments mom;
+  if (method == IIMethod::Fast) {
+    mom = ii_component_moments(grid, rd, h, balls, progress);
+  } else {
+    mom.moments = ii_component_moments_brute_force(grid, rd, h, balls);
+    mom.index.resize(balls.size());
+    for (std::size_t i = 0; i < balls.size(); ++i) mom.index[i] = std::uint32_t(i);
   }
-  const std::vector<BallMoments> mom = method == IIMethod::Fast ? ii_moments(grid, rd, h, centres, progress)
-                                                                : ii_moments_brute_force(grid, rd, h, centres);
   Eigen::MatrixX3d normals(Eigen::Index(F), 3);
   tbb::parallel_for(std::size_t(0), F, [&](std::size_t f) {
-    const auto in = std::lower_bound(uniq.begin(), uniq.end(), keys[2 * f]) - uniq.begin();
-    const auto out = std::lower_bound(uniq.begin(), uniq.end(), keys[2 * f + 1]) - uniq.begin();
     // docs/math.md §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
-    const Eigen::Matrix3d C = 0.5 * (mom[std::size_t(in)].covariance() + mom[std::size_t(out)].covariance());
+    const Eigen::Matrix3d C = 0.5 * (mom[2 * f].covariance() + mom[2 * f + 1].covariance());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
     Eigen::Vector3d n = es.eigenvectors().col(0);
     // docs/math.md §7 step 5: orient by the trivial normal (>= 0 keeps it).

@@ -56,6 +56,33 @@ std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double di
 std::vector<BallMoments> ii_moments(const VoxelGrid& grid, double digital_radius, double h,
                                     const std::vector<Eigen::Vector3i>& centres, const ProgressFn& progress = {});
 
+/// One II ball restricted to a component (docs/math.md §7.1): `centre` is the inner or the outer
+/// voxel of a surfel and `seed` the surfel's inner voxel.
+struct IIBall {
+  Eigen::Vector3i centre, seed;
+};
+
+/// The moments of docs/math.md §7.1, readable form (the definition; slow, for tests): the voxels of
+/// X are labelled by a flood fill of their 6-components, and each ball sums, over its kernel cube,
+/// the voxels of the seed's component. Zero moments when the seed is not in X.
+std::vector<BallMoments> ii_component_moments_brute_force(const VoxelGrid& grid, double digital_radius, double h,
+                                                          const std::vector<IIBall>& balls);
+
+/// Moments of several balls, each distinct (centre, component) stored once: ball i has moments[index[i]].
+struct ComponentMoments {
+  std::vector<BallMoments> moments;
+  std::vector<std::uint32_t> index;
+  const BallMoments& operator[](std::size_t i) const { return moments[index[i]]; }
+};
+
+/// Equal to ii_component_moments_brute_force, fast: the 6-components of X are labelled run by run
+/// (a union-find over the runs of ii_moments that overlap on neighbouring rows), balls are grouped by
+/// centre and component, and each group is one sweep of ii_moments over the runs of its component.
+/// When X is one component, or no other component's bounding box is within reach of the ball,
+/// that is the sweep of ii_moments itself. Integer exact, parallel (TBB).
+ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radius, double h,
+                                      const std::vector<IIBall>& balls, const ProgressFn& progress = {});
+
 enum class IIMethod { Fast, BruteForce };
 
 /// II normal per surfel/face (#F x 3), docs/math.md §7. mesh.surfels must be present (mesh from voxels).

@@ -34,9 +34,11 @@ Eigen::MatrixX3d given_normals(const std::string& path, const Eigen::MatrixX3d& 
   return n;
 }
 
-// A vertex whose II face normals cancel out has no normal: the II ball is wider than the part the
-// vertex lies on (it sees the whole part, whose covariance has no preferred direction). Names the
-// radius in voxels and the part's size so that the user knows which radius to give.
+// A vertex whose II face normals cancel out has no normal. When the II ball reaches across the part
+// the vertex lies on (a radius of at least half its thinnest side), it sees the whole part, whose
+// covariance has no preferred direction: the message names the radius in voxels and the part's size
+// so that the user knows which radius to give. A smaller ball is not the cause, and the message
+// says so instead of asking for a radius the user already has.
 void check_ii_vertex_normals(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals, const IIParams& ii) {
   Eigen::Index bad = -1;
   for (Eigen::Index v = 0; v < vertex_normals.rows() && bad < 0; ++v)
@@ -63,11 +65,20 @@ void check_ii_vertex_normals(const SurfelMesh& mesh, const Eigen::MatrixX3d& ver
   const double radius = ii_digital_radius(h, ii);
   std::ostringstream os;
   os << "II normals: the normal of vertex " << bad << " (and of " << count - 1
-     << " other vertices) is the zero vector: the II normals of its faces cancel out because the II radius, " << radius
-     << " voxels, exceeds the part it lies on (" << extent.x() << " x " << extent.y() << " x " << extent.z()
-     << " voxels, " << extent.minCoeff() << " across at its thinnest); give a smaller ii_radius (a radius below "
-     << 0.5 * extent.minCoeff() << " voxels; with alpha = " << ii.alpha << ", k is the radius in units of h^alpha)";
-  throw InputError(os.str(), "ii_radius");
+     << " other vertices) is the zero vector: the II normals of its faces cancel out";
+  if (radius >= 0.5 * extent.minCoeff()) {
+    os << " because the II radius, " << radius << " voxels, exceeds the part it lies on (" << extent.x() << " x "
+       << extent.y() << " x " << extent.z() << " voxels, " << extent.minCoeff()
+       << " across at its thinnest); give a smaller ii_radius (a radius below " << 0.5 * extent.minCoeff()
+       << " voxels; with alpha = " << ii.alpha << ", k is the radius in units of h^alpha)";
+    throw InputError(os.str(), "ii_radius");
+  }
+  os << ", although the II radius, " << radius << " voxels, is less than half the part it lies on (" << extent.x()
+     << " x " << extent.y() << " x " << extent.z()
+     << " voxels), so the radius is not what makes them cancel: the faces around the vertex have "
+        "II normals pointing in opposite directions; try another ii_radius, or give the normals another way (the "
+        "trivial or convolved source, or a normals file)";
+  throw InputError(os.str(), "normals");
 }
 
 }  // namespace
