@@ -4,6 +4,14 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 get_property(_targets GLOBAL PROPERTY CORRLAP_EXPORTED_TARGETS)
+# An installed library finds the corrlap libraries it needs beside itself: a consumer links only the
+# libraries it calls, and the loader resolves the others through the library's own run path.
+foreach(_t IN LISTS _targets)
+  get_target_property(_type ${_t} TYPE)
+  if(_type STREQUAL "SHARED_LIBRARY")
+    set_target_properties(${_t} PROPERTIES INSTALL_RPATH "$ORIGIN")
+  endif()
+endforeach()
 install(TARGETS ${_targets} corrlap EXPORT corrlapTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
