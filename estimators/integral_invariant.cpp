@@ -316,28 +316,34 @@ std::int64_t run_of(const RowRuns& rr, const Eigen::Vector3i& v) {
   return -1;
 }
 
+/// The moments of the voxels v of the digital ball B(c, R) (the kernel of docs/math.md §7) for which
+/// keep(v) holds, one voxel at a time: the readable sum both brute-force forms share.
+template <class Keep>
+BallMoments ball_moments_where(const Eigen::Vector3i& c, double digital_radius, double h, Keep keep) {
+  const double R = digital_radius * h;
+  const int n = int(std::ceil(digital_radius)) + 1;
+  BallMoments m;
+  for (int dz = -n; dz <= n; ++dz)
+    for (int dy = -n; dy <= n; ++dy)
+      for (int dx = -n; dx <= n; ++dx) {
+        if (!in_kernel(dx, dy, dz, R, h) || !keep(c + Eigen::Vector3i(dx, dy, dz))) continue;
+        const std::int64_t d[3] = {dx, dy, dz};
+        ++m.m0;
+        for (int a = 0; a < 3; ++a) m.m1[a] += d[a];
+        m.m2[0] += d[0] * d[0], m.m2[1] += d[0] * d[1], m.m2[2] += d[0] * d[2];
+        m.m2[3] += d[1] * d[1], m.m2[4] += d[1] * d[2], m.m2[5] += d[2] * d[2];
+      }
+  return m;
+}
+
 }  // namespace
 
 std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double digital_radius, double h,
                                                 const std::vector<Eigen::Vector3i>& centres) {
-  const double R = digital_radius * h;
-  const int n = int(std::ceil(digital_radius)) + 1;
   std::vector<BallMoments> out(centres.size());
   tbb::parallel_for(std::size_t(0), centres.size(), [&](std::size_t i) {
-    BallMoments m;
-    const Eigen::Vector3i& c = centres[i];
-    for (int dz = -n; dz <= n; ++dz)
-      for (int dy = -n; dy <= n; ++dy)
-        for (int dx = -n; dx <= n; ++dx) {
-          if (!in_kernel(dx, dy, dz, R, h)) continue;
-          if (!grid.get(c.x() + dx, c.y() + dy, c.z() + dz)) continue;
-          const std::int64_t d[3] = {dx, dy, dz};
-          ++m.m0;
-          for (int a = 0; a < 3; ++a) m.m1[a] += d[a];
-          m.m2[0] += d[0] * d[0], m.m2[1] += d[0] * d[1], m.m2[2] += d[0] * d[2];
-          m.m2[3] += d[1] * d[1], m.m2[4] += d[1] * d[2], m.m2[5] += d[2] * d[2];
-        }
-    out[i] = m;
+    out[i] = ball_moments_where(centres[i], digital_radius, h,
+                                [&](const Eigen::Vector3i& v) { return grid.get(v.x(), v.y(), v.z()); });
   });
   return out;
 }
@@ -379,25 +385,12 @@ std::vector<BallMoments> ii_component_moments_brute_force(const VoxelGrid& grid,
     return grid.get(v.x(), v.y(), v.z()) ? component[slot(v)] : -1;
   };
   // The brute-force ball of ii_moments_brute_force over the seed's component.
-  const double R = digital_radius * h;
-  const int n = int(std::ceil(digital_radius)) + 1;
   std::vector<BallMoments> out(balls.size());
   tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
-    BallMoments m;
-    const Eigen::Vector3i& c = balls[i].centre;
     const std::int32_t label = component_of(balls[i].seed);
     if (label >= 0)
-      for (int dz = -n; dz <= n; ++dz)
-        for (int dy = -n; dy <= n; ++dy)
-          for (int dx = -n; dx <= n; ++dx) {
-            if (!in_kernel(dx, dy, dz, R, h) || component_of(c + Eigen::Vector3i(dx, dy, dz)) != label) continue;
-            const std::int64_t d[3] = {dx, dy, dz};
-            ++m.m0;
-            for (int a = 0; a < 3; ++a) m.m1[a] += d[a];
-            m.m2[0] += d[0] * d[0], m.m2[1] += d[0] * d[1], m.m2[2] += d[0] * d[2];
-            m.m2[3] += d[1] * d[1], m.m2[4] += d[1] * d[2], m.m2[5] += d[2] * d[2];
-          }
-    out[i] = m;
+      out[i] = ball_moments_where(balls[i].centre, digital_radius, h,
+                                  [&](const Eigen::Vector3i& v) { return component_of(v) == label; });
   });
   return out;
 }
