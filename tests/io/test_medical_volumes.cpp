@@ -556,7 +556,9 @@ TEST_CASE("Physical spaces: NIfTI is RAS, MetaImage LPS, NRRD its 'space' field,
       {"scanner-xyz", PhysicalSpace::Unknown},         {"3D-right-handed", PhysicalSpace::Unknown},
       {"3D-left-handed", PhysicalSpace::Unknown}};
   const std::string named = scratch("named.nrrd");
-  for (const auto& [name, space] : nrrd_spaces) {
+  for (const auto& entry : nrrd_spaces) {
+    const char* name = entry.first;  // not a structured binding: clang 14 cannot capture one in CAPTURE
+    const PhysicalSpace space = entry.second;
     CAPTURE(name);
     write_text(named, std::string("NRRD0004\ntype: uint8\ndimension: 3\nspace: ") + name +
                           "\nsizes: 1 1 1\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nencoding: raw\n\n\1");
