@@ -5,6 +5,10 @@
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/.." && pwd)"
+case "${1:-}" in
+  -h | --help) sed -n 2,4p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+  -*) echo "fetch_bunny: unknown option '$1' (usage: scripts/fetch_bunny.sh [OUTPUT.obj])" >&2; exit 2 ;;
+esac
 out="${1:-$root/data/bunny/bunny.obj}"
 command -v npm >/dev/null 2>&1 || { echo "fetch_bunny: npm not found (install nodejs/npm)" >&2; exit 1; }
 command -v node >/dev/null 2>&1 || { echo "fetch_bunny: node not found (install nodejs)" >&2; exit 1; }
