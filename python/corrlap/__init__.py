@@ -454,8 +454,8 @@ def _document_defaults():
               "{voxel_min_curvature_radius}": _core.VOXEL_MIN_CURVATURE_RADIUS,
               "{curvature_radius_fraction}": _core.CURVATURE_RADIUS_FRACTION}
     for function in (ii_normals, curvature, regularize, regularize_volume):
-        for placeholder, value in values.items():
-            function.__doc__ = function.__doc__.replace(placeholder, f"{value:g}")
+        for name, value in values.items():
+            function.__doc__ = function.__doc__.replace(name, f"{value:g}")
 
 
 _document_defaults()
