@@ -47,7 +47,10 @@ struct SymmetricOperator {
 /// preconditioner,
 /// every column in one product per iteration, the true residual checked at the end). Options:
 /// tolerance (1e-10), max_iterations (0: 2 n) and on_no_convergence (error | warn: return the last
-/// finite iterate with status NoConvergence in `report`), as for "cg"; other keys are InputErrors. Throws
+/// finite iterate with status NoConvergence in `report`), as for "cg"; other keys are InputErrors.
+/// preconditioned_tolerance (0: off): a column also stops when sqrt(r^T P^{-1} r) of its recurrence
+/// residual is at most this (absolute; it bounds the error in A's norm); the true residual is then
+/// the caller's to check in that norm (one more application of P^{-1}), not checked here. Throws
 /// SolverError (NotPositiveDefinite, NoConvergence) like the backend; `report` gets iterations,
 /// residual and solve time.
 Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::MatrixXd& B, const Config& options = {},

@@ -76,6 +76,23 @@ void check_alpha(double alpha, const Eigen::SparseMatrix<double>& Ml, const Eige
   }
 }
 
+// A += diag(d), in place: a closed surface's L has every diagonal entry, so no insertion (a sparse
+// sum with a diagonal matrix rebuilds the whole pattern, several times slower).
+void add_to_diagonal(Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& d) {
+  A.makeCompressed();
+  for (Eigen::Index j = 0; j < A.outerSize(); ++j) {
+    if (d[j] == 0.0) continue;
+    bool found = false;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
+      if (it.index() == j) {
+        it.valueRef() += d[j];
+        found = true;
+        break;
+      }
+    if (!found) A.coeffRef(j, j) += d[j];
+  }
+}
+
 }  // namespace
 
 double max_regularization_alpha(double area, double reach) {
@@ -135,20 +152,28 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
 Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
                                                      const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
                                                      const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
-                                                     double alpha, LinearSolver& solver, SolverReport* report) {
+                                                     double alpha, LinearSolver& solver, SolverReport* report,
+                                                     double accuracy, double* error_bound) {
   check_inputs(L, M, p, normals, H);
+  if (!(accuracy >= 0.0) || !std::isfinite(accuracy))
+    throw InputError("regularization: the solve accuracy must be a finite number >= 0", "accuracy");
   const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
   check_alpha(alpha, Ml, p);
   const Eigen::VectorXd mass = Ml.diagonal(), inverse_mass = mass.cwiseInverse();
   const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
   // B = sqrt(alpha) M_l - L, SPD when L is negative semi-definite (the header's bound).
-  Eigen::SparseMatrix<double> B = -L;
-  B += std::sqrt(alpha) * Ml;
+  Eigen::SparseMatrix<double> B = L;  // a plain copy, negated in place: the expression -L is slower
+  B *= -1.0;
+  add_to_diagonal(B, std::sqrt(alpha) * mass);
   B.prune(0.0);
   solver.set_positions(p);  // orders the factorization (geometric nested dissection)
   solver.compute(std::move(B));
   const auto multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
     return L * (inverse_mass.asDiagonal() * (L * X)) + alpha * (mass.asDiagonal() * X);
+  };
+  // P^{-1} = B^{-1} M_l B^{-1}.
+  const auto precondition = [&](const Eigen::MatrixXd& R) -> Eigen::MatrixXd {
+    return solver.solve(mass.asDiagonal() * solver.solve(R));
   };
   SymmetricOperator A;
   A.rows = p.rows();
@@ -157,22 +182,32 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
     Yt = multiply(Xt.transpose()).transpose();
   };
   A.precondition_transposed = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
-    // P^{-1} = B^{-1} M_l B^{-1}.
-    const Eigen::MatrixXd Y = solver.solve(Rt.transpose());
-    Zt = solver.solve(mass.asDiagonal() * Y).transpose();
+    Zt = precondition(Rt.transpose()).transpose();
+  };
+  // The header's bound on the RMS error of each coordinate, sqrt(2 r^T P^{-1} r / (alpha area)),
+  // the worst column (one application of P^{-1}, the cost of a CG iteration).
+  const double area = mass.sum();
+  const auto bound_of = [&](const Eigen::MatrixXd& R) {
+    const Eigen::MatrixXd Z = precondition(R);
+    double worst = 0.0;
+    for (Eigen::Index j = 0; j < R.cols(); ++j) worst = std::max(worst, R.col(j).dot(Z.col(j)));
+    return std::sqrt(2.0 * std::max(worst, 0.0) / (alpha * area));
   };
   // Corrected weights grow like 1/(u.n) where normals are nearly tangent to the surfels; A's
   // entries then span many orders of magnitude and CG's recurrence drifts from the true residual.
   // Each pass after the first solves for the true residual of the last (iterative refinement, at
   // most 3 passes), until the relative residual is 1e-10 or the componentwise backward error,
   // max_i |b - A q|_i / (|L| M_l^{-1} |L| |q| + alpha M_l |q| + |b|)_i, is below 1e-12 (the rounding
-  // of A q is ~20 eps for rows of ~9 entries; one refinement pass reaches it, Skeel's result).
+  // of A q is ~20 eps for rows of ~9 entries; one refinement pass reaches it, Skeel's result), or
+  // until the error bound is below the accuracy asked.
   constexpr double kBackwardTolerance = 1e-12;
   Config cg_options;
   cg_options.set("on_no_convergence", "warn");
   SolverReport local;
   SolverReport& cg = report ? *report : local;
-  const Eigen::SparseMatrix<double> absL = L.cwiseAbs();
+  Eigen::SparseMatrix<double> absL = L;  // a copy with its values replaced (faster than L.cwiseAbs())
+  absL.makeCompressed();
+  for (Eigen::Index i = 0; i < absL.nonZeros(); ++i) absL.valuePtr()[i] = std::abs(absL.valuePtr()[i]);
   const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
     const Eigen::MatrixXd absq = q.cwiseAbs();
     const Eigen::MatrixXd scale = absL * (inverse_mass.asDiagonal() * (absL * absq)) +
@@ -186,35 +221,50 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   // Not from p: L p is the staircase's Laplacian, so |b - A p| is orders of magnitude above |b|.
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p.rows(), 3), residual = rhs;
   int iterations = 0;
-  double normwise = 1.0, backward = 1.0;
-  for (int pass = 0; pass < 3 && normwise > 1e-10 && backward > kBackwardTolerance; ++pass) {
-    // Each pass asks only for the reduction still missing: 1e-8 of b first (near the rounding floor
-    // of a badly scaled L), then a tenth of what the nearer acceptance test still lacks (a pass
-    // shrinks both errors by about its CG tolerance until the floor): fewer iterations than a fixed
-    // tolerance (bench/RESULTS.md, "corrlap regularize: CHOLMOD thread policy, refinement
-    // tolerances, face clusters").
-    const double missing = pass == 0 ? 1e-8 : 0.1 * std::max(1e-10 / normwise, kBackwardTolerance / backward);
-    cg_options.set("tolerance", std::clamp(missing, 1e-10, 0.1));
+  double normwise = 1.0, backward = 1.0, bound = std::numeric_limits<double>::infinity();
+  const auto at_rounding = [&] { return normwise <= 1e-10 || backward <= kBackwardTolerance; };  // NaN: not known
+  const auto done = [&] { return at_rounding() || (accuracy > 0.0 && bound <= accuracy); };
+  for (int pass = 0; pass < 3 && !done(); ++pass) {
+    if (accuracy > 0.0) {
+      // The bound is sqrt(2 r^T P^{-1} r / (alpha area)): CG stops on that norm of its recurrence
+      // residual, at half the accuracy (room for the drift of the recurrence), checked below on the
+      // true residual.
+      cg_options.set("tolerance", 1e-10);
+      cg_options.set("preconditioned_tolerance", 0.5 * accuracy * std::sqrt(0.5 * alpha * area));
+    } else {
+      // Each pass asks only for the reduction still missing: 1e-8 of b first (near the rounding
+      // floor of a badly scaled L), then a tenth of what the nearer acceptance test still lacks (a
+      // pass shrinks both errors by about its CG tolerance until the floor): fewer iterations than a
+      // fixed tolerance (bench/RESULTS.md, "corrlap regularize: CHOLMOD thread policy, refinement
+      // tolerances, face clusters").
+      const double missing = pass == 0 ? 1e-8 : 0.1 * std::max(1e-10 / normwise, kBackwardTolerance / backward);
+      cg_options.set("tolerance", std::clamp(missing, 1e-10, 0.1));
+    }
     const Eigen::MatrixXd step = conjugate_gradient(A, residual, cg_options, &cg);
     iterations += cg.iterations;
     if (!step.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
     q += step;
     residual = rhs - multiply(q);
     normwise = relative_residual(residual, rhs);
-    backward = backward_error(q, residual);
+    if (accuracy > 0.0) bound = bound_of(residual);
+    // The backward error only decides when the bound does not.
+    backward = accuracy > 0.0 && bound <= accuracy ? std::numeric_limits<double>::quiet_NaN()
+                                                   : backward_error(q, residual);
   }
   cg.iterations = iterations;
   cg.residual = normwise;
+  if (error_bound) *error_bound = accuracy > 0.0 ? bound : bound_of(residual);
   std::ostringstream os;
   os << "regularization: relative residual " << normwise << " after " << iterations
      << " preconditioned CG iterations, componentwise backward error " << backward;
-  if (normwise > 1e-10 && !(backward <= kBackwardTolerance)) {
+  if (accuracy > 0.0) os << ", error bound " << bound << " (asked " << accuracy << ")";
+  if (!done()) {
     cg.status = SolverStatus::NoConvergence;
     cg.message = os.str();
     throw SolverError(SolverStatus::NoConvergence, os.str());
   }
   cg.status = SolverStatus::Success;
-  cg.message = normwise > 1e-10 ? os.str() + " (the rounding of A q)" : std::string();
+  cg.message = accuracy == 0.0 && normwise > 1e-10 ? os.str() + " (the rounding of A q)" : std::string();
   return q;
 }
 

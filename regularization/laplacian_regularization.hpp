@@ -38,9 +38,9 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
                                       const Eigen::VectorXd& H, double alpha, LinearSolver& solver,
                                       SolverReport* report = nullptr);
 
-/// The same p' as regularize_positions (to the CG tolerance, 1e-10 relative residual of the
-/// normal equations), without forming L M_l^{-1} L, whose two-ring pattern makes its Cholesky
-/// factor several times denser than L's. With B = beta M_l - L, beta = sqrt(alpha), the matrix
+/// The same p' as regularize_positions without forming L M_l^{-1} L, whose two-ring pattern makes
+/// its Cholesky factor several times denser than L's. With B = beta M_l - L, beta = sqrt(alpha),
+/// the matrix
 ///     P = B M_l^{-1} B = L M_l^{-1} L + alpha M_l - 2 beta L
 /// bounds A = L M_l^{-1} L + alpha M_l spectrally: in the eigenbasis of -L v = lambda M_l v
 /// (lambda >= 0) the eigenvalues of P^{-1} A are (lambda^2 + alpha) / (lambda + beta)^2, in [1/2, 1].
@@ -48,12 +48,21 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
 /// converges in about 15 iterations whatever h. `solver` factorizes B; it must be a direct solver
 /// (a fixed preconditioner). Throws as regularize_positions, SolverError NotPositiveDefinite when
 /// B is not (L not negative semi-definite: use regularize_positions), NoConvergence from CG.
-/// `report`, if given, receives the CG iterations and residual.
+///
+/// How far it iterates: with `accuracy` = 0, to rounding (relative residual 1e-10 or a
+/// componentwise backward error of 1e-12). With `accuracy` > 0 (world units), until every
+/// coordinate's error is provably below it in the area-weighted RMS sense,
+///     |q - p'|_{M_l} / sqrt(area) <= accuracy,   area = sum of M_l,
+/// by the bound |e|_{M_l}^2 <= |e|_A^2 / alpha = r^T A^{-1} r / alpha <= 2 r^T P^{-1} r / alpha
+/// (A >= alpha M_l, and A >= P / 2 above) on the true residual r = b - A q, or to rounding if that
+/// comes first. `report`, if given, receives the CG iterations and the relative residual;
+/// `error_bound`, if given, the bound reached (world units; with accuracy 0, computed at the end).
 Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
                                                      const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
                                                      const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
                                                      double alpha, LinearSolver& solver,
-                                                     SolverReport* report = nullptr);
+                                                     SolverReport* report = nullptr, double accuracy = 0.0,
+                                                     double* error_bound = nullptr);
 
 /// The two terms of the energy above at positions q (for reports): the Laplacian term
 /// |M_l^{-1} L q + 2 H n|^2_{M_l} and the attachment term |q - p|^2_{M_l} (without alpha).

@@ -115,6 +115,7 @@ void check_regularization_options(const RegularizationOptions& o) {
                      "h_scale");
   if (o.h_clamp) check_real(*o.h_clamp, "h_clamp", "the mean curvature clamp", 0.0, /*open=*/false);
   check_real(o.normal_attachment, "normal_attachment", "the normal attachment", 0.0);
+  check_real(o.solve_accuracy, "solve_accuracy", "the solve accuracy", 0.0, /*open=*/false);
   check_edit(o.k1_edit, "k1");
   check_edit(o.k2_edit, "k2");
 }
@@ -244,10 +245,13 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   if (r.solver != "cg") {
     try {
       SolverReport cg;
-      r.mesh.positions =
-          regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver, &cg);
+      const double step = mesh.grid_step();
+      double bound = 0.0;
+      r.mesh.positions = regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha,
+                                                             *solver, &cg, o.solve_accuracy * step, &bound);
       r.solve_scheme = "preconditioned-cg";
       r.solve_iterations = cg.iterations;
+      r.solve_error_bound = bound / step;
       residual = cg.residual;
     } catch (const SolverError& e) {
       if (e.status() != SolverStatus::NotPositiveDefinite) throw;

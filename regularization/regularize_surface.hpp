@@ -25,6 +25,13 @@ inline constexpr double kVoxelMinCurvatureRadius = 2.0;
 /// The paper's curvature radius for a unit-sized shape (0.1), as a fraction of the object size.
 inline constexpr double kCurvatureRadiusFraction = 0.1;
 
+/// The default accuracy of the regularization's solve, in voxels (the mesh's grid step): the
+/// area-weighted RMS error of every coordinate is provably below it (the bound of
+/// regularize_positions_preconditioned). A thousandth of a voxel is a tenth of the smallest mean
+/// distance to the truth measured on the analytic shapes (docs/comparison.md), and the actual error
+/// is far below the bound (docs/regularization.md, "Solve accuracy").
+inline constexpr double kRegularizationSolveAccuracy = 1e-3;
+
 /// The default ball radius of the corrected curvature, the one rule of every command and binding
 /// that computes curvature (regularize, reconstruct, curvature, the studies): `fraction` of the
 /// object size, and for voxels from a file at least kVoxelMinCurvatureRadius voxels of side
@@ -58,6 +65,9 @@ struct RegularizationOptions {
   PrincipalCurvatureEdit k1_edit, k2_edit;
   double normal_attachment = 1.0;  ///< attachment of n' to n (integrate_shape_operator)
   Config solver;                   ///< linear solver ("solver" key: backend name; default cholmod)
+  /// The preconditioned solve stops when the error bound is below this many grid steps (0: to
+  /// rounding). The direct solve is exact whatever it says.
+  double solve_accuracy = kRegularizationSolveAccuracy;
 };
 
 /// Checks the options before any computation, in one wording for every front end (the CLI adds its
@@ -83,6 +93,9 @@ struct RegularizedSurface {
   /// or "direct" (regularize_positions: with "cg", or when L is not negative semi-definite).
   std::string solve_scheme;
   int solve_iterations = 0;                          ///< CG iterations of the preconditioned scheme
+  /// The preconditioned scheme's bound on the RMS error of the positions, in grid steps (0 for the
+  /// direct scheme).
+  double solve_error_bound = 0.0;
   SolutionCheck check;                               ///< the result against the input (check_solution)
   RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
   double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;

@@ -44,6 +44,7 @@ struct RegularizeArgs {
   std::optional<double> h_clamp;
   std::string k1_edit, k2_edit;  // principal-curvature edits (paper §4.3), parsed by PrincipalCurvatureEdit
   double normal_attachment = 1.0;
+  double solve_accuracy = kRegularizationSolveAccuracy;
   SolverOptions solver;
   std::string out;
   OutputOptions output;
@@ -223,7 +224,11 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   }
   m["solver"] = r.solver;
   m["solve_scheme"] = r.solve_scheme;
-  if (r.solve_scheme == "preconditioned-cg") m["solve_iterations"] = r.solve_iterations;
+  if (r.solve_scheme == "preconditioned-cg") {
+    m["solve_iterations"] = r.solve_iterations;
+    m["solve_accuracy"] = o.solve_accuracy;
+    m["solve_error_bound"] = r.solve_error_bound;
+  }
   m["solve_residual"] = *r.check.residual;
   m["area_ratio"] = r.check.area_ratio;
   m["extent_ratio"] = r.check.extent_ratio;
@@ -271,6 +276,7 @@ void run(const RegularizeArgs& a) {
   if (!a.k2_edit.empty()) o.k2_edit = PrincipalCurvatureEdit::parse(a.k2_edit);
   o.normal_attachment = a.normal_attachment;
   o.solver = a.solver.config();
+  o.solve_accuracy = a.solve_accuracy;
   // The options first: a bad name or value fails before the (possibly long) normals.
   check_regularization_options(o);
 
@@ -347,6 +353,11 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                                  "with --k1/--k2: weight of the new normals' attachment to the old ones, relative to "
                                  "the object size")
                      ->check(positive_number())
+                     ->capture_default_str());
+  only.push_back(cmd->add_option("--solve-accuracy", args->solve_accuracy,
+                                 "the solve stops when the RMS error of the positions is provably below this many "
+                                 "voxels (0: to rounding; docs/regularization.md)")
+                     ->check(non_negative_number())
                      ->capture_default_str());
   args->solver.add_options(
       *cmd, std::string("linear solver backend (see `corrlap backends`; default ") + kDefaultLinearSolver + ")",

@@ -7,14 +7,16 @@
 namespace corrlap::detail {
 
 BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
-                                       const Preconditioner& precondition, double tolerance, int max_iterations) {
+                                       const Preconditioner& precondition, double tolerance, int max_iterations,
+                                       double preconditioned_tolerance) {
   return block_conjugate_gradient(
       [&](const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Qt) { symmetric_product_transposed(A, Pt, Qt); }, B, precondition,
-      tolerance, max_iterations);
+      tolerance, max_iterations, preconditioned_tolerance);
 }
 
 BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const Eigen::MatrixXd& B,
-                                       const Preconditioner& precondition, double tolerance, int max_iterations) {
+                                       const Preconditioner& precondition, double tolerance, int max_iterations,
+                                       double preconditioned_tolerance) {
   const Eigen::Index n = B.rows(), k = B.cols();
   BlockCgResult result;
   // Rows are the k columns of the system (the transposed layout of symmetric_product_transposed).
@@ -25,17 +27,20 @@ BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const 
   Pt = Zt;
   Eigen::ArrayXd rz = (Rt.array() * Zt.array()).rowwise().sum();
   const Eigen::ArrayXd threshold = tolerance * tolerance * Rt.rowwise().squaredNorm().array();
+  const double rz_threshold = preconditioned_tolerance * preconditioned_tolerance;
   std::vector<bool> active(static_cast<std::size_t>(k), true);
-  const auto update_active = [&] {
+  // rz: r^T P^{-1} r of the current residual (the preconditioned test reads it, no extra work).
+  const auto update_active = [&](const Eigen::ArrayXd& rz_now) {
     bool any = false;
     const Eigen::ArrayXd rr = Rt.rowwise().squaredNorm().array();
     for (Eigen::Index c = 0; c < k; ++c) {
-      active[std::size_t(c)] = active[std::size_t(c)] && !(rr[c] <= threshold[c]);
+      const bool small = rr[c] <= threshold[c] || (preconditioned_tolerance > 0.0 && rz_now[c] <= rz_threshold);
+      active[std::size_t(c)] = active[std::size_t(c)] && !small;
       any = any || active[std::size_t(c)];
     }
     return any;
   };
-  bool any_active = update_active();
+  bool any_active = update_active(rz);
   int iterations = 0;
   while (any_active && iterations < max_iterations) {
     multiply(Pt, Qt);
@@ -54,10 +59,18 @@ BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const 
     Xt += alpha.matrix().asDiagonal() * Pt;  // frozen columns have alpha = 0
     Rt -= alpha.matrix().asDiagonal() * Qt;
     ++iterations;
-    any_active = update_active();
-    if (!any_active) break;
+    // The plain test needs no preconditioner application; the preconditioned one needs this
+    // iteration's z (the next iteration's, so no extra work when it goes on).
+    if (preconditioned_tolerance <= 0.0 && !update_active(rz)) {
+      any_active = false;
+      break;
+    }
     precondition(Rt, Zt);
     const Eigen::ArrayXd rz_next = (Rt.array() * Zt.array()).rowwise().sum();
+    if (preconditioned_tolerance > 0.0 && !update_active(rz_next)) {
+      any_active = false;
+      break;
+    }
     Eigen::ArrayXd beta = Eigen::ArrayXd::Zero(k);
     for (Eigen::Index c = 0; c < k; ++c)
       if (active[std::size_t(c)]) beta[c] = rz_next[c] / rz[c];

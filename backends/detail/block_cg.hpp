@@ -13,7 +13,7 @@ using Preconditioner = std::function<void(const Eigen::MatrixXd& Rt, Eigen::Matr
 struct BlockCgResult {
   Eigen::MatrixXd X;                   ///< n x k solution (the last iterate when not converged)
   int iterations = 0;                  ///< of the slowest column
-  bool converged = false;              ///< every column reached |r| <= tolerance |b| (recurrence residual)
+  bool converged = false;              ///< every column reached a stopping test (recurrence residual)
   Eigen::Index breakdown_column = -1;  ///< column with p^T A p <= 0 (A not positive definite), or -1
   double breakdown_value = 0.0;        ///< that p^T A p
 };
@@ -25,14 +25,18 @@ struct BlockCgResult {
 /// recurrence residual is <= tolerance |b|; iteration stops when every column has, at
 /// max_iterations, or at a breakdown (p^T A p <= 0 in a column not yet converged).
 BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& B,
-                                       const Preconditioner& precondition, double tolerance, int max_iterations);
+                                       const Preconditioner& precondition, double tolerance, int max_iterations,
+                                       double preconditioned_tolerance = 0.0);
 
 /// Qt = (A P)^T for Pt = P^T (k x n): an operator known only by its product.
 using TransposedProduct = std::function<void(const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Qt)>;
 
 /// The same iteration on an operator given by its product (the matrix overload passes
-/// symmetric_product_transposed).
+/// symmetric_product_transposed). With preconditioned_tolerance > 0 a column also stops when the
+/// preconditioned norm of its recurrence residual, sqrt(r^T P^{-1} r), is at most that (absolute):
+/// the quantity CG has at hand that bounds the error in A's norm (|e|_A^2 = r^T A^{-1} r).
 BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const Eigen::MatrixXd& B,
-                                       const Preconditioner& precondition, double tolerance, int max_iterations);
+                                       const Preconditioner& precondition, double tolerance, int max_iterations,
+                                       double preconditioned_tolerance = 0.0);
 
 }  // namespace corrlap::detail

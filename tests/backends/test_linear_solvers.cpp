@@ -8,6 +8,7 @@
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <corrlap/backends/detail/symmetric_product.hpp>
 #include <corrlap/backends/eigen_direct.hpp>
+#include <corrlap/backends/iterative.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <random>
 #include <string>
@@ -356,6 +357,47 @@ TEST_CASE("block CG: every column as if solved alone, zero columns stay zero, br
   const auto broken = corrlap::detail::block_conjugate_gradient(D, Eigen::MatrixXd::Ones(2, 1), none, 1e-10, 100);
   CHECK(!broken.converged);
   CHECK(broken.breakdown_column == 0);
+}
+
+TEST_CASE("block CG: the preconditioned stopping test stops each column at its first small r^T P^{-1} r") {
+  const SpMat A = test::shifted(sphere(), 1e-2);
+  std::srand(10);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 2);
+  const Eigen::VectorXd inverse_diagonal = A.diagonal().cwiseInverse();
+  const corrlap::detail::Preconditioner jacobi = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
+    Zt = Rt.array().rowwise() * inverse_diagonal.transpose().array();
+  };
+  const auto preconditioned_norm = [&](const Eigen::VectorXd& r) {
+    return std::sqrt(r.dot(inverse_diagonal.asDiagonal() * r));
+  };
+  const double initial = std::min(preconditioned_norm(B.col(0)), preconditioned_norm(B.col(1)));
+  for (const double fraction : {1e-2, 1e-5}) {
+    CAPTURE(fraction);
+    const double target = fraction * initial;
+    // The relative test alone would run to 1e-14: the preconditioned one stops first.
+    const auto cg = corrlap::detail::block_conjugate_gradient(A, B, jacobi, 1e-14, 10000, target);
+    REQUIRE(cg.converged);
+    for (Eigen::Index c = 0; c < 2; ++c) {
+      CAPTURE(c);
+      // The true residual: the recurrence's drift on this well-conditioned system is far below 1%.
+      CHECK(preconditioned_norm(B.col(c) - A * cg.X.col(c)) <= 1.01 * target);
+      // Each column stops at its first iterate that meets the test: one iteration fewer does not.
+      const auto alone = corrlap::detail::block_conjugate_gradient(A, B.col(c), jacobi, 1e-14, 10000, target);
+      REQUIRE(alone.converged);
+      CHECK((alone.X - cg.X.col(c)).norm() <= 1e-9 * alone.X.norm());
+      REQUIRE(alone.iterations >= 1);
+      const auto fewer = corrlap::detail::block_conjugate_gradient(A, B.col(c), jacobi, 1e-14, alone.iterations - 1);
+      CHECK(preconditioned_norm(B.col(c) - A * fewer.X) > 0.99 * target);
+    }
+  }
+  // The options key: refused when negative.
+  SymmetricOperator op;
+  op.rows = A.rows();
+  op.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) { Yt = (A * Xt.transpose()).transpose(); };
+  op.diagonal = A.diagonal();
+  Config bad;
+  bad.set("preconditioned_tolerance", "-1");
+  CHECK_THROWS_AS(conjugate_gradient(op, B, bad), InputError);
 }
 
 TEST_CASE("cg: compute(std::move(A)) keeps the matrix without a copy and solves as compute(A)") {

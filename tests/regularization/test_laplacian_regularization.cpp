@@ -182,6 +182,62 @@ TEST_CASE("regularize_positions_preconditioned equals regularize_positions, in a
       MESSAGE(std::string(method) << " alpha0 " << alpha0 << ": " << report.iterations << " iterations");
     }
   }
+}
+
+TEST_CASE("regularize_positions_preconditioned to an accuracy: the error is within the bound it reports") {
+  const test::RegularizationSphere& base = test::regularization_sphere();
+  const Eigen::MatrixX3d& p = base.mesh.positions;
+  const Eigen::MatrixX3d& n = base.normals.vertex;
+  std::srand(12);
+  const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows()) + 0.3 * Eigen::VectorXd::Random(p.rows());
+  const double h = base.mesh.grid_step();
+  for (const char* method : {"fem", "projected-polydec"}) {
+    CAPTURE(method);
+    const Operators ops = make_discretization(method)->assemble(base.mesh, base.normals, Config());
+    const Eigen::VectorXd mass = lumped_mass(ops.M).diagonal();
+    for (const double alpha0 : {1.0, 10.0, 1000.0}) {
+      CAPTURE(alpha0);
+      const double alpha = regularization_alpha(h, alpha0);
+      auto direct = make_linear_solver("cholmod");
+      const Eigen::MatrixX3d exact = regularize_positions(ops.L, ops.M, p, n, H, alpha, *direct);
+      SolverReport to_rounding;
+      auto factor = make_linear_solver("cholmod");
+      (void)regularize_positions_preconditioned(ops.L, ops.M, p, n, H, alpha, *factor, &to_rounding);
+      for (const double voxels : {1e-2, 1e-4}) {
+        CAPTURE(voxels);
+        SolverReport report;
+        double bound = -1.0;
+        auto again = make_linear_solver("cholmod");
+        const Eigen::MatrixX3d q =
+            regularize_positions_preconditioned(ops.L, ops.M, p, n, H, alpha, *again, &report, voxels * h, &bound);
+        // The bound holds: every coordinate's area-weighted RMS error is at most the bound
+        // (exact's own error, ~1e-10 |p|, is far below the accuracies asked), and the bound at most
+        // the accuracy.
+        for (Eigen::Index j = 0; j < 3; ++j) {
+          const Eigen::VectorXd e = q.col(j) - exact.col(j);
+          const double rms = std::sqrt(e.dot(mass.asDiagonal() * e) / mass.sum());
+          CHECK(rms <= bound * (1.0 + 1e-6));
+        }
+        CHECK(bound > 0.0);
+        CHECK(bound <= voxels * h);
+        // It stops earlier than to rounding.
+        CHECK(report.iterations < to_rounding.iterations);
+      }
+    }
+  }
+  // A negative or NaN accuracy is refused.
+  const Operators ops = make_discretization("fem")->assemble(base.mesh, base.normals, Config());
+  auto factor = make_linear_solver("cholmod");
+  CHECK_THROWS_AS(regularize_positions_preconditioned(ops.L, ops.M, p, n, H, regularization_alpha(h), *factor, nullptr,
+                                                      -1.0),
+                  InputError);
+}
+
+TEST_CASE("regularize_positions_preconditioned refuses an L that is not negative semi-definite") {
+  const test::RegularizationSphere& base = test::regularization_sphere();
+  const Eigen::MatrixX3d& p = base.mesh.positions;
+  const Eigen::MatrixX3d& n = base.normals.vertex;
+  const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows());
   // L not negative semi-definite: B = beta M_l - L is not SPD and the factorization says so.
   const Operators ops = make_discretization("fem")->assemble(base.mesh, base.normals, Config());
   const SpMat wrong_sign = -ops.L;
