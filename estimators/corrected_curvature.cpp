@@ -121,6 +121,37 @@ FaceClusters cluster_faces(const std::vector<WalkFace>& face, const std::vector<
   return c;
 }
 
+// The rows of `points` (#points x 3) in Z-order (Morton order) of their cells of side `cell`:
+// new -> old. Points near in space end up near in the order, so walks over neighbouring balls
+// read the same cache lines.
+std::vector<int> z_order(const Eigen::MatrixX3d& points, double cell) {
+  const Eigen::Index n = points.rows();
+  std::vector<std::pair<std::uint64_t, int>> keyed(static_cast<std::size_t>(n));
+  if (n == 0) return {};
+  const Eigen::RowVector3d low = points.colwise().minCoeff();
+  const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+  };
+  tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
+    std::uint64_t key = 0;
+    for (int j = 0; j < 3; ++j) {
+      const double c = std::floor((points(i, j) - low[j]) / cell);
+      key |= spread(std::uint64_t(std::clamp(c, 0.0, double(0x1fffff)))) << j;
+    }
+    keyed[std::size_t(i)] = {key, int(i)};
+  });
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<int> order(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = keyed[i].second;
+  return order;
+}
+
 void check_mesh(const SurfelMesh& mesh) {
   if (mesh.num_faces() == 0) throw InputError("curvature: the mesh has no face");
   mesh.validate("curvature mesh");
@@ -526,26 +557,41 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
     CurvatureEstimates e = at_vertices(r);
     return {std::move(e.H), std::move(e.area)};
   }
-  // Row-major copies: a face's data in one or two cache lines (the Eigen members are column-major).
+  // Row-major copies: a face's data in one or two cache lines (the Eigen members are column-major),
+  // faces and vertices renumbered in Z-order (z_order): the walk's reads stay local. "Old" indices
+  // are the mesh's, "new" the walk's.
+  const double edge = 0.5 * grid_cell_;
+  const std::vector<int> face_order = z_order(centroids_, 2.0 * edge), vertex_order = z_order(positions_, 2.0 * edge);
+  std::vector<int> face_rank(static_cast<std::size_t>(F)), vertex_rank(static_cast<std::size_t>(V));
+  for (std::size_t i = 0; i < face_order.size(); ++i) face_rank[std::size_t(face_order[i])] = int(i);
+  for (std::size_t i = 0; i < vertex_order.size(); ++i) vertex_rank[std::size_t(vertex_order[i])] = int(i);
   std::vector<WalkFace> face(static_cast<std::size_t>(F));
   std::vector<V3> position(static_cast<std::size_t>(V));
-  for (Eigen::Index v = 0; v < V; ++v) position[std::size_t(v)] = positions_.row(v).transpose();
-  tbb::parallel_for(Eigen::Index(0), F, [&](Eigen::Index f) {
-    WalkFace& d = face[std::size_t(f)];
+  for (Eigen::Index i = 0; i < V; ++i) position[std::size_t(i)] = positions_.row(vertex_order[std::size_t(i)]).transpose();
+  std::vector<int> neighbour_start(static_cast<std::size_t>(F) + 1, 0), neighbour_faces(neighbour_faces_.size());
+  for (Eigen::Index i = 0; i < F; ++i) {
+    const auto f = std::size_t(face_order[std::size_t(i)]);
+    neighbour_start[std::size_t(i) + 1] = neighbour_start[std::size_t(i)] + neighbour_start_[f + 1] - neighbour_start_[f];
+  }
+  tbb::parallel_for(Eigen::Index(0), F, [&](Eigen::Index i) {
+    const int f = face_order[std::size_t(i)];
+    WalkFace& d = face[std::size_t(i)];
     d.centroid = centroids_.row(f).transpose();
     d.rho = 0.0;
     for (int k = 0; k < 4; ++k) {
-      d.corners[std::size_t(k)] = faces_(f, k);
-      d.rho = std::max(d.rho, (position[std::size_t(faces_(f, k))] - d.centroid).norm());
+      d.corners[std::size_t(k)] = vertex_rank[std::size_t(faces_(f, k))];
+      d.rho = std::max(d.rho, (position[std::size_t(d.corners[std::size_t(k)])] - d.centroid).norm());
     }
     d.mu0 = mu0_[f], d.mu1 = mu1_[f];
+    int out = neighbour_start[std::size_t(i)];
+    for (int j = neighbour_start_[std::size_t(f)]; j < neighbour_start_[std::size_t(f) + 1]; ++j)
+      neighbour_faces[std::size_t(out++)] = face_rank[std::size_t(neighbour_faces_[std::size_t(j)])];
   });
   // Clusters pay off when the ball holds many of them (radius >= 12 edges, ~3 cluster widths);
   // below, the walk is face by face.
-  const double edge = 0.5 * grid_cell_;
   const bool use_clusters = r >= 12.0 * edge;
   const FaceClusters clusters =
-      use_clusters ? cluster_faces(face, neighbour_start_, neighbour_faces_, 4.0 * edge) : FaceClusters{};
+      use_clusters ? cluster_faces(face, neighbour_start, neighbour_faces, 4.0 * edge) : FaceClusters{};
   MeanCurvature out{Eigen::VectorXd(V), Eigen::VectorXd(V)};
   struct Walk {
     std::vector<std::uint32_t> stamp, cluster_seen;
@@ -562,12 +608,13 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
       w.cluster_seen.assign(C, 0);
       w.cluster_inside.assign(C, 0);
     }
-    for (Eigen::Index v = range.begin(); v != range.end(); ++v) {
-      const int seed = vertex_face_[std::size_t(v)];
-      if (seed < 0) {
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+      const int v = vertex_order[std::size_t(i)];
+      if (vertex_face_[std::size_t(v)] < 0) {
         out.H[v] = out.area[v] = 0.0;
         continue;
       }
+      const int seed = face_rank[std::size_t(vertex_face_[std::size_t(v)])];
       if (++w.generation == 0) {
         std::fill(w.stamp.begin(), w.stamp.end(), 0u);
         std::fill(w.cluster_seen.begin(), w.cluster_seen.end(), 0u);
@@ -577,7 +624,7 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
       // A cluster whose every corner is within r is summed at once (its faces all have weight 1
       // and are edge-connected, so the walk would reach them all) and the walk goes on from the
       // faces around it.
-      const V3 x = position[std::size_t(v)];
+      const V3 x = position[std::size_t(i)];
       double m0 = 0.0, m1 = 0.0;
       w.queue.assign(1, seed);
       w.stamp[std::size_t(seed)] = w.generation;
@@ -621,8 +668,8 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
         }
         m0 += weight * d.mu0;
         m1 += weight * d.mu1;
-        for (int i = neighbour_start_[std::size_t(f)]; i < neighbour_start_[std::size_t(f) + 1]; ++i)
-          push(neighbour_faces_[std::size_t(i)]);
+        for (int j = neighbour_start[std::size_t(f)]; j < neighbour_start[std::size_t(f) + 1]; ++j)
+          push(neighbour_faces[std::size_t(j)]);
       }
       out.area[v] = m0;
       out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
