@@ -269,8 +269,8 @@ Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::Matr
     else
       A.precondition_transposed(Rt, Zt);
   };
-  Eigen::MatrixXd X =
-      run_block_cg(A.multiply_transposed, B, precondition, tol, maxit, jacobi ? "jacobi" : "custom", on == "warn", r, ptol);
+  Eigen::MatrixXd X = run_block_cg(A.multiply_transposed, B, precondition, tol, maxit, jacobi ? "jacobi" : "custom",
+                                   on == "warn", r, ptol);
   r.solve_seconds = watch.elapsed();
   return X;
 }

@@ -567,11 +567,13 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
   for (std::size_t i = 0; i < vertex_order.size(); ++i) vertex_rank[std::size_t(vertex_order[i])] = int(i);
   std::vector<WalkFace> face(static_cast<std::size_t>(F));
   std::vector<V3> position(static_cast<std::size_t>(V));
-  for (Eigen::Index i = 0; i < V; ++i) position[std::size_t(i)] = positions_.row(vertex_order[std::size_t(i)]).transpose();
+  for (Eigen::Index i = 0; i < V; ++i)
+    position[std::size_t(i)] = positions_.row(vertex_order[std::size_t(i)]).transpose();
   std::vector<int> neighbour_start(static_cast<std::size_t>(F) + 1, 0), neighbour_faces(neighbour_faces_.size());
   for (Eigen::Index i = 0; i < F; ++i) {
     const auto f = std::size_t(face_order[std::size_t(i)]);
-    neighbour_start[std::size_t(i) + 1] = neighbour_start[std::size_t(i)] + neighbour_start_[f + 1] - neighbour_start_[f];
+    neighbour_start[std::size_t(i) + 1] =
+        neighbour_start[std::size_t(i)] + neighbour_start_[f + 1] - neighbour_start_[f];
   }
   tbb::parallel_for(Eigen::Index(0), F, [&](Eigen::Index i) {
     const int f = face_order[std::size_t(i)];

@@ -248,8 +248,8 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
     normwise = relative_residual(residual, rhs);
     if (accuracy > 0.0) bound = bound_of(residual);
     // The backward error only decides when the bound does not.
-    backward = accuracy > 0.0 && bound <= accuracy ? std::numeric_limits<double>::quiet_NaN()
-                                                   : backward_error(q, residual);
+    backward =
+        accuracy > 0.0 && bound <= accuracy ? std::numeric_limits<double>::quiet_NaN() : backward_error(q, residual);
   }
   cg.iterations = iterations;
   cg.residual = normwise;

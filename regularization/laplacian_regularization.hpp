@@ -60,9 +60,8 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
 Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
                                                      const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
                                                      const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
-                                                     double alpha, LinearSolver& solver,
-                                                     SolverReport* report = nullptr, double accuracy = 0.0,
-                                                     double* error_bound = nullptr);
+                                                     double alpha, LinearSolver& solver, SolverReport* report = nullptr,
+                                                     double accuracy = 0.0, double* error_bound = nullptr);
 
 /// The two terms of the energy above at positions q (for reports): the Laplacian term
 /// |M_l^{-1} L q + 2 H n|^2_{M_l} and the attachment term |q - p|^2_{M_l} (without alpha).

@@ -92,11 +92,12 @@ struct RegularizedSurface {
   /// "preconditioned-cg" (regularize_positions_preconditioned, the default with a direct backend)
   /// or "direct" (regularize_positions: with "cg", or when L is not negative semi-definite).
   std::string solve_scheme;
-  int solve_iterations = 0;                          ///< CG iterations of the preconditioned scheme
+  int solve_iterations = 0;  ///< CG iterations of the preconditioned scheme
   /// The preconditioned scheme's bound on the RMS error of the positions, in grid steps (0 for the
   /// direct scheme).
   double solve_error_bound = 0.0;
-  SolutionCheck check;                               ///< the result against the input (check_solution)
+  double solve_residual = 0.0;  ///< relative residual |b - A q| / |b| of the solve, max over the coordinates
+  SolutionCheck check;  ///< the result against the input (check_solution; no residual test at a proven accuracy)
   RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
   double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;
   double normal_angle_change_deg = 0.0;  ///< mean angle between n' and n (0 without principal edits)

@@ -15,7 +15,8 @@ struct SolutionCheck {
   double area_ratio = 1.0;    ///< area of the result / area of the input (surface_area)
   double extent_ratio = 1.0;  ///< smallest over the axes of the result's bounding-box side / the input's
   /// Relative residual of the solve, max over the coordinates of |b - A q| / |b|; none for a
-  /// result that is not one linear solve (the alignment descent).
+  /// result that is not one linear solve (the alignment descent) or whose solve proved its
+  /// accuracy by an error bound (regularize_positions_preconditioned with an accuracy).
   std::optional<double> residual;
   /// "area ratio A, extent ratio E, residual R", for messages and reports.
   std::string describe() const;

@@ -229,7 +229,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
     m["solve_accuracy"] = o.solve_accuracy;
     m["solve_error_bound"] = r.solve_error_bound;
   }
-  m["solve_residual"] = *r.check.residual;
+  m["solve_residual"] = r.solve_residual;
   m["area_ratio"] = r.check.area_ratio;
   m["extent_ratio"] = r.check.extent_ratio;
   m["time_s"] = stages;

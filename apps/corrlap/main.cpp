@@ -1,16 +1,15 @@
 // corrlap: command-line front end. Each subcommand lives in its own cmd_*.cpp file.
+#include <unistd.h>
+
 #include <algorithm>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/memory_budget.hpp>
 #include <corrlap/core/threads.hpp>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <new>
-
-#include <unistd.h>
-
-#include <cstdlib>
 
 #include "command.hpp"
 #include "deprecated.hpp"

@@ -393,7 +393,9 @@ TEST_CASE("block CG: the preconditioned stopping test stops each column at its f
   // The options key: refused when negative.
   SymmetricOperator op;
   op.rows = A.rows();
-  op.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) { Yt = (A * Xt.transpose()).transpose(); };
+  op.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
+    Yt = (A * Xt.transpose()).transpose();
+  };
   op.diagonal = A.diagonal();
   Config bad;
   bad.set("preconditioned_tolerance", "-1");
