@@ -641,7 +641,8 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
         const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
         if (w.cluster_seen[c] == w.generation) return w.cluster_inside[c] != 0;
         w.cluster_seen[c] = w.generation;
-        w.cluster_inside[c] = (clusters.centre[c] - x).norm() + clusters.radius[c] <= r;
+        const double inner = r - clusters.radius[c];
+        w.cluster_inside[c] = inner >= 0.0 && (clusters.centre[c] - x).squaredNorm() <= inner * inner;
         if (!w.cluster_inside[c]) return false;
         m0 += clusters.mu0[c];
         m1 += clusters.mu1[c];
@@ -653,19 +654,22 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
         const int f = w.queue[head];
         if (use_clusters && summed_with_cluster(f)) continue;
         const WalkFace& d = face[std::size_t(f)];
-        const double dc = (d.centroid - x).norm();
+        // Squared distances: the tests against r -+ rho need no root, and dmin, dmax are the roots
+        // of the least and largest squares (a root is monotonic: the same numbers as the norms).
+        const double dc2 = (d.centroid - x).squaredNorm();
+        const double inner = r - d.rho, outer = r + d.rho;
         double weight;
-        if (dc + d.rho <= r) {
+        if (inner >= 0.0 && dc2 <= inner * inner) {
           weight = 1.0;  // every corner within r: dmax <= r
-        } else if (dc - d.rho >= r) {
+        } else if (dc2 >= outer * outer) {
           continue;  // every corner at r or beyond: weight 0, the walk stops here
         } else {
-          double dmin = dc, dmax = dc;
+          double least = dc2, largest = dc2;
           for (const int k : d.corners) {
-            const double dk = (position[std::size_t(k)] - x).norm();
-            dmin = std::min(dmin, dk), dmax = std::max(dmax, dk);
+            const double dk2 = (position[std::size_t(k)] - x).squaredNorm();
+            least = std::min(least, dk2), largest = std::max(largest, dk2);
           }
-          weight = inclusion_ratio(dmin, dmax, r);
+          weight = inclusion_ratio(std::sqrt(least), std::sqrt(largest), r);
           if (weight <= 0.0) continue;
         }
         m0 += weight * d.mu0;
