@@ -183,18 +183,23 @@ def run_corrlap(cli, volume, name, flags, workdir):
 # indices to the truth's coordinates, x = origin + h * index.
 
 
-def voxelize_shape(shape, voxels, path):
+def voxelize_shape(shape, voxels, path, shift=(0.0, 0.0, 0.0)):
+    """The shape's voxels at N = `voxels` across; `shift` (in voxels, each within [-0.5, 0.5]) moves
+    the grid against the shape. With no shift the grid is centred on the shape's centre, so points
+    of the shapes' extremes fall on voxel centres (the sphere's poles, the torus's tube top), where
+    inside and outside are decided by a tie: a grid in general position is the paper's protocol
+    (docs/math.md §10.1)."""
     h = shape.grid_step(voxels)
     n = int(math.ceil(2.0 * shape.half_extent / h)) + 1 + 2 * PAD
-    origin = -(n - 1) / 2.0 * h
-    axis = origin + h * np.arange(n)
+    origin = np.array([-(n - 1) / 2.0 * h + s * h for s in shift])
+    axes = [origin[j] + h * np.arange(n) for j in range(3)]
     inside = np.zeros((n, n, n), dtype=np.uint8)
     for i in range(n):  # slab by slab: a 256-voxel shape would need GBs at once
-        yy, zz = np.meshgrid(axis, axis, indexing="ij")
-        pts = np.stack([np.full(yy.size, axis[i]), yy.ravel(), zz.ravel()], axis=1)
+        yy, zz = np.meshgrid(axes[1], axes[2], indexing="ij")
+        pts = np.stack([np.full(yy.size, axes[0][i]), yy.ravel(), zz.ravel()], axis=1)
         inside[i] = (shape.f(pts) <= 0.0).reshape(n, n)
     np.save(path, inside)
-    return h, np.array([origin] * 3)
+    return h, origin
 
 
 def voxelize_mesh(mesh_path, voxels, path):
@@ -370,7 +375,7 @@ def run_all(args):
                 workdir = os.path.join(args.out, "work", "%s_%d" % (shape_name, voxels))
                 os.makedirs(workdir, exist_ok=True)
                 volume = os.path.join(workdir, "volume.npy")
-                h, origin = voxelize_shape(shape, voxels, volume)
+                h, origin = voxelize_shape(shape, voxels, volume, args.shift)
                 print("%s, %d voxels across (h = %g)" % (shape_name, voxels, h), flush=True)
                 rows += bench_input(shape_name, voxels, volume, h, origin,
                                     lambda v, t, s=shape, hh=h: st.analytic_measures(s, v, t, hh), args, writer)
@@ -600,12 +605,17 @@ def main(argv=None):
                     help="closed triangle mesh voxelized as the model input (default: data/bunny/bunny.obj "
                          "when scripts/fetch_bunny.sh has fetched it; '' for none)")
     ap.add_argument("--corrlap", default=default_cli(), help="corrlap binary (default: build/bin/corrlap)")
+    ap.add_argument("--shift", nargs=3, type=float, default=[0.0, 0.0, 0.0], metavar=("SX", "SY", "SZ"),
+                    help="move the analytic shapes' grid by this much, in voxels (each within [-0.5, 0.5]); "
+                         "default 0: the grid centred on the shape, as in docs/comparison.md's tables")
     ap.add_argument("--report-only", action="store_true", help="redo summary.md and the plots from results.csv")
     args = ap.parse_args(argv)
     if args.quick:
         args.shapes, args.bunny = ["sphere1"], ""
     if args.resolutions is None:
         args.resolutions = [64] if args.quick else [64, 128, 256]
+    if not all(-0.5 <= x <= 0.5 for x in args.shift):
+        ap.error("--shift: each component must be within [-0.5, 0.5] voxels, got %s" % args.shift)
     if min(args.resolutions) < 8:
         ap.error("--resolutions: %d voxels across is too coarse for any of the tools (at least 8)"
                  % min(args.resolutions))
