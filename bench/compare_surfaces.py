@@ -45,7 +45,7 @@ CORRLAP_SETTINGS = [("defaults", []), ("polydec", ["--method", "polydec"]),
                     ("alignment", ["--baseline", "alignment"])]
 QUICK = {"vtk": [0.0, 0.5], "skimage": [0, 10], "corrlap": CORRLAP_SETTINGS[:2]}
 
-COLUMNS = ["tool", "setting", "input", "voxels", "h", "vertices", "triangles", "mean_dist", "max_dist",
+COLUMNS = ["tool", "setting", "input", "voxels", "shift", "h", "vertices", "triangles", "mean_dist", "max_dist",
            "mean_dist_vox", "max_dist_vox", "normal_angle_deg", "h_err_rel", "area_change",
            "volume_change", "wall_s", "core_s", "peak_mb", "staircase_max_vox", "status"]
 
@@ -187,8 +187,8 @@ def voxelize_shape(shape, voxels, path, shift=(0.0, 0.0, 0.0)):
     """The shape's voxels at N = `voxels` across; `shift` (in voxels, each within [-0.5, 0.5]) moves
     the grid against the shape. With no shift the grid is centred on the shape's centre, so points
     of the shapes' extremes fall on voxel centres (the sphere's poles, the torus's tube top), where
-    inside and outside are decided by a tie: a grid in general position is the paper's protocol
-    (docs/math.md §10.1)."""
+    inside and outside are decided by a tie. The studies draw the centre at random (docs/math.md
+    §10.1); so does the harness by default (--shifts)."""
     h = shape.grid_step(voxels)
     n = int(math.ceil(2.0 * shape.half_extent / h)) + 1 + 2 * PAD
     origin = np.array([-(n - 1) / 2.0 * h + s * h for s in shift])
@@ -311,13 +311,13 @@ def settings_for(quick):
     return VTK_FACTORS, TAUBIN_ITERATIONS, CORRLAP_SETTINGS
 
 
-def bench_input(name, voxels, volume, h, origin, measure, args, writer):
+def bench_input(name, voxels, shift, volume, h, origin, measure, args, writer):
     vtk_f, taubin, corr = settings_for(args.quick)
     workdir = os.path.dirname(volume)
     rows = []
 
     def record(tool, setting, mesh, info, staircase):
-        row = {"tool": tool, "setting": setting, "input": name, "voxels": voxels, "h": h,
+        row = {"tool": tool, "setting": setting, "input": name, "voxels": voxels, "shift": shift, "h": h,
                "staircase_max_vox": staircase, "status": "ok"}
         row.update(info)
         if mesh is not None:
@@ -362,31 +362,49 @@ def check_alignment(tool, staircase_max_vox):
                          "expected): its coordinates are not mapped to the truth's" % (tool, staircase_max_vox))
 
 
+def grid_shifts(args):
+    """The grid shifts of the analytic shapes, in voxels: the one given by --shift, none for
+    --shifts 0, else --shifts K draws in [-0.5, 0.5]^3 from --seed (the same draws on every run)."""
+    if args.shift is not None:
+        return [tuple(args.shift)]
+    if args.shifts == 0:
+        return [(0.0, 0.0, 0.0)]
+    rng = np.random.default_rng(args.seed)
+    return [tuple(float(x) for x in rng.uniform(-0.5, 0.5, 3)) for _ in range(args.shifts)]
+
+
+def shift_label(shift):
+    return " ".join("%.3f" % x for x in shift)
+
+
 def run_all(args):
     os.makedirs(args.out, exist_ok=True)
     csv_path = os.path.join(args.out, "results.csv")
     rows = []
+    shifts = grid_shifts(args)
     with open(csv_path, "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=COLUMNS)
         writer.writeheader()
         for voxels in args.resolutions:
             for shape_name in args.shapes:
                 shape = st.SHAPES[shape_name]
-                workdir = os.path.join(args.out, "work", "%s_%d" % (shape_name, voxels))
-                os.makedirs(workdir, exist_ok=True)
-                volume = os.path.join(workdir, "volume.npy")
-                h, origin = voxelize_shape(shape, voxels, volume, args.shift)
-                print("%s, %d voxels across (h = %g)" % (shape_name, voxels, h), flush=True)
-                rows += bench_input(shape_name, voxels, volume, h, origin,
-                                    lambda v, t, s=shape, hh=h: st.analytic_measures(s, v, t, hh), args, writer)
-                fh.flush()
+                for k, shift in enumerate(shifts):
+                    workdir = os.path.join(args.out, "work", "%s_%d_s%d" % (shape_name, voxels, k))
+                    os.makedirs(workdir, exist_ok=True)
+                    volume = os.path.join(workdir, "volume.npy")
+                    h, origin = voxelize_shape(shape, voxels, volume, shift)
+                    print("%s, %d voxels across (h = %g), grid shift %s voxels" % (shape_name, voxels, h,
+                                                                                   shift_label(shift)), flush=True)
+                    rows += bench_input(shape_name, voxels, shift_label(shift), volume, h, origin,
+                                        lambda v, t, s=shape, hh=h: st.analytic_measures(s, v, t, hh), args, writer)
+                    fh.flush()
             if args.bunny:
                 workdir = os.path.join(args.out, "work", "bunny_%d" % voxels)
                 os.makedirs(workdir, exist_ok=True)
                 volume = os.path.join(workdir, "volume.npy")
                 h, origin, sv, stri = voxelize_mesh(args.bunny, voxels, volume)
                 print("bunny, %d voxels across (h = %g)" % (voxels, h), flush=True)
-                rows += bench_input("bunny", voxels, volume, h, origin,
+                rows += bench_input("bunny", voxels, "", volume, h, origin,
                                     lambda v, t, hh=h: mesh_measures(sv, stri, v, t, hh), args, writer)
                 fh.flush()
     return rows
@@ -401,10 +419,34 @@ def load_rows(csv_path):
     with open(csv_path) as fh:
         for r in csv.DictReader(fh):
             for k in COLUMNS:
-                if k not in ("tool", "setting", "input", "status"):
+                if k not in ("tool", "setting", "input", "shift", "status"):
                     r[k] = float(r[k]) if r[k] not in ("", None) else float("nan")
             rows.append(r)
     return rows
+
+
+# Over the grid shifts of one (tool, setting, input, N): the largest of the maxima, the mean of the
+# rest; a run that failed at any shift makes the whole entry fail, named by its first failure.
+MAX_OVER_SHIFTS = ("max_dist", "max_dist_vox", "staircase_max_vox", "peak_mb")
+
+
+def averaged(rows):
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["tool"], r["setting"], r["input"], r["voxels"]), []).append(r)
+    out = []
+    for key, group in groups.items():
+        failed = [r for r in group if r["status"] != "ok"]
+        row = dict(failed[0] if failed else group[0])
+        row["shifts"] = len(group)
+        if not failed:
+            for k in COLUMNS:
+                if k in ("tool", "setting", "input", "voxels", "shift", "status"):
+                    continue
+                values = [r[k] for r in group]
+                row[k] = max(values) if k in MAX_OVER_SHIFTS else sum(values) / len(values)
+        out.append(row)
+    return out
 
 
 def best_of(rows, tool, inp, voxels):
@@ -605,16 +647,24 @@ def main(argv=None):
                     help="closed triangle mesh voxelized as the model input (default: data/bunny/bunny.obj "
                          "when scripts/fetch_bunny.sh has fetched it; '' for none)")
     ap.add_argument("--corrlap", default=default_cli(), help="corrlap binary (default: build/bin/corrlap)")
-    ap.add_argument("--shift", nargs=3, type=float, default=[0.0, 0.0, 0.0], metavar=("SX", "SY", "SZ"),
-                    help="move the analytic shapes' grid by this much, in voxels (each within [-0.5, 0.5]); "
-                         "default 0: the grid centred on the shape, as in docs/comparison.md's tables")
+    ap.add_argument("--shifts", type=int, default=3, metavar="K",
+                    help="voxelize each analytic shape K times, the grid moved by a random shift in "
+                         "[-0.5, 0.5]^3 voxels each time; the tables average over them (default 3; --quick: 1; "
+                         "0: the grid centred on the shape, whose extreme points then fall on voxel centres)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the --shifts draws (default 1)")
+    ap.add_argument("--shift", nargs=3, type=float, default=None, metavar=("SX", "SY", "SZ"),
+                    help="one given grid shift instead of --shifts, in voxels (each within [-0.5, 0.5])")
     ap.add_argument("--report-only", action="store_true", help="redo summary.md and the plots from results.csv")
     args = ap.parse_args(argv)
     if args.quick:
         args.shapes, args.bunny = ["sphere1"], ""
     if args.resolutions is None:
         args.resolutions = [64] if args.quick else [64, 128, 256]
-    if not all(-0.5 <= x <= 0.5 for x in args.shift):
+    if args.quick and "--shifts" not in argv:
+        args.shifts = 1
+    if args.shifts < 0:
+        ap.error("--shifts: the number of grid shifts must be 0 or more, got %d" % args.shifts)
+    if args.shift is not None and not all(-0.5 <= x <= 0.5 for x in args.shift):
         ap.error("--shift: each component must be within [-0.5, 0.5] voxels, got %s" % args.shift)
     if min(args.resolutions) < 8:
         ap.error("--resolutions: %d voxels across is too coarse for any of the tools (at least 8)"
@@ -627,7 +677,7 @@ def main(argv=None):
             ap.error("Python modules missing: %s (bash scripts/install_deps.sh --bench installs them)"
                      % ", ".join(missing))
         run_all(args)
-    rows = load_rows(os.path.join(args.out, "results.csv"))
+    rows = averaged(load_rows(os.path.join(args.out, "results.csv")))
     with open(os.path.join(args.out, "summary.md"), "w") as fh:
         fh.write(summary(rows))
     for p in plots(rows, args.out):

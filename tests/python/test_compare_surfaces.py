@@ -153,6 +153,46 @@ def test_measures_of_a_fine_sphere_mesh():
     assert -0.01 < m["area_change"] < 0 and -0.01 < m["volume_change"] < 0
 
 
+def _harness():
+    import compare_surfaces
+    compare_surfaces.st = st
+    return compare_surfaces
+
+
+def test_grid_shifts_are_seeded_draws_within_half_a_voxel():
+    cs = _harness()
+
+    def args(shifts, seed=1, shift=None):
+        return type("Args", (), {"shifts": shifts, "seed": seed, "shift": shift})()
+
+    three = cs.grid_shifts(args(3))
+    assert len(three) == 3 and len(set(three)) == 3
+    assert all(-0.5 <= x <= 0.5 for s in three for x in s)
+    assert cs.grid_shifts(args(3)) == three
+    assert cs.grid_shifts(args(3, seed=2)) != three
+    assert cs.grid_shifts(args(0)) == [(0.0, 0.0, 0.0)]
+    assert cs.grid_shifts(args(3, shift=[0.1, -0.2, 0.3])) == [(0.1, -0.2, 0.3)]
+
+
+def test_rows_are_averaged_over_the_shifts():
+    cs = _harness()
+    base = {k: 1.0 for k in cs.COLUMNS}
+    base.update(tool="vtk", setting="f=0.5", input="sphere1", voxels=64.0, status="ok")
+    a = dict(base, shift="0 0 0", mean_dist=1.0, max_dist=5.0, wall_s=2.0)
+    b = dict(base, shift="0.1 0 0", mean_dist=3.0, max_dist=4.0, wall_s=4.0)
+    other = dict(base, voxels=128.0, mean_dist=7.0)
+    failed = dict(base, tool="corrlap", setting="defaults", status="exit 1: radius")
+    fine = dict(base, tool="corrlap", setting="defaults")
+    out = {(r["tool"], r["voxels"]): r for r in cs.averaged([a, b, other, fine, failed])}
+    assert out[("vtk", 64.0)]["mean_dist"] == 2.0
+    assert out[("vtk", 64.0)]["max_dist"] == 5.0
+    assert out[("vtk", 64.0)]["wall_s"] == 3.0
+    assert out[("vtk", 64.0)]["shifts"] == 2
+    assert out[("vtk", 128.0)]["mean_dist"] == 7.0 and out[("vtk", 128.0)]["shifts"] == 1
+    # A failure at any shift fails the entry: a mean over the runs that worked would flatter it.
+    assert out[("corrlap", 64.0)]["status"] == "exit 1: radius"
+
+
 def _missing_bench_modules():
     return [m for m in ("vtk", "skimage", "open3d") if importlib.util.find_spec(m) is None]
 
@@ -174,10 +214,14 @@ def test_quick_run(tmp_path):
         ("vtk", "f=0"), ("vtk", "f=0.5"), ("skimage", "taubin=0"), ("skimage", "taubin=10"),
         ("corrlap", "defaults"), ("corrlap", "polydec")]
     assert all(r["status"] == "ok" for r in rows)
+    # The quick run voxelizes once, with the grid off the sphere's centre.
+    assert len(set(r["shift"] for r in rows)) == 1 and rows[0]["shift"] != "0.000 0.000 0.000"
     assert all(float(r["staircase_max_vox"]) < 1.0 for r in rows)
     by = {(r["tool"], r["setting"]): float(r["mean_dist_vox"]) for r in rows}
-    # Flying edges and marching cubes of the same binary volume are the same surface.
-    assert by[("vtk", "f=0")] == pytest.approx(by[("skimage", "taubin=0")], rel=1e-6)
+    # Flying edges and marching cubes of the same binary volume are the same surface up to the
+    # triangulation of ambiguous cells (3e-4 apart relatively at this size); a wrong axis order or
+    # a half-voxel offset between the tools would be more than 10 % apart.
+    assert by[("vtk", "f=0")] == pytest.approx(by[("skimage", "taubin=0")], rel=5e-3)
     # Every smoothing brings the staircase closer to the sphere.
     for key in [("vtk", "f=0.5"), ("skimage", "taubin=10"), ("corrlap", "defaults")]:
         assert by[key] < by[("vtk", "f=0")]
