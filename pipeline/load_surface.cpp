@@ -375,6 +375,17 @@ Eigen::MatrixX3d VoxelFrame::normals_to_physical(const Eigen::MatrixX3d& normals
 
 bool VoxelFrame::mirrors() const { return geometry_ && geometry_->direction.determinant() < 0.0; }
 
+Eigen::Matrix3d VoxelFrame::space_change_to(PhysicalSpace to) const {
+  if (to != space() && space() == PhysicalSpace::Unknown)
+    throw InputError(std::string("the input's physical space is unknown (") +
+                         (geometry_ ? "the volume file names none: NIfTI is RAS, MetaImage LPS, an NRRD names its "
+                                      "'space'; .vol, .raw, binvox, .vox, .npy and TIFF have none"
+                                    : "shapes, mesh files and arrays have no anatomical space") +
+                         ")",
+                     "space");
+  return space_change(space(), to);
+}
+
 std::vector<double> volume_labels(const VolumeData& volume) {
   std::set<double> labels;
   const std::size_t n = std::size_t(volume.size.x()) * std::size_t(volume.size.y()) * std::size_t(volume.size.z());

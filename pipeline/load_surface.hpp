@@ -107,6 +107,11 @@ class VoxelFrame {
   /// True when world -> physical reverses orientation (a direction matrix of determinant < 0):
   /// faces are then written in the other order, so that they keep facing outwards.
   bool mirrors() const;
+  /// The anatomical space of the physical coordinates (Unknown without geometry).
+  PhysicalSpace space() const { return geometry_ ? geometry_->space : PhysicalSpace::Unknown; }
+  /// The map from physical coordinates into the anatomical space `to` (space_change): the identity
+  /// for the frame's own space; InputError "space" saying why when the frame's space is unknown.
+  Eigen::Matrix3d space_change_to(PhysicalSpace to) const;
 
  private:
   double h_ = 1.0;

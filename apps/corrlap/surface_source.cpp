@@ -125,11 +125,10 @@ OutputUnits OutputUnits::parse(const std::string& name, const VoxelFrame& frame,
     throw InputError("--output-units '" + name + "': expected physical, world or voxels", "output_units");
   if (u.kind != Kind::World && !(u.frame.h() > 0.0))
     throw InputError("--output-units " + name + ": the surface has no grid step", "output_units");
-  const PhysicalSpace input = frame.geometry() ? frame.geometry()->space : PhysicalSpace::Unknown;
   std::string wanted = space;
   std::transform(wanted.begin(), wanted.end(), wanted.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   if (wanted == "file") {
-    u.space = input;
+    u.space = frame.space();
     return u;
   }
   if (wanted != "ras" && wanted != "lps")
@@ -138,15 +137,14 @@ OutputUnits OutputUnits::parse(const std::string& name, const VoxelFrame& frame,
     throw InputError("--output-space " + space + " applies to --output-units physical (" + name +
                          " coordinates have no anatomical space)",
                      "output_space");
-  if (input == PhysicalSpace::Unknown)
-    throw InputError("--output-space " + space + ": the input's physical space is unknown (" +
-                         (frame.geometry() ? "the volume file names none: NIfTI is RAS, MetaImage LPS, an NRRD names "
-                                             "its 'space'; .vol, .raw, binvox, .vox, .npy and TIFF have none"
-                                           : "shapes and mesh files have no anatomical space") +
-                         "); omit --output-space to write the input's own coordinates",
-                     "output_space");
   u.space = wanted == "ras" ? PhysicalSpace::RAS : PhysicalSpace::LPS;
-  u.flip = space_change(input, u.space);
+  try {
+    u.flip = frame.space_change_to(u.space);
+  } catch (const InputError& e) {
+    throw InputError("--output-space " + space + ": " + e.what() +
+                         "; omit --output-space to write the input's own coordinates",
+                     "output_space");
+  }
   return u;
 }
 

@@ -163,7 +163,8 @@ def write_volume(path, array, affine=None, space=None):
 
 
 def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0=10.0,
-                      curvature_radius=None, size=None, solver="cholmod", solver_options=None, **params):
+                      curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
+                      space=None, **params):
     """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
     from the voxels, docs/regularization.md), in physical coordinates.
 
@@ -174,10 +175,13 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
     affine     arrays only: 4 by 4 map from (i, j, k, 1) to physical coordinates (read_volume's,
                nibabel's img.affine); None: voxel indices. Anisotropic voxels are resampled to
                cubes of the finest spacing first (docs/io.md)
-    h, method, alpha0, curvature_radius, size, solver, solver_options, params:
+    h, method, alpha0, curvature_radius, size, solver, solver_options, solve_accuracy, params:
                as regularize, in the normalized units of the computation (the longest side spans 2);
                the default curvature_radius is at least {voxel_min_curvature_radius} voxels, as for
                `corrlap regularize --volume`
+    space      volume files only: None (the file's own physical space, as read_volume's affine), 'RAS'
+               or 'LPS' (x and y flipped from the file's space, as `--output-space`; ValueError for a
+               file that names no space, or with an array)
 
     Returns V (#V, 3) in physical coordinates and F (#F, 4) int64 quads facing outwards.
     """
@@ -188,7 +192,8 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
         volume, _real(label, "label"), _real(threshold, "threshold"),
         None if affine is None else _np.asarray(affine, dtype=_np.float64), _real(h, "h"), str(method), params,
         _real(alpha0, "alpha0", required=True), _real(curvature_radius, "curvature_radius"), _real(size, "size"),
-        str(solver), dict(solver_options or {}))
+        str(solver), dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"),
+        "" if space is None else str(space))
     _warn(warnings)
     return V, F
 
@@ -366,8 +371,8 @@ def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, p
 
 
 def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0=10.0,
-               curvature_radius=None, size=None, solver="cholmod", solver_options=None, return_curvature=False,
-               allow_nonmanifold=False, **params):
+               curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
+               return_curvature=False, allow_nonmanifold=False, **params):
     """Regularized positions of a closed digital surface (paper 4.1, docs/regularization.md): the
     positions P minimizing the distance to V plus the corrected Dirichlet energy, with
     Delta p = -2 H n from the corrected mean curvature H.
@@ -377,7 +382,9 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
     curvature_radius, size: as `corrlap regularize --mesh` (defaults {curvature_radius_fraction} size and half the
     bounding box).
-    solver, solver_options: the linear solver and its options.
+    solver, solver_options: the linear solver and its options. solve_accuracy: the iterative solve
+    stops when the RMS error of the positions is provably below this many grid steps h (None: the
+    library's {solve_accuracy}, as `--solve-accuracy`; 0: to rounding; docs/regularization.md).
     The surface must be closed and manifold (ValueError naming the counts otherwise). Surfaces from
     voxels (digitize_volume, digitize) always are: pointels where voxels touch along an edge or at a
     corner are split into one vertex per sheet (docs/math.md 1.4). A mesh from elsewhere is taken as
@@ -389,7 +396,7 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
                                       _real(alpha0, "alpha0", required=True),
                                       _real(curvature_radius, "curvature_radius"), _real(size, "size"), str(solver),
-                                      dict(solver_options or {}))
+                                      dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"))
     _warn(warnings)
     return (P, H) if return_curvature else P
 
@@ -452,7 +459,8 @@ def _document_defaults():
     """The library's default radii in the docstrings that name them."""
     values = {"{voxel_ii_radius}": _core.VOXEL_II_RADIUS,
               "{voxel_min_curvature_radius}": _core.VOXEL_MIN_CURVATURE_RADIUS,
-              "{curvature_radius_fraction}": _core.CURVATURE_RADIUS_FRACTION}
+              "{curvature_radius_fraction}": _core.CURVATURE_RADIUS_FRACTION,
+              "{solve_accuracy}": _core.SOLVE_ACCURACY}
     for function in (ii_normals, curvature, regularize, regularize_volume):
         for name, value in values.items():
             function.__doc__ = function.__doc__.replace(name, f"{value:g}")

@@ -31,6 +31,7 @@ VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double thresh
 /// unset curvature_radius and size keep the library's defaults.
 RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params, double alpha0,
                                                  std::optional<double> curvature_radius, std::optional<double> size,
-                                                 const std::string& solver, const py::dict& solver_options);
+                                                 const std::string& solver, const py::dict& solver_options,
+                                                 std::optional<double> solve_accuracy);
 
 }  // namespace corrlap::python

@@ -190,8 +190,9 @@ void bind_surface(py::module_& m) {
       [](py::handle volume, std::optional<double> label, std::optional<double> threshold, py::handle affine,
          std::optional<double> h, const std::string& method, const py::dict& params, double alpha0,
          std::optional<double> curvature_radius, std::optional<double> size, const std::string& solver,
-         const py::dict& solver_options) {
+         const py::dict& solver_options, std::optional<double> solve_accuracy, const std::string& space) {
         const InsideRule inside = inside_arg(label, threshold);
+        const PhysicalSpace wanted = space_arg(space, "space");
         py::array values;
         SurfaceInput input;
         if (py::isinstance<py::str>(volume)) {
@@ -203,12 +204,16 @@ void bind_surface(py::module_& m) {
           in.h = h;
           input = in;
         } else {
+          if (wanted != PhysicalSpace::Unknown)
+            throw py::value_error("space='" + space +
+                                  "': an array's affine names no anatomical space; give the affine in the space "
+                                  "wanted (space converts a volume file's own)");
           VolumeArrayInput in = array_input(volume, h, inside, values);
           if (!affine.is_none()) in.geometry = geometry_arg(affine);
           input = in;
         }
-        const RegularizationOptions o =
-            regularization_options_arg(method, params, alpha0, curvature_radius, size, solver, solver_options);
+        const RegularizationOptions o = regularization_options_arg(method, params, alpha0, curvature_radius, size,
+                                                                   solver, solver_options, solve_accuracy);
         std::vector<std::string> warnings;
         SurfelMesh out;
         {
@@ -216,6 +221,16 @@ void bind_surface(py::module_& m) {
           check_regularization_options(o);
           // As `corrlap regularize --volume`: II normals from the voxels, outputs in physical coordinates.
           const LoadedSurface surface = load_surface(input);
+          // Before the computation: a space the file does not name is refused at once.
+          Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
+          if (wanted != PhysicalSpace::Unknown) {
+            try {
+              flip = surface.frame.space_change_to(wanted);
+            } catch (const InputError& e) {
+              throw InputError("space='" + space + "': " + e.what() + "; omit space to get the file's own coordinates",
+                               "space");
+            }
+          }
           check_regularizable(surface.mesh);
           check_regularization_options(surface.mesh, o);
           const NormalFields normals =
@@ -224,6 +239,7 @@ void bind_surface(py::module_& m) {
           warnings = r.warnings;
           out = r.mesh;
           out.positions = surface.frame.to_physical(r.mesh.positions);
+          out.positions = out.positions * flip.transpose();
           if (surface.frame.mirrors()) out.faces = out.faces.rowwise().reverse().eval();
         }
         py::list w;
@@ -232,7 +248,7 @@ void bind_surface(py::module_& m) {
       },
       py::arg("volume"), py::arg("label"), py::arg("threshold"), py::arg("affine"), py::arg("h"), py::arg("method"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("size"), py::arg("solver"),
-      py::arg("solver_options"));
+      py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"));
   m.def(
       "read_mesh",
       [](const std::string& path) {

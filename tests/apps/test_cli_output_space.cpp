@@ -126,7 +126,7 @@ TEST_CASE("Output spaces need physical units and an input whose space is known")
   CHECK(err.find("--output-space ras: the input's physical space is unknown") != std::string::npos);
   CHECK(err.find("omit --output-space") != std::string::npos);
   CHECK(run_cli("digitize --shape sphere1 --h 0.5 --output-space lps --out " + out, nullptr, &err) == 1);
-  CHECK(err.find("shapes and mesh files have no anatomical space") != std::string::npos);
+  CHECK(err.find("shapes, mesh files and arrays have no anatomical space") != std::string::npos);
   write_volume_data(scratch("seg.nrrd"), ball_segmentation());
   CHECK(run_cli("digitize --volume " + scratch("seg.nrrd") + " --output-units world --output-space ras --out " + out,
                 nullptr, &err) == 1);

@@ -172,3 +172,45 @@ def test_cli_and_python_keep_the_papers_curvature_radius_on_a_shape(tmp_path):
     run_cli("curvature", *shape, "--normals", "true", "--out", tmp_path / "k")
     H = corrlap.curvature(V, F, face_normals=fn)[0]
     np.testing.assert_array_equal(H, np.loadtxt(tmp_path / "k" / "H_vertices.txt"))
+
+
+def test_regularize_volume_in_another_anatomical_space(tmp_path):
+    values, affine = ellipsoid((1.0, 1.0, 2.5))
+    path = tmp_path / "e.nii"
+    corrlap.write_volume(path, values.astype(np.uint8), affine, space="RAS")
+    own, F = corrlap.regularize_volume(path, h=1.0)
+    lps, G = corrlap.regularize_volume(path, h=1.0, space="LPS")
+    # LPS flips x and y of RAS; the faces are the same (a rotation keeps them facing outwards).
+    np.testing.assert_allclose(lps, own * [-1.0, -1.0, 1.0], atol=1e-12)
+    assert (F == G).all()
+    ras, _ = corrlap.regularize_volume(path, h=1.0, space="ras")
+    np.testing.assert_allclose(ras, own, atol=1e-12)
+    corrlap.write_volume(tmp_path / "u.nrrd", values.astype(np.uint8), affine)
+    with pytest.raises(ValueError, match="space='LPS': the input's physical space is unknown"):
+        corrlap.regularize_volume(tmp_path / "u.nrrd", space="LPS")
+    with pytest.raises(ValueError, match="an array's affine names no anatomical space"):
+        corrlap.regularize_volume(values, affine=affine, space="RAS")
+    with pytest.raises(ValueError, match="expected 'RAS', 'LPS', 'LAS' or None"):
+        corrlap.regularize_volume(path, space="up")
+
+
+def test_regularize_volume_solve_accuracy():
+    values, affine = ellipsoid((1.0, 1.0, 1.0))
+    default, _ = corrlap.regularize_volume(values, h=1.0)
+    exact, _ = corrlap.regularize_volume(values, h=1.0, solve_accuracy=0)
+    coarse, _ = corrlap.regularize_volume(values, h=1.0, solve_accuracy=0.05)
+    # The RMS error is within the accuracy asked, in voxels (h = 1: world units are voxels here).
+    assert np.sqrt(((default - exact) ** 2).sum(axis=1).mean()) <= 1e-3 * np.sqrt(3)
+    coarse_error = np.sqrt(((coarse - exact) ** 2).sum(axis=1).mean())
+    assert coarse_error <= 0.05 * np.sqrt(3)
+    # The keyword is taken: a coarser accuracy stops earlier (1e-2 voxels here, 2e-4 by default).
+    assert coarse_error > 10 * np.sqrt(((default - exact) ** 2).sum(axis=1).mean())
+    with pytest.raises(ValueError, match="solve accuracy"):
+        corrlap.regularize_volume(values, h=1.0, solve_accuracy=-1)
+    V, F = corrlap.digitize_volume(values, h=1.0)
+    N = np.cross(V[F[:, 2]] - V[F[:, 0]], V[F[:, 3]] - V[F[:, 1]])
+    N /= np.linalg.norm(N, axis=1)[:, None]
+    P = corrlap.regularize(V, F, face_normals=N, solve_accuracy=0)
+    assert np.isfinite(P).all()
+    with pytest.raises(ValueError, match="solve accuracy"):
+        corrlap.regularize(V, F, face_normals=N, solve_accuracy=float("nan"))
