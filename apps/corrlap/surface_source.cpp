@@ -141,9 +141,9 @@ OutputUnits OutputUnits::parse(const std::string& name, const VoxelFrame& frame,
   try {
     u.flip = frame.space_change_to(u.space);
   } catch (const InputError& e) {
-    throw InputError("--output-space " + space + ": " + e.what() +
-                         "; omit --output-space to write the input's own coordinates",
-                     "output_space");
+    throw InputError(
+        "--output-space " + space + ": " + e.what() + "; omit --output-space to write the input's own coordinates",
+        "output_space");
   }
   return u;
 }

@@ -42,9 +42,8 @@ void bind_regularization(py::module_& m) {
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)
           throw py::value_error("face_normals, vertex_normals: give one of them");
-        const RegularizationOptions o =
-            regularization_options_arg(method, params, alpha0, curvature_radius, size, solver, solver_options,
-                                       solve_accuracy);
+        const RegularizationOptions o = regularization_options_arg(method, params, alpha0, curvature_radius, size,
+                                                                   solver, solver_options, solve_accuracy);
         const RegularizedSurface r = [&] {
           py::gil_scoped_release release;
           // As `corrlap regularize`: the same surface policy, and vertex normals the normalized sum of
