@@ -34,6 +34,10 @@ Eigen::MatrixX3d given_normals(const std::string& path, const Eigen::MatrixX3d& 
   return n;
 }
 
+}  // namespace
+
+namespace detail {
+
 // A vertex whose II face normals cancel out has no normal. When the II ball reaches across the part
 // the vertex lies on (a radius of at least half its thinnest side), it sees the whole part, whose
 // covariance has no preferred direction: the message names the radius in voxels and the part's size
@@ -81,7 +85,7 @@ void check_ii_vertex_normals(const SurfelMesh& mesh, const Eigen::MatrixX3d& ver
   throw InputError(os.str(), "normals");
 }
 
-}  // namespace
+}  // namespace detail
 
 NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const NormalRequest& request,
                              const ImplicitShape* shape, const VoxelGrid* grid, const std::string& what) {
@@ -115,7 +119,7 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
   // docs/math.md §1.5: vertex normals = normalized sum of the incident face normals (one definition).
   if (need_vertex && !n.has_vertex() && n.has_face()) {
     n.vertex = vertex_normals_from_face_normals(n.face, mesh.faces, mesh.num_vertices());
-    if (ii_estimated) check_ii_vertex_normals(mesh, n.vertex, ii);
+    if (ii_estimated) detail::check_ii_vertex_normals(mesh, n.vertex, ii);
   }
   if (need == NormalKind::Face && !n.has_face())
     throw InputError(what + " needs face normals: give face_normals or a normals source (true, ii, trivial)" +

@@ -58,4 +58,11 @@ Eigen::MatrixX3d true_vertex_normals_from_faces(const ImplicitShape& shape, cons
 /// source Exact gives at vertices, not what "true" gives.
 Eigen::MatrixX3d exact_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh);
 
+namespace detail {
+/// resolve_normals' check of II vertex normals (the normalized sums of the faces'): returns when
+/// none is zero, else throws InputError, parameter "ii_radius" when the radius reaches across the
+/// part of the first zero normal (half its thinnest side or more), "normals" otherwise.
+void check_ii_vertex_normals(const SurfelMesh& mesh, const Eigen::MatrixX3d& vertex_normals, const IIParams& ii);
+}  // namespace detail
+
 }  // namespace corrlap

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
+#include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/io/text_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
@@ -264,4 +265,39 @@ TEST_CASE("ii normals on a checkerboard are those of each block alone") {
                            << " degrees");
   CHECK(matched == 600);  // the block's 6 x 10 x 10 surfels
   CHECK(max_difference == 0.0);
+}
+
+TEST_CASE("a zero II vertex normal: the radius is named when it reaches across the part, not otherwise") {
+  // A box of 10 x 6 x 20 voxels: 6 across at its thinnest, so radii from 3 voxels reach across it.
+  const VoxelGrid grid =
+      voxels({14, 10, 24}, [](int x, int y, int z) { return x >= 2 && x < 12 && y >= 2 && y < 8 && z >= 2 && z < 22; });
+  const SurfelMesh mesh = extract_surface(grid);
+  Eigen::MatrixX3d normals = Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);
+  normals.col(0).setOnes();
+  IIParams small;  // alpha = 1: k is the radius in voxels
+  small.alpha = 1.0;
+  small.k = 2.0;
+  IIParams wide = small;
+  wide.k = 3.0;
+  CHECK_NOTHROW(detail::check_ii_vertex_normals(mesh, normals, small));
+  normals.row(5).setZero();
+  normals.row(9).setZero();
+  const auto error_of = [&](const IIParams& ii) -> std::pair<std::string, std::string> {
+    try {
+      detail::check_ii_vertex_normals(mesh, normals, ii);
+    } catch (const InputError& e) {
+      return {e.parameter(), e.what()};
+    }
+    return {"(no error)", ""};
+  };
+  const auto below = error_of(small);
+  CHECK(below.first == "normals");
+  CHECK(below.second.find("normal of vertex 5 (and of 1 other vertices) is the zero vector") != std::string::npos);
+  CHECK(below.second.find("less than half the part it lies on (10 x 6 x 20 voxels)") != std::string::npos);
+  CHECK(below.second.find("the radius is not what makes them cancel") != std::string::npos);
+  const auto across = error_of(wide);
+  CHECK(across.first == "ii_radius");
+  CHECK(across.second.find("exceeds the part it lies on (10 x 6 x 20 voxels, 6 across at its thinnest)") !=
+        std::string::npos);
+  CHECK(across.second.find("a radius below 3 voxels") != std::string::npos);
 }
