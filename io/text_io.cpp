@@ -158,10 +158,15 @@ void write_normals(const std::string& path, const Eigen::MatrixX3d& n) {
 
 Eigen::VectorXd read_scalars(const std::string& path) { return read_rows<Eigen::VectorXd>(path, 1, "scalars"); }
 
-void write_scalars(const std::string& path, const Eigen::VectorXd& values) {
+void write_scalars(const std::string& path, const Eigen::VectorXd& values, const std::vector<std::string>& comments) {
   for (Eigen::Index i = 0; i < values.size(); ++i)
     io_detail::require_finite(values[i], path, "scalars", "row", (long long)i + 1);
   io_detail::TextWriter out(path, "scalars");
+  for (const std::string& c : comments) {
+    out.write("# ");
+    for (const char ch : c) out.write(ch == '\n' || ch == '\r' ? ' ' : ch);  // one line each
+    out.write('\n');
+  }
   for (Eigen::Index i = 0; i < values.size(); ++i) {
     out.write_double(values[i]);
     out.write('\n');

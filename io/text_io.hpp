@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <string>
+#include <vector>
 
 namespace corrlap {
 
@@ -14,7 +15,10 @@ void write_normals(const std::string& path, const Eigen::MatrixX3d& normals);
 
 /// One value per line (same rules as read_normals).
 Eigen::VectorXd read_scalars(const std::string& path);
-void write_scalars(const std::string& path, const Eigen::VectorXd& values);
+/// One value per line with 17 significant digits, after one "# " line per comment (what the values
+/// are, their units: read_scalars, numpy.loadtxt and most readers skip them).
+void write_scalars(const std::string& path, const Eigen::VectorXd& values,
+                   const std::vector<std::string>& comments = {});
 
 /// "%%MatrixMarket matrix coordinate real general", 1-based, every stored entry, %.17g.
 void write_matrix_market(const std::string& path, const Eigen::SparseMatrix<double>& A);

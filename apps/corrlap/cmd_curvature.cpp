@@ -39,11 +39,13 @@ CurvatureEstimates in_units(CurvatureEstimates e, const OutputUnits& units) {
   return e;
 }
 
-void write_set(const std::string& dir, const std::string& suffix, const CurvatureEstimates& e) {
-  write_scalars(dir + "/H_" + suffix + ".txt", e.H);
-  write_scalars(dir + "/G_" + suffix + ".txt", e.G);
-  write_scalars(dir + "/k1_" + suffix + ".txt", e.k1);
-  write_scalars(dir + "/k2_" + suffix + ".txt", e.k2);
+void write_set(const std::string& dir, const std::string& suffix, const CurvatureEstimates& e,
+               const OutputUnits& units) {
+  const std::string at = " at " + suffix;
+  write_scalars(dir + "/H_" + suffix + ".txt", e.H, units.scalar_comments("H: mean curvature" + at, 1));
+  write_scalars(dir + "/G_" + suffix + ".txt", e.G, units.scalar_comments("G: Gaussian curvature" + at, 2));
+  write_scalars(dir + "/k1_" + suffix + ".txt", e.k1, units.scalar_comments("k1: least principal curvature" + at, 1));
+  write_scalars(dir + "/k2_" + suffix + ".txt", e.k2, units.scalar_comments("k2: largest principal curvature" + at, 1));
   write_normals(dir + "/d1_" + suffix + ".txt", e.d1);
   write_normals(dir + "/d2_" + suffix + ".txt", e.d2);
 }
@@ -75,8 +77,8 @@ void run(const CurvatureArgs& a) {
   const OutputUnits units = a.output.parse(surface);
   const CurvatureEstimates ef = in_units(cc.at_faces(radius), units);
   const CurvatureEstimates ev = in_units(cc.at_vertices(radius), units);
-  write_set(out.path(), "faces", ef);
-  write_set(out.path(), "vertices", ev);
+  write_set(out.path(), "faces", ef, units);
+  write_set(out.path(), "vertices", ev, units);
   MeshAttributes attr;
   attr.face_scalars = {{"H", ef.H}, {"G", ef.G}, {"k1", ef.k1}, {"k2", ef.k2}};
   attr.vertex_scalars = {{"H", ev.H}, {"G", ev.G}, {"k1", ev.k1}, {"k2", ev.k2}};

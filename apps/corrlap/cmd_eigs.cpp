@@ -51,7 +51,7 @@ void run(const EigsArgs& a) {
   if (a.out.empty()) {
     for (Eigen::Index i = 0; i < values.size(); ++i) std::printf("%.17g\n", values[i]);
   } else {
-    write_scalars(out->path(), values);
+    write_scalars(out->path(), values, units.scalar_comments("eigenvalues mu of -L u = mu M u, ascending", 2));
     out->commit();
   }
   // A value -lambda < 0 means L u = lambda M u with lambda > 0: L is not negative semi-definite

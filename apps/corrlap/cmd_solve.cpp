@@ -119,7 +119,10 @@ void run(const SolveArgs& a) {
   const SolverReport report = solver->info();
   if (out) {
     // heat: X is a Laplacian, in 1 / length^2 of the output units; poisson: g is a potential.
-    write_scalars(out->path(), a.system == "heat" ? units.inverse_areas(g) : g);
+    if (a.system == "heat")
+      write_scalars(out->path(), units.inverse_areas(g), units.scalar_comments("X: the heat step's Laplacian", 2));
+    else
+      write_scalars(out->path(), g);
     out->commit();
   }
 

@@ -160,6 +160,13 @@ const char* OutputUnits::name() const {
   return "physical";
 }
 
+std::vector<std::string> OutputUnits::scalar_comments(const std::string& what, int power) const {
+  std::string line =
+      what + " in 1/length" + (power == 1 ? std::string() : "^" + std::to_string(power)) + " of " + name() + " units";
+  if (kind == Kind::Physical && space != PhysicalSpace::Unknown) line += " (SPACE=" + corrlap::space_name(space) + ")";
+  return {line};
+}
+
 std::string OutputUnits::space_name() const { return kind == Kind::Physical ? corrlap::space_name(space) : ""; }
 
 std::vector<std::string> OutputUnits::comments() const {

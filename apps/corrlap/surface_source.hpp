@@ -55,6 +55,10 @@ struct OutputUnits {
   /// The header comments of a mesh file that name its space ("SPACE=LPS", which 3D Slicer reads from
   /// OBJ and PLY files); none when the space is unknown.
   std::vector<std::string> comments() const;
+  /// The header comment of a scalar file: what its values are and their units, e.g. "H: mean
+  /// curvature in 1/length of physical units (SPACE=LPS)"; `power`: the values scale as
+  /// length^-power (1 for curvatures, 2 for Gaussian curvatures and Laplacians).
+  std::vector<std::string> scalar_comments(const std::string& what, int power) const;
   /// Positions (and h) in these units; faces reversed where the map mirrors, to keep facing outwards.
   SurfelMesh mesh(const SurfelMesh& m) const;
   /// One world length in these units.

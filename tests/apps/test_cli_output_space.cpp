@@ -155,6 +155,11 @@ TEST_CASE("curvature, normals, solve and eigs follow --output-units: lengths in 
                           p = read_scalars(cp + "/" + name + "_faces.txt");
     CHECK(max_difference(p, v / std::pow(mm, power)) < 1e-9 * v.cwiseAbs().maxCoeff() / std::pow(mm, power));
   }
+  // Each file says what it holds and in which units.
+  CHECK(read_text(cp + "/H_faces.txt")
+            .rfind("# H: mean curvature at faces in 1/length of physical units (SPACE=LPS)\n", 0) == 0);
+  CHECK(read_text(cv + "/G_vertices.txt")
+            .rfind("# G: Gaussian curvature at vertices in 1/length^2 of voxels units\n", 0) == 0);
   const double mean_h = read_scalars(cp + "/H_faces.txt").mean();
   CHECK(std::abs(mean_h) == doctest::Approx(1.0 / (4.5 * mm)).epsilon(0.25));
   CHECK(read_text(cp + "/curvature.ply").find("comment SPACE=LPS") != std::string::npos);
@@ -178,6 +183,7 @@ TEST_CASE("curvature, normals, solve and eigs follow --output-units: lengths in 
   REQUIRE(run_cli(solve + xv + " --output-units voxels", nullptr, &err) == 0);
   REQUIRE(run_cli(solve + xp, nullptr, &err) == 0);
   const Eigen::VectorXd x_vox = read_scalars(xv), x_mm = read_scalars(xp);
+  CHECK(read_text(xp).rfind("# X: the heat step's Laplacian in 1/length^2 of physical units (SPACE=LPS)\n", 0) == 0);
   CHECK(max_difference(x_mm, x_vox / (mm * mm)) < 1e-9 * x_vox.cwiseAbs().maxCoeff() / (mm * mm));
   std::string json;
   REQUIRE(run_cli(solve + xp + " --json", &json, &err) == 0);
@@ -209,6 +215,12 @@ TEST_CASE("curvature, normals, solve and eigs follow --output-units: lengths in 
     CHECK(ew[i] == doctest::Approx(ev[i] / (h * h)).epsilon(1e-9));
   }
   CHECK(run_cli(eigs + " --output-space ras", nullptr, &err) != 0);  // no positions, no space flag
+  const std::string ef = scratch("eigs_mm.txt");
+  REQUIRE(run_cli(eigs + " --out " + ef, nullptr, &err) == 0);
+  CHECK(read_text(ef).rfind("# eigenvalues mu of -L u = mu M u, ascending in 1/length^2 of physical units", 0) == 0);
+  const Eigen::VectorXd written = read_scalars(ef);
+  REQUIRE(written.size() == 6);
+  for (Eigen::Index i = 1; i < 6; ++i) CHECK(written[i] == doctest::Approx(ep[std::size_t(i)]).epsilon(1e-12));
 }
 
 #endif

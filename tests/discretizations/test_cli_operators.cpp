@@ -107,9 +107,8 @@ TEST_CASE("corrlap eigs reproduces the h=0.1 eigenvalues of docs/math.md §12.3"
   const std::string out = tmp_path("eigs_fem.txt");
   REQUIRE(run_cli_tagged(
               "t4", "eigs --method fem --shape sphere1 --h 0.1 --bbox -2 2 --normals true -k 16 --out " + out) == 0);
-  std::istringstream in(read_text(out));
-  std::vector<double> mu;
-  for (double v; in >> v;) mu.push_back(v);
+  const Eigen::VectorXd values = read_scalars(out);  // after its "# ..." line of units
+  const std::vector<double> mu(values.data(), values.data() + values.size());
   REQUIRE(mu.size() == 16);
   CHECK(std::abs(mu[0]) <= 1e-9);
   const double expected[15] = {2.0177,  2.0177,  2.0177,  6.04467, 6.04467, 6.04467, 6.09828, 6.09828,
