@@ -149,8 +149,10 @@ void parse_descr(const std::string& path, const std::string& descr, VolumeHeader
   const std::string supported =
       " (supported: bool, int8 ... int64, uint8 ... uint64, float32, float64, either byte order; convert with "
       "array.astype(...))";
+  // descr may be anything the file says, even empty or one character: read it through `code`.
   const char order = descr.empty() ? '\0' : descr[0];
-  const auto it = types.find(descr.size() > 1 ? descr.substr(1) : std::string());
+  const std::string code = descr.size() > 1 ? descr.substr(1) : std::string();
+  const auto it = types.find(code);
   if ((order != '<' && order != '>' && order != '|') || it == types.end()) {
     const char kind = descr.size() > 1 ? descr[1] : '\0';
     std::string what = "unsupported dtype '" + descr.substr(0, 40) + "'";
@@ -158,7 +160,7 @@ void parse_descr(const std::string& path, const std::string& descr, VolumeHeader
     if (kind == 'O') what = "object dtype '" + descr + "' is not supported (a numpy array of Python objects)";
     if (kind == 'U' || kind == 'S' || kind == 'a') what = "string dtype '" + descr.substr(0, 40) + "' is not supported";
     if (kind == 'V') what = "void (structured) dtype '" + descr.substr(0, 40) + "' is not supported";
-    if (descr.substr(1) == "f2") what = "float16 dtype '" + descr + "' is not supported";
+    if (code == "f2") what = "float16 dtype '" + descr + "' is not supported";
     if (kind == 'M' || kind == 'm') what = "datetime dtype '" + descr.substr(0, 40) + "' is not supported";
     fail(path, what + supported, "dtype");
   }

@@ -361,6 +361,9 @@ TEST_CASE("bad npy files are named errors: magic, truncation, absurd shapes, dty
   check(npy("{'descr': '<U3', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "string dtype '<U3'");
   check(npy("{'descr': '<M8[s]', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "datetime dtype");
   check(npy("{'descr': '|i2', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "has no byte order");
+  // A descr of zero or one character (found by the fuzzer: it used to throw std::out_of_range).
+  check(npy("{'descr': '', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "unsupported dtype ''");
+  check(npy("{'descr': '<', 'fortran_order': False, 'shape': (2, 2, 2), }", eight), "unsupported dtype '<'");
   check(npy("{'descr': '<u1', 'fortran_order': 0, 'shape': (2, 2, 2), }", eight),
         "'fortran_order' is not True or False");
   check(npy("{'descr': '<u1', 'fortran_order': False, 'shape': (2, 2, 2), 'x': 1}", eight), "unexpected key 'x'");
