@@ -377,6 +377,18 @@ def shift_label(shift):
     return " ".join("%.3f" % x for x in shift)
 
 
+def prepare_input(name, voxels, shift, volume, bunny):
+    """Voxelizes input `name` (an analytic shape moved by `shift`, or "bunny": the mesh `bunny`)
+    into `volume`. Returns h, the origin of voxel (0, 0, 0) and the measure of a mesh (V, T)
+    against that input's truth."""
+    if name == "bunny":
+        h, origin, sv, stri = voxelize_mesh(bunny, voxels, volume)
+        return h, origin, lambda v, t: mesh_measures(sv, stri, v, t, h)
+    shape = st.SHAPES[name]
+    h, origin = voxelize_shape(shape, voxels, volume, shift)
+    return h, origin, lambda v, t: st.analytic_measures(shape, v, t, h)
+
+
 def run_all(args):
     os.makedirs(args.out, exist_ok=True)
     csv_path = os.path.join(args.out, "results.csv")
@@ -387,25 +399,23 @@ def run_all(args):
         writer.writeheader()
         for voxels in args.resolutions:
             for shape_name in args.shapes:
-                shape = st.SHAPES[shape_name]
                 for k, shift in enumerate(shifts):
                     workdir = os.path.join(args.out, "work", "%s_%d_s%d" % (shape_name, voxels, k))
                     os.makedirs(workdir, exist_ok=True)
                     volume = os.path.join(workdir, "volume.npy")
-                    h, origin = voxelize_shape(shape, voxels, volume, shift)
+                    h, origin, measure = prepare_input(shape_name, voxels, shift, volume, None)
                     print("%s, %d voxels across (h = %g), grid shift %s voxels" % (shape_name, voxels, h,
                                                                                    shift_label(shift)), flush=True)
-                    rows += bench_input(shape_name, voxels, shift_label(shift), volume, h, origin,
-                                        lambda v, t, s=shape, hh=h: st.analytic_measures(s, v, t, hh), args, writer)
+                    rows += bench_input(shape_name, voxels, shift_label(shift), volume, h, origin, measure, args,
+                                        writer)
                     fh.flush()
             if args.bunny:
                 workdir = os.path.join(args.out, "work", "bunny_%d" % voxels)
                 os.makedirs(workdir, exist_ok=True)
                 volume = os.path.join(workdir, "volume.npy")
-                h, origin, sv, stri = voxelize_mesh(args.bunny, voxels, volume)
+                h, origin, measure = prepare_input("bunny", voxels, None, volume, args.bunny)
                 print("bunny, %d voxels across (h = %g)" % (voxels, h), flush=True)
-                rows += bench_input("bunny", voxels, "", volume, h, origin,
-                                    lambda v, t, hh=h: mesh_measures(sv, stri, v, t, hh), args, writer)
+                rows += bench_input("bunny", voxels, "", volume, h, origin, measure, args, writer)
                 fh.flush()
     return rows
 
@@ -647,7 +657,7 @@ def main(argv=None):
                     help="closed triangle mesh voxelized as the model input (default: data/bunny/bunny.obj "
                          "when scripts/fetch_bunny.sh has fetched it; '' for none)")
     ap.add_argument("--corrlap", default=default_cli(), help="corrlap binary (default: build/bin/corrlap)")
-    ap.add_argument("--shifts", type=int, default=3, metavar="K",
+    ap.add_argument("--shifts", type=int, default=None, metavar="K",
                     help="voxelize each analytic shape K times, the grid moved by a random shift in "
                          "[-0.5, 0.5]^3 voxels each time; the tables average over them (default 3; --quick: 1; "
                          "0: the grid centred on the shape, whose extreme points then fall on voxel centres)")
@@ -660,8 +670,8 @@ def main(argv=None):
         args.shapes, args.bunny = ["sphere1"], ""
     if args.resolutions is None:
         args.resolutions = [64] if args.quick else [64, 128, 256]
-    if args.quick and "--shifts" not in argv:
-        args.shifts = 1
+    if args.shifts is None:
+        args.shifts = 1 if args.quick else 3
     if args.shifts < 0:
         ap.error("--shifts: the number of grid shifts must be 0 or more, got %d" % args.shifts)
     if args.shift is not None and not all(-0.5 <= x <= 0.5 for x in args.shift):

@@ -48,13 +48,7 @@ def main():
         work = os.path.join(args.work, "%s_%d_s%d" % (name, args.resolution, k))
         os.makedirs(work, exist_ok=True)
         volume = os.path.join(work, "volume.npy")
-        if name == "bunny":
-            h, origin, sv, stri = cs.voxelize_mesh(args.bunny, args.resolution, volume)
-            measure = lambda v, t, hh=h: cs.mesh_measures(sv, stri, v, t, hh)  # noqa: E731
-        else:
-            shape = st.SHAPES[name]
-            h, origin = cs.voxelize_shape(shape, args.resolution, volume, shift)
-            measure = lambda v, t, s=shape, hh=h: st.analytic_measures(s, v, t, hh)  # noqa: E731
+        h, origin, measure = cs.prepare_input(name, args.resolution, shift, volume, args.bunny)
         world_step = 2.0 / max(np.load(volume, mmap_mode="r").shape)
         for i, (label, radius, flags) in enumerate(variants):
             if radius:

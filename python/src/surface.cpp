@@ -239,7 +239,7 @@ void bind_surface(py::module_& m) {
           warnings = r.warnings;
           out = r.mesh;
           out.positions = surface.frame.to_physical(r.mesh.positions);
-          out.positions = out.positions * flip.transpose();
+          if (wanted != PhysicalSpace::Unknown) out.positions *= flip.transpose();
           if (surface.frame.mirrors()) out.faces = out.faces.rowwise().reverse().eval();
         }
         py::list w;
