@@ -552,16 +552,25 @@ CurvatureEstimates CorrectedCurvature::at_vertices(double r) const {
 
 CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices(double r) const {
   check_radius(r, positions_);
-  const Eigen::Index V = positions_.rows(), F = faces_.rows();
   if (!interpolated_ || r < 1e-6) {
     CurvatureEstimates e = at_vertices(r);
     return {std::move(e.H), std::move(e.area)};
   }
+  const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
+  std::vector<int> every(vertex_order.size());
+  for (std::size_t i = 0; i < every.size(); ++i) every[i] = int(i);
+  return walk_mean_curvature(r, vertex_order, every);
+}
+
+CorrectedCurvature::MeanCurvature CorrectedCurvature::walk_mean_curvature(double r,
+                                                                          const std::vector<int>& vertex_order,
+                                                                          const std::vector<int>& at) const {
+  const Eigen::Index V = positions_.rows(), F = faces_.rows();
   // Row-major copies: a face's data in one or two cache lines (the Eigen members are column-major),
   // faces and vertices renumbered in Z-order (z_order): the walk's reads stay local. "Old" indices
   // are the mesh's, "new" the walk's.
   const double edge = 0.5 * grid_cell_;
-  const std::vector<int> face_order = z_order(centroids_, 2.0 * edge), vertex_order = z_order(positions_, 2.0 * edge);
+  const std::vector<int> face_order = z_order(centroids_, 2.0 * edge);
   std::vector<int> face_rank(static_cast<std::size_t>(F)), vertex_rank(static_cast<std::size_t>(V));
   for (std::size_t i = 0; i < face_order.size(); ++i) face_rank[std::size_t(face_order[i])] = int(i);
   for (std::size_t i = 0; i < vertex_order.size(); ++i) vertex_rank[std::size_t(vertex_order[i])] = int(i);
@@ -594,7 +603,7 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
   const bool use_clusters = r >= 12.0 * edge;
   const FaceClusters clusters =
       use_clusters ? cluster_faces(face, neighbour_start, neighbour_faces, 4.0 * edge) : FaceClusters{};
-  MeanCurvature out{Eigen::VectorXd(V), Eigen::VectorXd(V)};
+  MeanCurvature out{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V)};
   struct Walk {
     std::vector<std::uint32_t> stamp, cluster_seen;
     std::vector<char> cluster_inside;
@@ -603,83 +612,180 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
   };
   tbb::enumerable_thread_specific<Walk> walks;
   const std::size_t C = clusters.mu0.size();
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, V, 256), [&](const tbb::blocked_range<Eigen::Index>& range) {
-    Walk& w = walks.local();
-    if (w.stamp.empty()) {
-      w.stamp.assign(std::size_t(F), 0);
-      w.cluster_seen.assign(C, 0);
-      w.cluster_inside.assign(C, 0);
-    }
-    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      const int v = vertex_order[std::size_t(i)];
-      if (vertex_face_[std::size_t(v)] < 0) {
-        out.H[v] = out.area[v] = 0.0;
-        continue;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, at.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      Walk& w = walks.local();
+                      if (w.stamp.empty()) {
+                        w.stamp.assign(std::size_t(F), 0);
+                        w.cluster_seen.assign(C, 0);
+                        w.cluster_inside.assign(C, 0);
+                      }
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        const std::size_t i = std::size_t(at[k]);
+                        const int v = vertex_order[i];
+                        if (vertex_face_[std::size_t(v)] < 0) {
+                          out.H[v] = out.area[v] = 0.0;
+                          continue;
+                        }
+                        const int seed = face_rank[std::size_t(vertex_face_[std::size_t(v)])];
+                        if (++w.generation == 0) {
+                          std::fill(w.stamp.begin(), w.stamp.end(), 0u);
+                          std::fill(w.cluster_seen.begin(), w.cluster_seen.end(), 0u);
+                          w.generation = 1;
+                        }
+                        // The walk of faces_in_ball (same faces, same weights), fused with the sums of estimate().
+                        // A cluster whose every corner is within r is summed at once (its faces all have weight 1
+                        // and are edge-connected, so the walk would reach them all) and the walk goes on from the
+                        // faces around it.
+                        const V3 x = position[std::size_t(i)];
+                        double m0 = 0.0, m1 = 0.0;
+                        w.queue.assign(1, seed);
+                        w.stamp[std::size_t(seed)] = w.generation;
+                        const auto push = [&w](int n) {
+                          if (w.stamp[std::size_t(n)] != w.generation) {
+                            w.stamp[std::size_t(n)] = w.generation;
+                            w.queue.push_back(n);
+                          }
+                        };
+                        // True when face f is summed with its whole cluster, now (first face of it popped) or before.
+                        const auto summed_with_cluster = [&](int f) {
+                          const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
+                          if (w.cluster_seen[c] == w.generation) return w.cluster_inside[c] != 0;
+                          w.cluster_seen[c] = w.generation;
+                          const double inner = r - clusters.radius[c];
+                          w.cluster_inside[c] = inner >= 0.0 && (clusters.centre[c] - x).squaredNorm() <= inner * inner;
+                          if (!w.cluster_inside[c]) return false;
+                          m0 += clusters.mu0[c];
+                          m1 += clusters.mu1[c];
+                          for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
+                            push(clusters.around[std::size_t(i)]);
+                          return true;
+                        };
+                        for (std::size_t head = 0; head < w.queue.size(); ++head) {
+                          const int f = w.queue[head];
+                          if (use_clusters && summed_with_cluster(f)) continue;
+                          const WalkFace& d = face[std::size_t(f)];
+                          // Squared distances: the tests against r -+ rho need no root, and dmin, dmax are the roots
+                          // of the least and largest squares (a root is monotonic: the same numbers as the norms).
+                          const double dc2 = (d.centroid - x).squaredNorm();
+                          const double inner = r - d.rho, outer = r + d.rho;
+                          double weight;
+                          if (inner >= 0.0 && dc2 <= inner * inner) {
+                            weight = 1.0;  // every corner within r: dmax <= r
+                          } else if (dc2 >= outer * outer) {
+                            continue;  // every corner at r or beyond: weight 0, the walk stops here
+                          } else {
+                            double least = dc2, largest = dc2;
+                            for (const int k : d.corners) {
+                              const double dk2 = (position[std::size_t(k)] - x).squaredNorm();
+                              least = std::min(least, dk2), largest = std::max(largest, dk2);
+                            }
+                            weight = inclusion_ratio(std::sqrt(least), std::sqrt(largest), r);
+                            if (weight <= 0.0) continue;
+                          }
+                          m0 += weight * d.mu0;
+                          m1 += weight * d.mu1;
+                          for (int j = neighbour_start[std::size_t(f)]; j < neighbour_start[std::size_t(f) + 1]; ++j)
+                            push(neighbour_faces[std::size_t(j)]);
+                        }
+                        out.area[v] = m0;
+                        out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
+                      }
+                    });
+  return out;
+}
+
+namespace {
+// Sites of mean_curvature_at_sites in a uniform grid of cells of side >= the query radius (the
+// 27 cells around a point hold every site within it), each cell a linked list of its sites.
+class SiteGrid {
+ public:
+  SiteGrid(const Eigen::MatrixX3d& points, double radius) {
+    low_ = points.colwise().minCoeff().transpose();
+    const V3 extent = points.colwise().maxCoeff().transpose() - low_;
+    // At most 128 cells a side (a few MB of heads); more sites per cell below that.
+    cell_ = std::max(radius, extent.maxCoeff() / 128.0);
+    for (int j = 0; j < 3; ++j) dims_[j] = int(std::floor(extent[j] / cell_)) + 1;
+    head_.assign(std::size_t(dims_[0]) * std::size_t(dims_[1]) * std::size_t(dims_[2]), -1);
+  }
+  void add(int site, const V3& p) {
+    const std::size_t c = index(cell_of(p));
+    if (next_.size() <= std::size_t(site)) next_.resize(std::size_t(site) + 1, -1);
+    next_[std::size_t(site)] = head_[c];
+    head_[c] = site;
+  }
+  // Calls visit(site) for every site in the 27 cells around p; stops when visit returns true.
+  template <class Visit>
+  bool any_near(const V3& p, Visit&& visit) const {
+    const Eigen::Vector3i c = cell_of(p);
+    for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, dims_[2] - 1); ++z)
+      for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, dims_[1] - 1); ++y)
+        for (int x = std::max(c[0] - 1, 0); x <= std::min(c[0] + 1, dims_[0] - 1); ++x)
+          for (int s = head_[index({x, y, z})]; s >= 0; s = next_[std::size_t(s)])
+            if (visit(s)) return true;
+    return false;
+  }
+
+ private:
+  Eigen::Vector3i cell_of(const V3& p) const {
+    Eigen::Vector3i c;
+    for (int j = 0; j < 3; ++j) c[j] = std::clamp(int(std::floor((p[j] - low_[j]) / cell_)), 0, dims_[j] - 1);
+    return c;
+  }
+  std::size_t index(const Eigen::Vector3i& c) const {
+    return (std::size_t(c[2]) * std::size_t(dims_[1]) + std::size_t(c[1])) * std::size_t(dims_[0]) + std::size_t(c[0]);
+  }
+  V3 low_;
+  double cell_ = 1.0;
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<int> head_, next_;
+};
+}  // namespace
+
+CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(double r, double spacing) const {
+  check_radius(r, positions_);
+  if (!(spacing >= 0.0) || !std::isfinite(spacing))
+    throw InputError("curvature: site spacing must be >= 0, got " + std::to_string(spacing));
+  const double edge = 0.5 * grid_cell_;
+  if (!interpolated_ || r < 1e-6 || spacing < 2.0 * edge) return mean_curvature_at_vertices(r);
+  const Eigen::Index V = positions_.rows();
+  const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
+  // Greedy cover in Z-order: a vertex becomes a site unless a site within spacing / 2 has a
+  // normal within 60 degrees of its own.
+  const double cover2 = 0.25 * spacing * spacing, reach2 = spacing * spacing, agree = 0.5;
+  SiteGrid grid(positions_, spacing);
+  std::vector<int> site_vertex, site_rank;  // mesh index and Z-order rank of each site
+  for (std::size_t i = 0; i < vertex_order.size(); ++i) {
+    const int v = vertex_order[i];
+    if (vertex_face_[std::size_t(v)] < 0) continue;
+    const V3 p = positions_.row(v).transpose(), n = vertex_normals_.row(v).transpose();
+    const bool covered = grid.any_near(p, [&](int s) {
+      const int u = site_vertex[std::size_t(s)];
+      return (positions_.row(u).transpose() - p).squaredNorm() <= cover2 && vertex_normals_.row(u).dot(n) >= agree;
+    });
+    if (covered) continue;
+    grid.add(int(site_vertex.size()), p);
+    site_vertex.push_back(v);
+    site_rank.push_back(int(i));
+  }
+  const MeanCurvature walked = walk_mean_curvature(r, vertex_order, site_rank);
+  MeanCurvature out{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V)};
+  tbb::parallel_for(Eigen::Index(0), V, [&](Eigen::Index v) {
+    if (vertex_face_[std::size_t(v)] < 0) return;  // as at_vertices: 0
+    const V3 p = positions_.row(v).transpose(), n = vertex_normals_.row(v).transpose();
+    double weights = 0.0, H = 0.0, area = 0.0;
+    grid.any_near(p, [&](int s) {
+      const int u = site_vertex[std::size_t(s)];
+      const double d2 = (positions_.row(u).transpose() - p).squaredNorm();
+      if (d2 < reach2 && vertex_normals_.row(u).dot(n) >= agree) {
+        const double t = 1.0 - d2 / reach2, weight = t * t;
+        weights += weight, H += weight * walked.H[u], area += weight * walked.area[u];
       }
-      const int seed = face_rank[std::size_t(vertex_face_[std::size_t(v)])];
-      if (++w.generation == 0) {
-        std::fill(w.stamp.begin(), w.stamp.end(), 0u);
-        std::fill(w.cluster_seen.begin(), w.cluster_seen.end(), 0u);
-        w.generation = 1;
-      }
-      // The walk of faces_in_ball (same faces, same weights), fused with the sums of estimate().
-      // A cluster whose every corner is within r is summed at once (its faces all have weight 1
-      // and are edge-connected, so the walk would reach them all) and the walk goes on from the
-      // faces around it.
-      const V3 x = position[std::size_t(i)];
-      double m0 = 0.0, m1 = 0.0;
-      w.queue.assign(1, seed);
-      w.stamp[std::size_t(seed)] = w.generation;
-      const auto push = [&w](int n) {
-        if (w.stamp[std::size_t(n)] != w.generation) {
-          w.stamp[std::size_t(n)] = w.generation;
-          w.queue.push_back(n);
-        }
-      };
-      // True when face f is summed with its whole cluster, now (first face of it popped) or before.
-      const auto summed_with_cluster = [&](int f) {
-        const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
-        if (w.cluster_seen[c] == w.generation) return w.cluster_inside[c] != 0;
-        w.cluster_seen[c] = w.generation;
-        const double inner = r - clusters.radius[c];
-        w.cluster_inside[c] = inner >= 0.0 && (clusters.centre[c] - x).squaredNorm() <= inner * inner;
-        if (!w.cluster_inside[c]) return false;
-        m0 += clusters.mu0[c];
-        m1 += clusters.mu1[c];
-        for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
-          push(clusters.around[std::size_t(i)]);
-        return true;
-      };
-      for (std::size_t head = 0; head < w.queue.size(); ++head) {
-        const int f = w.queue[head];
-        if (use_clusters && summed_with_cluster(f)) continue;
-        const WalkFace& d = face[std::size_t(f)];
-        // Squared distances: the tests against r -+ rho need no root, and dmin, dmax are the roots
-        // of the least and largest squares (a root is monotonic: the same numbers as the norms).
-        const double dc2 = (d.centroid - x).squaredNorm();
-        const double inner = r - d.rho, outer = r + d.rho;
-        double weight;
-        if (inner >= 0.0 && dc2 <= inner * inner) {
-          weight = 1.0;  // every corner within r: dmax <= r
-        } else if (dc2 >= outer * outer) {
-          continue;  // every corner at r or beyond: weight 0, the walk stops here
-        } else {
-          double least = dc2, largest = dc2;
-          for (const int k : d.corners) {
-            const double dk2 = (position[std::size_t(k)] - x).squaredNorm();
-            least = std::min(least, dk2), largest = std::max(largest, dk2);
-          }
-          weight = inclusion_ratio(std::sqrt(least), std::sqrt(largest), r);
-          if (weight <= 0.0) continue;
-        }
-        m0 += weight * d.mu0;
-        m1 += weight * d.mu1;
-        for (int j = neighbour_start[std::size_t(f)]; j < neighbour_start[std::size_t(f) + 1]; ++j)
-          push(neighbour_faces[std::size_t(j)]);
-      }
-      out.area[v] = m0;
-      out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
-    }
+      return false;
+    });
+    // The covering site is within spacing / 2: weights >= (3/4)^2.
+    out.H[v] = H / weights;
+    out.area[v] = area / weights;
   });
   return out;
 }

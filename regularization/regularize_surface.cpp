@@ -108,6 +108,7 @@ void check_regularization_options(const RegularizationOptions& o) {
   (void)make_linear_solver(o.solver, kDefaultLinearSolver);
   if (o.size) check_real(*o.size, "size", "the object size", 0.0);
   if (o.curvature_radius) check_real(*o.curvature_radius, "curvature_radius", "the curvature radius", 0.0);
+  check_real(o.curvature_spacing, "curvature_spacing", "the curvature site spacing", 0.0, /*open=*/false);
   check_real(o.alpha0, "alpha0", "alpha0", 0.0);
   if (o.alpha_step) check_real(*o.alpha_step, "alpha_step", "the step of alpha", 0.0);
   if (!std::isfinite(o.h_scale))
@@ -150,14 +151,15 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   c.curvature_radius = o.curvature_radius ? *o.curvature_radius : default_curvature_radius(c.size, h, false);
   Stopwatch watch;
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
-  // Principal edits need k1, k2 and their directions; H alone has a faster walk (equal results).
+  // Principal edits need k1, k2 and their directions at every vertex; H alone is walked at sites
+  // (§8.4) and interpolated.
   const bool principal = o.k1_edit.active() || o.k2_edit.active();
   const CorrectedCurvature measures = CorrectedCurvature::interpolated(mesh, normals.vertex);
   CurvatureEstimates estimates;
   if (principal)
     estimates = measures.at_vertices(c.curvature_radius);
   else
-    estimates.H = measures.mean_curvature_at_vertices(c.curvature_radius).H;
+    estimates.H = measures.mean_curvature_at_sites(c.curvature_radius, o.curvature_spacing * c.curvature_radius).H;
   c.H = estimates.H;
   for (Eigen::Index v = 0; v < c.H.size(); ++v)
     if (!std::isfinite(c.H[v]))

@@ -25,6 +25,13 @@ inline constexpr double kVoxelMinCurvatureRadius = 2.0;
 /// The paper's curvature radius for a unit-sized shape (0.1), as a fraction of the object size.
 inline constexpr double kCurvatureRadiusFraction = 0.1;
 
+/// The default spacing of the sites where the curvature ball is walked, as a fraction of the
+/// curvature radius (CorrectedCurvature::mean_curvature_at_sites; docs/math.md §8.4): the other
+/// vertices interpolate the sites' H. A quarter of the radius walks about one vertex in 15 at
+/// the default radius and changes H by a few percent of its own error (docs/regularization.md,
+/// "Curvature sites"); 0 walks every vertex.
+inline constexpr double kCurvatureSiteSpacing = 0.25;
+
 /// The default accuracy of the regularization's solve, in voxels (the mesh's grid step): the
 /// area-weighted RMS error of every coordinate is provably below it (the bound of
 /// regularize_positions_preconditioned). A thousandth of a voxel is a tenth of the smallest mean
@@ -53,6 +60,8 @@ struct RegularizationOptions {
   /// (0.1 size here, where the mesh alone does not say whether its voxels came from a file; the
   /// overloads on a LoadedSurface add the floor for volumes and mesh files).
   std::optional<double> curvature_radius;
+  /// Spacing of the curvature's sites, a fraction of the curvature radius (0: every vertex).
+  double curvature_spacing = kCurvatureSiteSpacing;
   double alpha0 = 10.0;  ///< alpha = alpha0 / (h size)^2
   /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
   /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.
@@ -73,7 +82,8 @@ struct RegularizationOptions {
 /// Checks the options before any computation, in one wording for every front end (the CLI adds its
 /// flags, Python its keywords): the method exists and defines its operators on vertices
 /// (InputError "method" listing those that do), its parameters and the solver are valid, and
-/// every real option is finite and in range (InputError naming it: size, curvature_radius, alpha0,
+/// every real option is finite and in range (InputError naming it: size, curvature_radius,
+/// curvature_spacing, alpha0,
 /// alpha_step, h_scale, h_clamp, normal_attachment, k1/k2 edits). regularize_surface calls it.
 void check_regularization_options(const RegularizationOptions& options);
 

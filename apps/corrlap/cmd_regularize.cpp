@@ -39,6 +39,7 @@ struct RegularizeArgs {
   MethodOptions method;
   NormalOptions normals;
   std::optional<double> size, curvature_radius;
+  double curvature_spacing = kCurvatureSiteSpacing;
   double alpha0 = 10.0;
   double h_scale = 1.0;
   std::optional<double> h_clamp;
@@ -269,6 +270,7 @@ void run(const RegularizeArgs& a) {
   o.method_params = a.method.config();
   o.size = a.size;
   o.curvature_radius = a.curvature_radius;
+  o.curvature_spacing = a.curvature_spacing;
   o.alpha0 = a.alpha0;
   o.h_scale = a.h_scale;
   o.h_clamp = a.h_clamp;
@@ -336,6 +338,11 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                                      " s; for volumes and mesh files at least " +
                                      number_text(kVoxelMinCurvatureRadius) + " voxels)")
                      ->check(positive_number()));
+  only.push_back(cmd->add_option("--curvature-spacing", args->curvature_spacing,
+                                 "spacing of the vertices where the curvature ball is walked, a fraction of the "
+                                 "curvature radius; the others interpolate them (0: every vertex)")
+                     ->check(non_negative_number())
+                     ->capture_default_str());
   only.push_back(cmd->add_option("--alpha0", args->alpha0, "attachment weight: alpha = alpha0 / (h s)^2")
                      ->check(positive_number())
                      ->capture_default_str());

@@ -164,7 +164,7 @@ def write_volume(path, array, affine=None, space=None):
 
 def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0=10.0,
                       curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
-                      space=None, **params):
+                      space=None, curvature_spacing=None, **params):
     """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
     from the voxels, docs/regularization.md), in physical coordinates.
 
@@ -175,7 +175,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
     affine     arrays only: 4 by 4 map from (i, j, k, 1) to physical coordinates (read_volume's,
                nibabel's img.affine); None: voxel indices. Anisotropic voxels are resampled to
                cubes of the finest spacing first (docs/io.md)
-    h, method, alpha0, curvature_radius, size, solver, solver_options, solve_accuracy, params:
+    h, method, alpha0, curvature_radius, curvature_spacing, size, solver, solver_options, solve_accuracy, params:
                as regularize, in the normalized units of the computation (the longest side spans 2);
                the default curvature_radius is at least {voxel_min_curvature_radius} voxels, as for
                `corrlap regularize --volume`
@@ -191,7 +191,8 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
     V, F, warnings = _core.regularize_volume(
         volume, _real(label, "label"), _real(threshold, "threshold"),
         None if affine is None else _np.asarray(affine, dtype=_np.float64), _real(h, "h"), str(method), params,
-        _real(alpha0, "alpha0", required=True), _real(curvature_radius, "curvature_radius"), _real(size, "size"),
+        _real(alpha0, "alpha0", required=True), _real(curvature_radius, "curvature_radius"),
+        _real(curvature_spacing, "curvature_spacing"), _real(size, "size"),
         str(solver), dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"),
         "" if space is None else str(space))
     _warn(warnings)
@@ -372,7 +373,7 @@ def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, p
 
 def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0=10.0,
                curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
-               return_curvature=False, allow_nonmanifold=False, **params):
+               return_curvature=False, allow_nonmanifold=False, curvature_spacing=None, **params):
     """Regularized positions of a closed digital surface (paper 4.1, docs/regularization.md): the
     positions P minimizing the distance to V plus the corrected Dirichlet energy, with
     Delta p = -2 H n from the corrected mean curvature H.
@@ -381,7 +382,9 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     sums of the face normals). method: a vertex-based discretization (its parameters as keywords).
     h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
     curvature_radius, size: as `corrlap regularize --mesh` (defaults {curvature_radius_fraction} size and half the
-    bounding box).
+    bounding box). curvature_spacing: the curvature ball is walked at vertices this fraction of the
+    radius apart and interpolated between them (None: the library's {curvature_site_spacing}, as
+    `--curvature-spacing`; 0: at every vertex; docs/math.md 8.4).
     solver, solver_options: the linear solver and its options. solve_accuracy: the iterative solve
     stops when the RMS error of the positions is provably below this many grid steps h (None: the
     library's {solve_accuracy}, as `--solve-accuracy`; 0: to rounding; docs/regularization.md).
@@ -395,7 +398,8 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     """
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
                                       _real(alpha0, "alpha0", required=True),
-                                      _real(curvature_radius, "curvature_radius"), _real(size, "size"), str(solver),
+                                      _real(curvature_radius, "curvature_radius"),
+                                      _real(curvature_spacing, "curvature_spacing"), _real(size, "size"), str(solver),
                                       dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"))
     _warn(warnings)
     return (P, H) if return_curvature else P
@@ -460,6 +464,7 @@ def _document_defaults():
     values = {"{voxel_ii_radius}": _core.VOXEL_II_RADIUS,
               "{voxel_min_curvature_radius}": _core.VOXEL_MIN_CURVATURE_RADIUS,
               "{curvature_radius_fraction}": _core.CURVATURE_RADIUS_FRACTION,
+              "{curvature_site_spacing}": _core.CURVATURE_SITE_SPACING,
               "{solve_accuracy}": _core.SOLVE_ACCURACY}
     for function in (ii_normals, curvature, regularize, regularize_volume):
         for name, value in values.items():

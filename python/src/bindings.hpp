@@ -28,9 +28,10 @@ VoxelGrid shape_voxels(const std::string& shape, double h, double bbox_min, doub
 VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double threshold);
 
 /// The options of regularize and regularize_volume from their common keywords (regularization.cpp);
-/// unset curvature_radius and size keep the library's defaults.
+/// unset curvature_radius, curvature_spacing and size keep the library's defaults.
 RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params, double alpha0,
-                                                 std::optional<double> curvature_radius, std::optional<double> size,
+                                                 std::optional<double> curvature_radius,
+                                                 std::optional<double> curvature_spacing, std::optional<double> size,
                                                  const std::string& solver, const py::dict& solver_options,
                                                  std::optional<double> solve_accuracy);
 

@@ -189,8 +189,9 @@ void bind_surface(py::module_& m) {
       "regularize_volume",
       [](py::handle volume, std::optional<double> label, std::optional<double> threshold, py::handle affine,
          std::optional<double> h, const std::string& method, const py::dict& params, double alpha0,
-         std::optional<double> curvature_radius, std::optional<double> size, const std::string& solver,
-         const py::dict& solver_options, std::optional<double> solve_accuracy, const std::string& space) {
+         std::optional<double> curvature_radius, std::optional<double> curvature_spacing, std::optional<double> size,
+         const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy,
+         const std::string& space) {
         const InsideRule inside = inside_arg(label, threshold);
         const PhysicalSpace wanted = space_arg(space, "space");
         py::array values;
@@ -212,8 +213,8 @@ void bind_surface(py::module_& m) {
           if (!affine.is_none()) in.geometry = geometry_arg(affine);
           input = in;
         }
-        const RegularizationOptions o = regularization_options_arg(method, params, alpha0, curvature_radius, size,
-                                                                   solver, solver_options, solve_accuracy);
+        const RegularizationOptions o = regularization_options_arg(
+            method, params, alpha0, curvature_radius, curvature_spacing, size, solver, solver_options, solve_accuracy);
         std::vector<std::string> warnings;
         SurfelMesh out;
         {
@@ -247,8 +248,8 @@ void bind_surface(py::module_& m) {
         return py::make_tuple(to_numpy(out.positions), faces_to_numpy(out.faces), w);
       },
       py::arg("volume"), py::arg("label"), py::arg("threshold"), py::arg("affine"), py::arg("h"), py::arg("method"),
-      py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("size"), py::arg("solver"),
-      py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"));
+      py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("curvature_spacing"), py::arg("size"),
+      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"));
   m.def(
       "read_mesh",
       [](const std::string& path) {

@@ -176,6 +176,83 @@ TEST_CASE("constant-normal curvature measures: Gauss-Bonnet total, principal cur
   CHECK(std::abs(e.k1.mean() - 1.0) < 0.1);
 }
 
+TEST_CASE("mean_curvature_at_sites: a mean of walked values, close to walking every vertex") {
+  // Every vertex's value is a weighted mean of the walked values at sites within `spacing` whose
+  // normals agree with its own (cosine >= 1/2), so it lies within the range of the dense values
+  // over those vertices (sites are vertices). On a thin plate, 2 voxels thick with a spacing of 6,
+  // a vertex of one sheet taking the other sheet's sites would leave that range: their normals
+  // are opposite and, with noisy normals, so are the values.
+  VoxelGrid plate(Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(41, 41, 5), 1.0);
+  for (int z = 2; z <= 3; ++z)
+    for (int y = 2; y <= 39; ++y)
+      for (int x = 2; x <= 39; ++x) plate.set(x, y, z, true);
+  struct Case {
+    const char* name;
+    SurfelMesh mesh;
+  };
+  for (Case& c : std::vector<Case>{{"plate", extract_surface(plate)}, {"torus", surface("torus", 0.4, -10.0, 10.0)}}) {
+    const SurfelMesh& m = c.mesh;
+    const double h = m.grid_step();
+    const Eigen::MatrixX3d centred = m.positions.rowwise() - m.positions.colwise().mean();
+    std::srand(11);
+    const Eigen::MatrixX3d noisy = radial(centred) + 0.2 * Eigen::MatrixX3d::Random(m.num_vertices(), 3);
+    // The plate's normals: its faces' outward direction, as II normals would give, with noise.
+    Eigen::MatrixX3d n = noisy.rowwise().normalized();
+    if (std::string(c.name) == "plate") {
+      const Eigen::MatrixX3d sum =
+          vertex_normals_from_face_normals(m.face_normals_from_positions(), m.faces, int(m.num_vertices()));
+      const Eigen::MatrixX3d perturbed = sum + 0.2 * Eigen::MatrixX3d::Random(m.num_vertices(), 3);
+      n = perturbed.rowwise().normalized();
+    }
+    const CorrectedCurvature cc = CorrectedCurvature::interpolated(m, n);
+    const double r = 12.0 * h, spacing = 0.5 * r;
+    const CorrectedCurvature::MeanCurvature dense = cc.mean_curvature_at_vertices(r);
+    const CorrectedCurvature::MeanCurvature sites = cc.mean_curvature_at_sites(r, spacing);
+    REQUIRE(sites.H.size() == dense.H.size());
+    CAPTURE(c.name);
+    int outside = 0;
+    for (Eigen::Index v = 0; v < m.num_vertices(); ++v) {
+      double low = std::numeric_limits<double>::infinity(), high = -low;
+      for (Eigen::Index u = 0; u < m.num_vertices(); ++u)
+        if ((m.positions.row(u) - m.positions.row(v)).squaredNorm() < spacing * spacing &&
+            n.row(u).dot(n.row(v)) >= 0.5)
+          low = std::min(low, dense.H[u]), high = std::max(high, dense.H[u]);
+      // 1e-12: the weighted mean of values in [low, high] rounds within a few ulps of the range.
+      const double slack = 1e-12 * std::max(std::abs(low), std::abs(high));
+      if (!(sites.H[v] >= low - slack && sites.H[v] <= high + slack)) ++outside;
+    }
+    CHECK(outside == 0);
+  }
+  // A spacing below 2 edges walks every vertex: the dense result, exactly.
+  const SurfelMesh m = surface("sphere1", 0.1, -1.5, 1.5);
+  const CorrectedCurvature cc = CorrectedCurvature::interpolated(m, radial(m.positions));
+  CHECK((cc.mean_curvature_at_sites(0.3, 0.19).H - cc.mean_curvature_at_vertices(0.3).H).cwiseAbs().maxCoeff() == 0.0);
+  CHECK_THROWS_AS(cc.mean_curvature_at_sites(0.3, -1.0), InputError);
+  CHECK_THROWS_AS(cc.mean_curvature_at_sites(0.3, std::nan("")), InputError);
+}
+
+TEST_CASE("mean_curvature_at_sites changes H far less than its error against the truth") {
+  // sphere1 (H = 1) and the torus (H known at every point) at 200 voxels across with their true
+  // normals, at the regularization's radius (0.1 size, 10 voxels) and site spacing (a quarter of
+  // it). The ball estimate's own error is measured here, not assumed.
+  for (const std::string shape : {"sphere1", "torus"}) {
+    CAPTURE(shape);
+    const double extent = shape == "torus" ? 8.0 : 1.0;  // half the longest side
+    const SurfelMesh m = surface(shape, extent / 100.0, -1.1 * extent, 1.1 * extent);
+    const ImplicitShape implicit = make_implicit_shape(shape);
+    const Eigen::MatrixX3d n = true_vertex_normals(implicit, m);
+    const Eigen::VectorXd truth = true_mean_curvatures(implicit, m.positions);
+    const CorrectedCurvature cc = CorrectedCurvature::interpolated(m, n);
+    const double size = 0.5 * (m.positions.colwise().maxCoeff() - m.positions.colwise().minCoeff()).maxCoeff();
+    const double r = 0.1 * size;
+    const Eigen::VectorXd dense = cc.mean_curvature_at_vertices(r).H, sites = cc.mean_curvature_at_sites(r, 0.25 * r).H;
+    const double error = (dense - truth).cwiseAbs().mean(), change = (sites - dense).cwiseAbs().mean();
+    MESSAGE(shape << ": mean |H - truth| " << error << ", mean change " << change);
+    CHECK(change <= 0.25 * error);
+    CHECK((sites - truth).cwiseAbs().mean() <= 1.05 * error);
+  }
+}
+
 TEST_CASE("mean_curvature_at_vertices equals at_vertices' H and area") {
   // The fast walk classifies faces from their centroid distance and, from 12 edges on, sums whole
   // clusters of faces (side 4 edges) at once; the terms are at_vertices', their order differs.
