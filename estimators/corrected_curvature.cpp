@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <string>
 
 namespace corrlap {
@@ -558,7 +559,7 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_vertices
   }
   const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
   std::vector<int> every(vertex_order.size());
-  for (std::size_t i = 0; i < every.size(); ++i) every[i] = int(i);
+  std::iota(every.begin(), every.end(), 0);
   return walk_mean_curvature(r, vertex_order, every);
 }
 
@@ -612,86 +613,86 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::walk_mean_curvature(double
   };
   tbb::enumerable_thread_specific<Walk> walks;
   const std::size_t C = clusters.mu0.size();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, at.size(), 256),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      Walk& w = walks.local();
-                      if (w.stamp.empty()) {
-                        w.stamp.assign(std::size_t(F), 0);
-                        w.cluster_seen.assign(C, 0);
-                        w.cluster_inside.assign(C, 0);
-                      }
-                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
-                        const std::size_t i = std::size_t(at[k]);
-                        const int v = vertex_order[i];
-                        if (vertex_face_[std::size_t(v)] < 0) {
-                          out.H[v] = out.area[v] = 0.0;
-                          continue;
-                        }
-                        const int seed = face_rank[std::size_t(vertex_face_[std::size_t(v)])];
-                        if (++w.generation == 0) {
-                          std::fill(w.stamp.begin(), w.stamp.end(), 0u);
-                          std::fill(w.cluster_seen.begin(), w.cluster_seen.end(), 0u);
-                          w.generation = 1;
-                        }
-                        // The walk of faces_in_ball (same faces, same weights), fused with the sums of estimate().
-                        // A cluster whose every corner is within r is summed at once (its faces all have weight 1
-                        // and are edge-connected, so the walk would reach them all) and the walk goes on from the
-                        // faces around it.
-                        const V3 x = position[std::size_t(i)];
-                        double m0 = 0.0, m1 = 0.0;
-                        w.queue.assign(1, seed);
-                        w.stamp[std::size_t(seed)] = w.generation;
-                        const auto push = [&w](int n) {
-                          if (w.stamp[std::size_t(n)] != w.generation) {
-                            w.stamp[std::size_t(n)] = w.generation;
-                            w.queue.push_back(n);
-                          }
-                        };
-                        // True when face f is summed with its whole cluster, now (first face of it popped) or before.
-                        const auto summed_with_cluster = [&](int f) {
-                          const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
-                          if (w.cluster_seen[c] == w.generation) return w.cluster_inside[c] != 0;
-                          w.cluster_seen[c] = w.generation;
-                          const double inner = r - clusters.radius[c];
-                          w.cluster_inside[c] = inner >= 0.0 && (clusters.centre[c] - x).squaredNorm() <= inner * inner;
-                          if (!w.cluster_inside[c]) return false;
-                          m0 += clusters.mu0[c];
-                          m1 += clusters.mu1[c];
-                          for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
-                            push(clusters.around[std::size_t(i)]);
-                          return true;
-                        };
-                        for (std::size_t head = 0; head < w.queue.size(); ++head) {
-                          const int f = w.queue[head];
-                          if (use_clusters && summed_with_cluster(f)) continue;
-                          const WalkFace& d = face[std::size_t(f)];
-                          // Squared distances: the tests against r -+ rho need no root, and dmin, dmax are the roots
-                          // of the least and largest squares (a root is monotonic: the same numbers as the norms).
-                          const double dc2 = (d.centroid - x).squaredNorm();
-                          const double inner = r - d.rho, outer = r + d.rho;
-                          double weight;
-                          if (inner >= 0.0 && dc2 <= inner * inner) {
-                            weight = 1.0;  // every corner within r: dmax <= r
-                          } else if (dc2 >= outer * outer) {
-                            continue;  // every corner at r or beyond: weight 0, the walk stops here
-                          } else {
-                            double least = dc2, largest = dc2;
-                            for (const int k : d.corners) {
-                              const double dk2 = (position[std::size_t(k)] - x).squaredNorm();
-                              least = std::min(least, dk2), largest = std::max(largest, dk2);
-                            }
-                            weight = inclusion_ratio(std::sqrt(least), std::sqrt(largest), r);
-                            if (weight <= 0.0) continue;
-                          }
-                          m0 += weight * d.mu0;
-                          m1 += weight * d.mu1;
-                          for (int j = neighbour_start[std::size_t(f)]; j < neighbour_start[std::size_t(f) + 1]; ++j)
-                            push(neighbour_faces[std::size_t(j)]);
-                        }
-                        out.area[v] = m0;
-                        out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
-                      }
-                    });
+  const auto walk = [&](const tbb::blocked_range<std::size_t>& range) {
+    Walk& w = walks.local();
+    if (w.stamp.empty()) {
+      w.stamp.assign(std::size_t(F), 0);
+      w.cluster_seen.assign(C, 0);
+      w.cluster_inside.assign(C, 0);
+    }
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      const std::size_t i = std::size_t(at[k]);
+      const int v = vertex_order[i];
+      if (vertex_face_[std::size_t(v)] < 0) {
+        out.H[v] = out.area[v] = 0.0;
+        continue;
+      }
+      const int seed = face_rank[std::size_t(vertex_face_[std::size_t(v)])];
+      if (++w.generation == 0) {
+        std::fill(w.stamp.begin(), w.stamp.end(), 0u);
+        std::fill(w.cluster_seen.begin(), w.cluster_seen.end(), 0u);
+        w.generation = 1;
+      }
+      // The walk of faces_in_ball (same faces, same weights), fused with the sums of estimate().
+      // A cluster whose every corner is within r is summed at once (its faces all have weight 1
+      // and are edge-connected, so the walk would reach them all) and the walk goes on from the
+      // faces around it.
+      const V3 x = position[std::size_t(i)];
+      double m0 = 0.0, m1 = 0.0;
+      w.queue.assign(1, seed);
+      w.stamp[std::size_t(seed)] = w.generation;
+      const auto push = [&w](int n) {
+        if (w.stamp[std::size_t(n)] != w.generation) {
+          w.stamp[std::size_t(n)] = w.generation;
+          w.queue.push_back(n);
+        }
+      };
+      // True when face f is summed with its whole cluster, now (first face of it popped) or before.
+      const auto summed_with_cluster = [&](int f) {
+        const std::size_t c = std::size_t(clusters.of_face[std::size_t(f)]);
+        if (w.cluster_seen[c] == w.generation) return w.cluster_inside[c] != 0;
+        w.cluster_seen[c] = w.generation;
+        const double inner = r - clusters.radius[c];
+        w.cluster_inside[c] = inner >= 0.0 && (clusters.centre[c] - x).squaredNorm() <= inner * inner;
+        if (!w.cluster_inside[c]) return false;
+        m0 += clusters.mu0[c];
+        m1 += clusters.mu1[c];
+        for (int i = clusters.around_start[c]; i < clusters.around_start[c + 1]; ++i)
+          push(clusters.around[std::size_t(i)]);
+        return true;
+      };
+      for (std::size_t head = 0; head < w.queue.size(); ++head) {
+        const int f = w.queue[head];
+        if (use_clusters && summed_with_cluster(f)) continue;
+        const WalkFace& d = face[std::size_t(f)];
+        // Squared distances: the tests against r -+ rho need no root, and dmin, dmax are the roots
+        // of the least and largest squares (a root is monotonic: the same numbers as the norms).
+        const double dc2 = (d.centroid - x).squaredNorm();
+        const double inner = r - d.rho, outer = r + d.rho;
+        double weight;
+        if (inner >= 0.0 && dc2 <= inner * inner) {
+          weight = 1.0;  // every corner within r: dmax <= r
+        } else if (dc2 >= outer * outer) {
+          continue;  // every corner at r or beyond: weight 0, the walk stops here
+        } else {
+          double least = dc2, largest = dc2;
+          for (const int k : d.corners) {
+            const double dk2 = (position[std::size_t(k)] - x).squaredNorm();
+            least = std::min(least, dk2), largest = std::max(largest, dk2);
+          }
+          weight = inclusion_ratio(std::sqrt(least), std::sqrt(largest), r);
+          if (weight <= 0.0) continue;
+        }
+        m0 += weight * d.mu0;
+        m1 += weight * d.mu1;
+        for (int j = neighbour_start[std::size_t(f)]; j < neighbour_start[std::size_t(f) + 1]; ++j)
+          push(neighbour_faces[std::size_t(j)]);
+      }
+      out.area[v] = m0;
+      out.H[v] = m0 == 0.0 ? 0.0 : m1 / (2.0 * m0);  // as estimate()
+    }
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, at.size(), 256), walk);
   return out;
 }
 
