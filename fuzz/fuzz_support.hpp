@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/memory_budget.hpp>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -13,6 +14,11 @@
 #include <string>
 
 namespace corrlap::fuzz {
+
+/// CORRLAP_MAX_MEMORY is honoured as by the command line: a long run can refuse large announced
+/// volumes at the budget check (the check itself stays fuzzed) and spend its executions on the
+/// parsing instead of filling a 256^3 grid per input.
+inline const bool budget_from_environment = (apply_memory_budget_from_environment(), true);
 
 /// Writes the input to <dir>/corrlap-fuzz-<pid><extension> (dir: $TMPDIR, else /dev/shm, else /tmp)
 /// and returns the path. The same file is reused by every run of the process.

@@ -7,6 +7,8 @@
 # budget: the same inputs on every machine, which is what CI uses (a red CI is then reproducible).
 # Prints one line per target (executions, coverage, features); exits 1 at the first finding, whose
 # reproducer libFuzzer leaves in BUILD/fuzz/ (crash-*, timeout-*, leak-*, oom-*).
+# The targets honour CORRLAP_MAX_MEMORY as the CLI does: CORRLAP_MAX_MEMORY=256K refuses volumes
+# above about 64^3 at the budget check, for long runs of the volume readers (8-30x more executions).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-fuzz}
