@@ -23,6 +23,17 @@ double surface_area(const SurfelMesh& mesh) {
   return area;
 }
 
+double enclosed_volume(const SurfelMesh& mesh) {
+  double six_volumes = 0.0;  // six times the volume, doubled by the two splits
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::RowVector3d a = mesh.positions.row(mesh.faces(f, 0)), b = mesh.positions.row(mesh.faces(f, 1)),
+                             c = mesh.positions.row(mesh.faces(f, 2)), d = mesh.positions.row(mesh.faces(f, 3));
+    // Triangles (a, b, c) + (a, c, d), and (b, c, d) + (b, d, a): a tetrahedron with the origin each.
+    six_volumes += a.dot(b.cross(c)) + a.dot(c.cross(d)) + b.dot(c.cross(d)) + b.dot(d.cross(a));
+  }
+  return six_volumes / 12.0;
+}
+
 SurfaceQuality measure_against_shape(const SurfelMesh& mesh, const ImplicitShape& shape, double curvature_radius) {
   SurfaceQuality q;
   if (mesh.num_vertices() == 0) return q;

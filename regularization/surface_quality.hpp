@@ -16,6 +16,11 @@ struct SurfaceQuality {
 /// (its vector area; exact for planar quads).
 double surface_area(const SurfelMesh& mesh);
 
+/// Volume enclosed by the quad mesh (positive for outward faces, as the surfels are): the flux of x / 3
+/// through each face split into two triangles, averaged over its two diagonals (exact for planar
+/// quads, independent of the origin on a closed mesh).
+double enclosed_volume(const SurfelMesh& mesh);
+
 /// Geometric vertex normals of the mesh as it is (docs/math.md §1.5: normalized sums of the face
 /// normals from the corners): what a viewer shades with.
 Eigen::MatrixX3d geometric_vertex_normals(const SurfelMesh& mesh);

@@ -7,6 +7,8 @@ Inputs (comma-separated, header first, unknown extra columns ignored, a file may
                    (study forward, backward or cotan; other studies are ignored)
   DIR/orders.csv   study,method,normals,function,norm,order,...   (optional; legend labels)
   DIR/eigen.csv    study,method,normals,h,center,index,exact,computed,relative_error,time_s
+  DIR/regularization.csv  study,shape,method,normals,h,alpha0,distance_*,angle_*,curvature_error_*,
+                   area_*,volume_* (each *_before and *_after)
 DIR/results.csv (one row per centre) is not read: summary.csv already holds its means.
 
 Outputs, in DIR/plots/, each in every requested format (default png at dpi 150 and svg):
@@ -15,6 +17,12 @@ Outputs, in DIR/plots/, each in every requested format (default png at dpi 150 a
                                               h^1 forward and cotan); norm is linf or l2
   eigen_<normals>_h<h>.<ext>                  |relative error| of eigenvalues 1.. (mean over
                                               centres), one line per method, multiplets marked
+  regularization_<shape>_<quantity>[_alpha0_<a>].<ext>
+                                              distance or |H| error against h, one line per
+                                              method, the staircase dashed (per alpha0 when the
+                                              study swept several)
+  alpha0_<shape>_h<h>_<quantity>.<ext>        distance, normal angle, |H| error, area or volume
+                                              against alpha0, when two or more were swept
 Empty values are undefined and skipped (corrlap writes an empty field, never nan: docs/studies.md,
 "Undefined values"; the nan of older files reads the same). The written paths are printed one per
 line on stdout.
@@ -64,13 +72,24 @@ SUMMARY_COLUMNS = (["study", "method", "normals", "function"],
                    ["h", "error_linf_mean", "error_linf_std", "error_l2_mean", "error_l2_std"])
 ORDERS_COLUMNS = (["study", "method", "normals", "function", "norm"], ["order"])
 EIGEN_COLUMNS = (["method", "normals"], ["h", "index", "relative_error"])
+# A third list names numeric columns that may be absent (NaN then): files of older versions.
 REGULARIZATION_COLUMNS = (["shape", "method", "normals"],
                           ["h", "distance_before", "distance_after", "curvature_error_before",
-                           "curvature_error_after", "area_before", "area_after"])
-# The regularization study's figures (paper Fig. 15): quantity -> (before column, after column, label).
+                           "curvature_error_after", "area_before", "area_after"],
+                          ["alpha0", "angle_before", "angle_after", "volume_before", "volume_after"])
+# The regularization study's figures against h (paper Fig. 15): quantity -> (before column, after
+# column, label).
 REGULARIZATION_QUANTITIES = {
     "distance": ("distance_before", "distance_after", "mean distance to the true surface"),
     "curvature": ("curvature_error_before", "curvature_error_after", "mean |H - H_true|"),
+}
+# Against alpha0 (paper Fig. 13): quantity -> (before column, after column, label, log y).
+ALPHA0_QUANTITIES = {
+    "distance": ("distance_before", "distance_after", "mean distance to the true surface", True),
+    "angle": ("angle_before", "angle_after", "mean normal angle (degrees)", True),
+    "curvature": ("curvature_error_before", "curvature_error_after", "mean |H - H_true|", True),
+    "area": ("area_before", "area_after", "area", False),
+    "volume": ("volume_before", "volume_after", "enclosed volume", False),
 }
 
 
@@ -90,7 +109,8 @@ def read_table(path, columns):
     """
     if not os.path.isfile(path):
         return None
-    text_columns, number_columns = columns
+    text_columns, number_columns = columns[0], columns[1]
+    optional_columns = columns[2] if len(columns) > 2 else []
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
         if reader.fieldnames is None:
@@ -104,6 +124,8 @@ def read_table(path, columns):
             row = {column: (raw[column] or "").strip() for column in text_columns}
             for column in number_columns:
                 row[column] = number(raw[column], f"{path}:{reader.line_num}", column)
+            for column in optional_columns:
+                row[column] = number(raw.get(column), f"{path}:{reader.line_num}", column)
             rows.append(row)
         return rows
 
@@ -283,7 +305,7 @@ def plot_eigen_study(directory, eigen, colors, formats):
     return paths
 
 
-def plot_regularization(rows, shape, quantity, colors):
+def plot_regularization(rows, title, quantity, colors):
     """One log-log figure of a quality against h for one shape: one line per method after the
     regularization, the staircase (before) dashed; None when nothing is positive."""
     before_column, after_column, label = REGULARIZATION_QUANTITIES[quantity]
@@ -310,7 +332,47 @@ def plot_regularization(rows, shape, quantity, colors):
     ax.set_yscale("log")
     ax.set_xlabel("grid step h")
     ax.set_ylabel(label)
-    ax.set_title(f"regularization, {shape}: {label}")
+    ax.set_title(f"regularization, {title}: {label}")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def plot_alpha0(rows, title, quantity, colors):
+    """One figure of a quality against alpha0 (log x) for one shape and h: one line per method,
+    the staircase dashed and each method without alpha0 (the baseline) dotted, both horizontal;
+    None when no method has two finite values."""
+    before_column, after_column, label, log_y = ALPHA0_QUANTITIES[quantity]
+    usable = (lambda v: positive(v)) if log_y else (lambda v: math.isfinite(v))
+    by_method, flat = {}, {}
+    staircase = None
+    for row in rows:
+        if usable(row[before_column]):
+            staircase = row[before_column]
+        if not usable(row[after_column]):
+            continue
+        if positive(row["alpha0"]):
+            by_method.setdefault(row["method"], []).append((row["alpha0"], row[after_column]))
+        else:
+            flat[row["method"]] = row[after_column]
+    by_method = {m: sorted(points) for m, points in by_method.items() if len(points) >= 2}
+    if not by_method:
+        return None
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    if staircase is not None:
+        ax.axhline(staircase, linestyle="--", color="grey", label="digital surface")
+    for method in sorted(flat):
+        ax.axhline(flat[method], linestyle=":", color=colors[method], label=f"{method} (no alpha0)")
+    for method in sorted(by_method):
+        points = by_method[method]
+        ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", color=colors[method], label=method)
+    ax.set_xscale("log")
+    if log_y:
+        ax.set_yscale("log")
+    ax.set_xlabel("attachment weight alpha0")
+    ax.set_ylabel(label)
+    ax.set_title(f"regularization, {title}: {label}")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
@@ -318,15 +380,32 @@ def plot_regularization(rows, shape, quantity, colors):
 
 
 def plot_regularization_study(directory, rows, colors, formats):
+    """Against h, per shape (and per alpha0 when several, the baseline in each); against alpha0,
+    per shape and h when the study swept two or more."""
     shapes = {}
     for row in rows:
         shapes.setdefault(row["shape"], []).append(row)
     paths = []
     for shape in sorted(shapes):
-        for quantity in REGULARIZATION_QUANTITIES:
-            fig = plot_regularization(shapes[shape], shape, quantity, colors)
-            if fig is not None:
-                paths += save(fig, directory, f"regularization_{safe_name(shape)}_{quantity}", formats)
+        shape_rows = shapes[shape]
+        weights = sorted({row["alpha0"] for row in shape_rows if positive(row["alpha0"])})
+        for alpha0 in weights if len(weights) > 1 else [None]:
+            selected = [row for row in shape_rows
+                        if alpha0 is None or not positive(row["alpha0"]) or row["alpha0"] == alpha0]
+            title = shape if alpha0 is None else f"{shape}, alpha0 = {alpha0:g}"
+            suffix = "" if alpha0 is None else f"_alpha0_{alpha0:g}"
+            for quantity in REGULARIZATION_QUANTITIES:
+                fig = plot_regularization(selected, title, quantity, colors)
+                if fig is not None:
+                    paths += save(fig, directory, f"regularization_{safe_name(shape)}_{quantity}{suffix}", formats)
+        if len(weights) < 2:
+            continue
+        for h in sorted({row["h"] for row in shape_rows if positive(row["h"])}):
+            selected = [row for row in shape_rows if row["h"] == h]
+            for quantity in ALPHA0_QUANTITIES:
+                fig = plot_alpha0(selected, f"{shape}, h = {h:g}", quantity, colors)
+                if fig is not None:
+                    paths += save(fig, directory, f"alpha0_{safe_name(shape)}_h{h:g}_{quantity}", formats)
     return paths
 
 

@@ -1,5 +1,7 @@
 #include "regularization_study.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
@@ -23,8 +25,8 @@ namespace corrlap {
 namespace {
 
 constexpr const char* kHeader =
-    "study,shape,method,normals,h,resolution,vertices,faces,distance_before,distance_after,angle_before,angle_after,"
-    "curvature_error_before,curvature_error_after,area_before,area_after,time_s";
+    "study,shape,method,normals,h,resolution,alpha0,vertices,faces,distance_before,distance_after,angle_before,"
+    "angle_after,curvature_error_before,curvature_error_after,area_before,area_after,volume_before,volume_after,time_s";
 
 DigitizationParams box(const RegularizationStudyOptions& o, double h) {
   DigitizationParams p;
@@ -67,7 +69,14 @@ void RegularizationStudyOptions::validate() const {
   if (h.empty()) detail::refuse_repeats(resolutions, "resolution", "resolutions", "study regularization");
   if (normals != to_string(NormalSource::II) && normals != to_string(NormalSource::True))
     throw InputError("study regularization: normals '" + normals + "': expected ii or true", "normals");
-  if (!(alpha0 > 0.0)) throw InputError("study regularization: alpha0 must be positive");
+  if (alpha0.empty()) throw InputError("study regularization: no alpha0", "alpha0");
+  for (double a : alpha0)
+    if (!(a > 0.0) || !std::isfinite(a)) {
+      std::ostringstream os;
+      os << "study regularization: alpha0 must be a positive number, got " << a;
+      throw InputError(os.str(), "alpha0");
+    }
+  detail::refuse_repeats(alpha0, "alpha0 =", "alpha0", "study regularization");
   if (!(max_aabb > min_aabb)) throw InputError("study regularization: the box must have max > min");
 }
 
@@ -76,7 +85,10 @@ void run_regularization_study(const RegularizationStudyOptions& o,
                               const std::function<void(const RegularizationStudyProgress&)>& progress) {
   o.validate();
   RegularizationStudyProgress p;
-  p.total = int(o.shapes.size() * (o.h.empty() ? o.resolutions.size() : o.h.size()) * o.methods.size());
+  const auto laplacians =
+      std::count_if(o.methods.begin(), o.methods.end(), [](const std::string& m) { return m != "alignment"; });
+  const auto per_step = std::size_t(laplacians) * o.alpha0.size() + (o.methods.size() - std::size_t(laplacians));
+  p.total = int(o.shapes.size() * (o.h.empty() ? o.resolutions.size() : o.h.size()) * per_step);
   for (const std::string& name : o.shapes) {
     const ImplicitShape shape = make_implicit_shape(name);
     std::vector<std::pair<double, int>> steps;  // (h, resolution)
@@ -107,51 +119,62 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       const double radius = default_curvature_radius(surface);
       const SurfaceQuality before = measure_against_shape(mesh, shape, radius);
       const double area_before = surface_area(mesh);
+      const double volume_before = enclosed_volume(mesh);
       RegularizationOptions options;
-      options.alpha0 = o.alpha0;
       options.solver.set("solver", o.linear_solver);
-      std::optional<RegularizationCurvature> curvature;  // the same for every Laplacian method
+      std::optional<RegularizationCurvature> curvature;  // the same for every Laplacian method and alpha0
       for (const std::string& method : o.methods) {
-        const Stopwatch watch;
-        SurfelMesh result = mesh;
-        try {
-          if (method == "alignment") {
-            result.positions = alignment_regularization(mesh, normals.face).positions;
-          } else {
-            options.method = method;
-            if (!curvature) curvature = regularization_curvature(surface, normals, options);
-            result = regularize_surface(surface, normals, options, &*curvature).mesh;
+        // The baseline has no attachment weight: one unit, alpha0 NaN.
+        const std::vector<double> weights = method == "alignment" ? std::vector<double>{detail::kNaN} : o.alpha0;
+        for (const double alpha0 : weights) {
+          const Stopwatch watch;
+          SurfelMesh result = mesh;
+          try {
+            if (method == "alignment") {
+              result.positions = alignment_regularization(mesh, normals.face).positions;
+            } else {
+              options.method = method;
+              options.alpha0 = alpha0;
+              if (!curvature) curvature = regularization_curvature(surface, normals, options);
+              result = regularize_surface(surface, normals, options, &*curvature).mesh;
+            }
+          } catch (const Error& e) {
+            std::ostringstream os;
+            os << "study regularization: " << name << " at h = " << h << ", " << method;
+            if (method != "alignment") os << ", alpha0 = " << alpha0;
+            os << ": " << e.what();
+            if (dynamic_cast<const InputError*>(&e)) throw InputError(os.str());
+            throw NumericalError(os.str());
           }
-        } catch (const Error& e) {
-          std::ostringstream os;
-          os << "study regularization: " << name << " at h = " << h << ", " << method << ": " << e.what();
-          if (dynamic_cast<const InputError*>(&e)) throw InputError(os.str());
-          throw NumericalError(os.str());
+          RegularizationStudyRow r;
+          r.time_s = watch.elapsed();
+          r.shape = name;
+          r.method = method;
+          r.normals = o.normals;
+          r.h = h;
+          r.resolution = resolution;
+          r.alpha0 = alpha0;
+          r.vertices = mesh.num_vertices();
+          r.faces = mesh.num_faces();
+          const SurfaceQuality after = measure_against_shape(result, shape, radius);
+          r.distance_before = before.distance_l1;
+          r.distance_after = after.distance_l1;
+          r.angle_before = before.normal_angle_deg;
+          r.angle_after = after.normal_angle_deg;
+          r.curvature_error_before = before.mean_curvature_error;
+          r.curvature_error_after = after.mean_curvature_error;
+          r.area_before = area_before;
+          r.area_after = surface_area(result);
+          r.volume_before = volume_before;
+          r.volume_after = enclosed_volume(result);
+          if (row) row(r);
+          ++p.done;
+          p.shape = name;
+          p.method = method;
+          p.h = h;
+          p.alpha0 = alpha0;
+          if (progress) progress(p);
         }
-        RegularizationStudyRow r;
-        r.time_s = watch.elapsed();
-        r.shape = name;
-        r.method = method;
-        r.normals = o.normals;
-        r.h = h;
-        r.resolution = resolution;
-        r.vertices = mesh.num_vertices();
-        r.faces = mesh.num_faces();
-        const SurfaceQuality after = measure_against_shape(result, shape, radius);
-        r.distance_before = before.distance_l1;
-        r.distance_after = after.distance_l1;
-        r.angle_before = before.normal_angle_deg;
-        r.angle_after = after.normal_angle_deg;
-        r.curvature_error_before = before.mean_curvature_error;
-        r.curvature_error_after = after.mean_curvature_error;
-        r.area_before = area_before;
-        r.area_after = surface_area(result);
-        if (row) row(r);
-        ++p.done;
-        p.shape = name;
-        p.method = method;
-        p.h = h;
-        if (progress) progress(p);
       }
     }
   }
@@ -161,12 +184,13 @@ void write_regularization_csv(const std::string& path, const std::vector<Regular
   std::FILE* f = detail::open_csv(path, false, kHeader);
   using detail::number;
   for (const RegularizationStudyRow& r : rows)
-    std::fprintf(f, "regularization,%s,%s,%s,%s,%d,%lld,%lld,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", r.shape.c_str(),
-                 r.method.c_str(), r.normals.c_str(), number(r.h).c_str(), r.resolution, r.vertices, r.faces,
-                 number(r.distance_before).c_str(), number(r.distance_after).c_str(), number(r.angle_before).c_str(),
-                 number(r.angle_after).c_str(), number(r.curvature_error_before).c_str(),
-                 number(r.curvature_error_after).c_str(), number(r.area_before).c_str(), number(r.area_after).c_str(),
-                 number(r.time_s).c_str());
+    std::fprintf(f, "regularization,%s,%s,%s,%s,%d,%s,%lld,%lld,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", r.shape.c_str(),
+                 r.method.c_str(), r.normals.c_str(), number(r.h).c_str(), r.resolution, number(r.alpha0).c_str(),
+                 r.vertices, r.faces, number(r.distance_before).c_str(), number(r.distance_after).c_str(),
+                 number(r.angle_before).c_str(), number(r.angle_after).c_str(),
+                 number(r.curvature_error_before).c_str(), number(r.curvature_error_after).c_str(),
+                 number(r.area_before).c_str(), number(r.area_after).c_str(), number(r.volume_before).c_str(),
+                 number(r.volume_after).c_str(), number(r.time_s).c_str());
   detail::close_csv(f, path);
 }
 
@@ -180,17 +204,20 @@ std::vector<RegularizationStudyRow> read_regularization_csv(const std::string& p
     r.normals = row.fields[3];
     r.h = csv.required_number(row, 4);
     r.resolution = int(csv.required_integer(row, 5));
-    r.vertices = csv.required_integer(row, 6);
-    r.faces = csv.required_integer(row, 7);
-    r.distance_before = csv.number(row, 8);
-    r.distance_after = csv.number(row, 9);
-    r.angle_before = csv.number(row, 10);
-    r.angle_after = csv.number(row, 11);
-    r.curvature_error_before = csv.number(row, 12);
-    r.curvature_error_after = csv.number(row, 13);
-    r.area_before = csv.number(row, 14);
-    r.area_after = csv.number(row, 15);
-    r.time_s = csv.number(row, 16);
+    r.alpha0 = csv.number(row, 6);
+    r.vertices = csv.required_integer(row, 7);
+    r.faces = csv.required_integer(row, 8);
+    r.distance_before = csv.number(row, 9);
+    r.distance_after = csv.number(row, 10);
+    r.angle_before = csv.number(row, 11);
+    r.angle_after = csv.number(row, 12);
+    r.curvature_error_before = csv.number(row, 13);
+    r.curvature_error_after = csv.number(row, 14);
+    r.area_before = csv.number(row, 15);
+    r.area_after = csv.number(row, 16);
+    r.volume_before = csv.number(row, 17);
+    r.volume_after = csv.number(row, 18);
+    r.time_s = csv.number(row, 19);
     out.push_back(r);
   }
   return out;

@@ -45,9 +45,9 @@ struct StudyArgs {
   std::vector<double> bbox = {-2.0, 2.0};
   std::string out;
   bool resume = false, overwrite = false, no_plots = false;
-  // The regularization study (paper Fig. 15)
+  // The regularization study (paper Fig. 13 and 15)
   std::string shapes = "sphere1,torus,goursat";
-  double alpha0 = 10.0;
+  std::string alpha0 = "10";
   bool bbox_given = false;
   bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
   CLI::Option *h_option = nullptr, *resolutions_option = nullptr, *diffusion_option = nullptr;
@@ -139,7 +139,15 @@ void run_regularization(const StudyArgs& a) {
     if (a.h_option->count() > 0) throw InputError("study regularization: give --h or --resolutions, not both");
   }
   o.normals = a.normals_given ? a.options.normals : "ii";
-  o.alpha0 = a.alpha0;
+  o.alpha0.clear();
+  for (const std::string& item : split_list(a.alpha0)) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size())
+      throw InputError("study regularization: --alpha0: '" + item + "' is not a number (expected a list 0.1,1,10)",
+                       "alpha0");
+    o.alpha0.push_back(v);  // the study's options check the values
+  }
   if (a.bbox_given) {
     o.min_aabb = a.bbox[0];
     o.max_aabb = a.bbox[1];
@@ -167,14 +175,18 @@ void run_regularization(const StudyArgs& a) {
       [&](const RegularizationStudyProgress& p) {
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::cerr << "study regularization " << p.done << "/" << p.total << "  " << p.shape << " h=" << p.h << " "
-                  << p.method << "  elapsed " << format_seconds(elapsed) << "\n";
+                  << p.method;
+        if (p.method != "alignment") std::cerr << " alpha0=" << p.alpha0;
+        std::cerr << "  elapsed " << format_seconds(elapsed) << "\n";
       });
   if (!a.no_plots) run_plot_script(out.path());
   out.commit();
   std::cout << "study: " << table << "\n";
   for (const RegularizationStudyRow& r : rows)
-    std::cout << "  " << r.shape << " h=" << r.h << " " << r.method << ": distance " << r.distance_before << " -> "
-              << r.distance_after << ", |dH| " << r.curvature_error_before << " -> " << r.curvature_error_after << "\n";
+    std::cout << "  " << r.shape << " h=" << r.h << " " << r.method
+              << (r.method == "alignment" ? std::string() : " alpha0=" + number_text(r.alpha0)) << ": distance "
+              << r.distance_before << " -> " << r.distance_after << ", |dH| " << r.curvature_error_before << " -> "
+              << r.curvature_error_after << ", area " << r.area_before << " -> " << r.area_after << "\n";
 }
 
 // An option of one kind of study given to another is refused rather than silently ignored.
@@ -415,8 +427,10 @@ RegisterCommand reg(45, "study", [](CLI::App& app) {
           ->capture_default_str();
   cmd->add_option("--shapes", args->shapes, "regularization: implicit shapes")->capture_default_str();
   cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold, kAllowNonmanifoldNote);
-  cmd->add_option("--alpha0", args->alpha0, "regularization: attachment weight alpha = alpha0 / (h size)^2")
-      ->check(positive_number())
+  cmd->add_option(
+         "--alpha0", args->alpha0,
+         "regularization: attachment weights alpha = alpha0 / (h size)^2, a list swept (0.01,0.1,1,10,100,1000 "
+         "for the paper's Fig. 13)")
       ->capture_default_str();
   cmd->add_option("--refine-vertices", args->options.refine_vertices,
                   "cotan: Loop-subdivide the mesh to at least this many vertices (0: as given)")

@@ -222,6 +222,33 @@ def test_regularization_study_figures(tmp_path):
     assert all(os.path.getsize(p) > 1000 for p in paths)
 
 
+SWEEP_HEADER = ("study,shape,method,normals,h,resolution,alpha0,vertices,faces,distance_before,distance_after,"
+                "angle_before,angle_after,curvature_error_before,curvature_error_after,area_before,area_after,"
+                "volume_before,volume_after,time_s")
+
+
+def test_alpha0_sweep_figures(tmp_path):
+    """An alpha0 sweep (paper Fig. 13): against h once per alpha0, against alpha0 once per h and
+    quantity; the baseline (empty alpha0) is a flat line, not a point."""
+    rows = []
+    for h in (0.2, 0.1):
+        for alpha0 in (0.01, 1, 100):
+            for method, c in (("fem", 1.0), ("polydec", 1.0 + 1 / alpha0)):
+                rows.append(("regularization", "sphere1", method, "ii", h, 0, alpha0, 100, 100, h / 4, c * h ** 2,
+                             17.0, c, 0.5, c * h, 18.0, 12.6 * c, 4.0, 4.2 * c, 0.1))
+        rows.append(("regularization", "sphere1", "alignment", "ii", h, 0, "", 100, 100, h / 4, h / 8,
+                     17.0, 2.0, 0.5, h, 18.0, 12.3, 4.0, 4.1, 0.1))
+    write(tmp_path / "regularization.csv", SWEEP_HEADER, rows)
+    paths = plot_study.plot_study(str(tmp_path), formats=("png",))
+    names = sorted(os.path.basename(p) for p in paths)
+    against_h = [f"regularization_sphere1_{q}_alpha0_{a}.png" for a in ("0.01", "1", "100")
+                 for q in ("curvature", "distance")]
+    against_alpha0 = [f"alpha0_sphere1_h{h}_{q}.png" for h in ("0.1", "0.2")
+                      for q in ("angle", "area", "curvature", "distance", "volume")]
+    assert names == sorted(against_h + against_alpha0)
+    assert all(os.path.getsize(p) > 1000 for p in paths)
+
+
 def test_header_only_is_exit_1(tmp_path, capsys):
     write(tmp_path / "summary.csv", SUMMARY_HEADER, [])
     assert plot_study.main([str(tmp_path)]) == 1

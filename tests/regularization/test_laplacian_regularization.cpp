@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <corrlap/corrlap.hpp>
+#include <numbers>
 
 #include "regularization/sphere_fixture.hpp"
 
@@ -259,4 +260,23 @@ TEST_CASE("regularize_positions_preconditioned refuses an L that is not negative
   auto factor = make_linear_solver("cholmod");
   CHECK_THROWS_AS(regularize_positions_preconditioned(wrong_sign, ops.M, p, n, H, regularization_alpha(0.1), *factor),
                   SolverError);
+}
+
+TEST_CASE("enclosed_volume: the staircase holds its voxels, translations change nothing, reversed faces negate") {
+  const ImplicitShape shape = make_implicit_shape("sphere1");
+  const VoxelGrid grid = digitize(shape, {.h = 0.1, .min_aabb = -1.5, .max_aabb = 1.5});
+  SurfelMesh mesh = extract_surface(grid);
+  // A union of cubes with planar faces: exactly the voxel count times h^3 (to rounding).
+  const double voxels = double(grid.count()) * 0.001;
+  CHECK(enclosed_volume(mesh) == doctest::Approx(voxels).epsilon(1e-12));
+  CHECK(voxels == doctest::Approx(4.0 / 3.0 * std::numbers::pi).epsilon(0.05));
+  // The regularized sphere: not planar, within 1% of the ball's volume.
+  const RegularizedSurface r = regularize_surface(sphere().mesh, sphere().normals);
+  CHECK(enclosed_volume(r.mesh) == doctest::Approx(4.0 / 3.0 * std::numbers::pi).epsilon(0.01));
+  const double before = enclosed_volume(r.mesh);
+  SurfelMesh moved = r.mesh;
+  moved.positions.rowwise() += Eigen::RowVector3d(3.0, -2.0, 7.0);
+  CHECK(enclosed_volume(moved) == doctest::Approx(before).epsilon(1e-10));
+  moved.faces = moved.faces.rowwise().reverse().eval();
+  CHECK(enclosed_volume(moved) == doctest::Approx(-before).epsilon(1e-10));
 }
