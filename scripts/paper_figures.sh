@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# The paper's §4 figures and tables reproduced (docs/paper.md): each part runs corrlap's commands,
+# writes its tables as Markdown and its pictures under OUT, and copies what the docs show into
+# docs/images/paper/ (with --docs).
+#
+#   scripts/paper_figures.sh [--docs] [OUT_DIR]        (default OUT_DIR corrlap-paper-figures)
+#
+# Parts:
+#   fig13  the attachment weight alpha0 swept, corrected (fem) against uncorrected (polydec) and the
+#          baseline [17], on sphere1, torus and goursat at 32 and 64 voxels across: the study's CSV,
+#          its plots against alpha0, a table, and goursat drawn at alpha0 = 0.1 and 1000.
+# Needs a built corrlap (make build) and python3-matplotlib. PARTS="fig13" selects parts.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+CORRLAP=${CORRLAP:-build/bin/corrlap}
+DOCS=0
+if [ "${1:-}" = "--docs" ]; then
+  DOCS=1
+  shift
+fi
+OUT=${1:-corrlap-paper-figures}
+PARTS=${PARTS:-fig13}
+mkdir -p "$OUT"
+IMAGES=docs/images/paper
+
+fig13() {
+  local dir="$OUT/fig13"
+  mkdir -p "$dir"
+  "$CORRLAP" study regularization --shapes sphere1,torus,goursat --resolutions 32,64 \
+    --alpha0 0.01,0.1,1,10,100,1000 --methods fem,polydec,alignment --overwrite --out "$dir/study" \
+    2>"$dir/study.log" >/dev/null
+  /usr/bin/python3 - "$dir/study/regularization.csv" >"$dir/table.md" <<'PY'
+import csv
+import sys
+
+rows = list(csv.DictReader(open(sys.argv[1])))
+# The true areas and volumes where they are known (sphere1: unit sphere; torus: R = 6, r = 2).
+truth = {"sphere1": ("12.57", "4.189"), "torus": ("473.7", "473.7"), "goursat": ("–", "–")}
+print("| shape | N | α₀ | area fem | area polydec | volume fem | volume polydec | distance fem | distance polydec |")
+print("|---|---|---|---|---|---|---|---|---|")
+for shape in ("sphere1", "torus", "goursat"):
+    for n in ("32", "64"):
+        picked = [r for r in rows if r["shape"] == shape and r["resolution"] == n]
+        if not picked:
+            continue
+        first = picked[0]
+        area, volume = truth[shape]
+        print(f"| {shape} | {n} | staircase | {float(first['area_before']):.4g} (true {area}) | | "
+              f"{float(first['volume_before']):.4g} (true {volume}) | | {float(first['distance_before']):.3g} | |")
+        weights = sorted({float(r["alpha0"]) for r in picked if r["alpha0"]})
+        for a in weights:
+            by = {r["method"]: r for r in picked if r["alpha0"] and float(r["alpha0"]) == a}
+            f, p = by["fem"], by["polydec"]
+            print(f"| | | {a:g} | {float(f['area_after']):.4g} | {float(p['area_after']):.4g} | "
+                  f"{float(f['volume_after']):.4g} | {float(p['volume_after']):.4g} | "
+                  f"{float(f['distance_after']):.3g} | {float(p['distance_after']):.3g} |")
+        b = [r for r in picked if r["method"] == "alignment"]
+        if b:
+            print(f"| | | [17] | {float(b[0]['area_after']):.4g} | | {float(b[0]['volume_after']):.4g} | | "
+                  f"{float(b[0]['distance_after']):.3g} | |")
+PY
+  # goursat at 64 voxels across (h = 0.4 in the box [-10, 10]), as the paper's rows: alpha0 = 0.1, 1000.
+  local view=(--view 1,-1.4,0.9 --size 500 --scalar none --no-legend)
+  for a in 0.1 1000; do
+    for m in fem polydec; do
+      "$CORRLAP" regularize --shape goursat --h 0.4 --bbox -10 10 --method "$m" --alpha0 "$a" --no-render \
+        --out "$dir/goursat_${m}_$a" >/dev/null 2>"$dir/goursat_${m}_$a.log"
+      "$CORRLAP" render "$dir/goursat_${m}_$a/regularized.ply" "${view[@]}" --out "$dir/goursat_${m}_$a.png" \
+        >/dev/null 2>>"$dir/render.log"
+    done
+  done
+  /usr/bin/python3 - "$dir" <<'PY'
+import sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
+
+d = sys.argv[1]
+fig, axes = plt.subplots(2, 2, figsize=(8, 8))
+for i, a in enumerate(("0.1", "1000")):
+    for j, (m, label) in enumerate((("fem", "corrected (fem)"), ("polydec", "uncorrected (polydec)"))):
+        ax = axes[i][j]
+        ax.imshow(mpimg.imread(f"{d}/goursat_{m}_{a}.png"))
+        ax.set_title(f"{label}, α₀ = {a}")
+        ax.axis("off")
+fig.tight_layout()
+fig.savefig(f"{d}/fig13_goursat.png", dpi=100)
+PY
+  if [ "$DOCS" = 1 ]; then
+    mkdir -p "$IMAGES"
+    cp "$dir/fig13_goursat.png" "$IMAGES/fig13_goursat.png"
+    # The plots at the finer step (64 voxels across) of sphere1 and the torus.
+    local shape q finest
+    for shape in sphere1 torus; do
+      for q in area distance; do
+        finest=$(ls "$dir/study/plots/alpha0_${shape}_h"*"_$q.png" | sed 's/.*_h\([0-9.e-]*\)_.*/\1 &/' | sort -g |
+          head -1 | cut -d' ' -f2)
+        cp "$finest" "$IMAGES/fig13_${shape}_64_$q.png"
+      done
+    done
+  fi
+  echo "fig13: $dir/table.md, $dir/fig13_goursat.png, $dir/study/plots/"
+}
+
+for part in $PARTS; do
+  case "$part" in
+    fig13) fig13 ;;
+    *)
+      echo "paper_figures: unknown part '$part' (known: fig13)" >&2
+      exit 2
+      ;;
+  esac
+done
