@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace corrlap {
 
@@ -118,7 +119,8 @@ Eigen::SparseMatrix<double> lumped_mass(const Eigen::SparseMatrix<double>& M) {
 
 double regularization_alpha(double h, double alpha0) {
   if (!(h > 0.0) || !std::isfinite(h)) throw InputError("regularization: h must be a positive number");
-  if (!(alpha0 > 0.0) || !std::isfinite(alpha0)) throw InputError("regularization: alpha0 must be a positive number");
+  if (!(alpha0 >= 0.0) || !std::isfinite(alpha0))
+    throw InputError("regularization: alpha0 must be a finite number >= 0 (0: no attachment)");
   return alpha0 / (h * h);
 }
 
@@ -265,6 +267,107 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   }
   cg.status = SolverStatus::Success;
   cg.message = accuracy == 0.0 && normwise > 1e-10 ? os.str() + " (the rounding of A q)" : std::string();
+  return q;
+}
+
+Eigen::MatrixX3d regularize_positions_unattached(const Eigen::SparseMatrix<double>& L,
+                                                 const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
+                                                 const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
+                                                 LinearSolver& solver, SolverReport* report) {
+  check_inputs(L, M, p, normals, H);
+  const Eigen::VectorXd mass = lumped_mass(M).diagonal();
+  const Eigen::Index n = p.rows();
+  // Connected components of L's graph (its exact zeros are no edges): the null space of L.
+  Eigen::SparseMatrix<double> S = L;
+  S.makeCompressed();
+  std::vector<int> component(static_cast<std::size_t>(n), -1);
+  int C = 0;
+  std::vector<int> stack;
+  for (Eigen::Index seed = 0; seed < n; ++seed) {
+    if (component[std::size_t(seed)] >= 0) continue;
+    component[std::size_t(seed)] = C;
+    stack.assign(1, int(seed));
+    while (!stack.empty()) {
+      const int v = stack.back();
+      stack.pop_back();
+      for (Eigen::SparseMatrix<double>::InnerIterator it(S, v); it; ++it)
+        if (it.value() != 0.0 && component[std::size_t(it.index())] < 0) {
+          component[std::size_t(it.index())] = C;
+          stack.push_back(int(it.index()));
+        }
+    }
+    ++C;
+  }
+  // g' = g - sum_c M_l 1_c (1_c^T g) / (1_c^T M_l 1_c), g = -2 M_l H n (§9.3).
+  Eigen::MatrixX3d g = -2.0 * (mass.asDiagonal() * mean_curvature_normals(normals, H));
+  Eigen::MatrixX3d g_sum = Eigen::MatrixX3d::Zero(C, 3), p_sum = Eigen::MatrixX3d::Zero(C, 3);
+  Eigen::VectorXd mass_sum = Eigen::VectorXd::Zero(C);
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const int c = component[std::size_t(v)];
+    g_sum.row(c) += g.row(v);
+    p_sum.row(c) += mass[v] * p.row(v);
+    mass_sum[c] += mass[v];
+  }
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const int c = component[std::size_t(v)];
+    g.row(v) -= mass[v] / mass_sum[c] * g_sum.row(c);
+  }
+  // The first vertex of each component is held at 0: -L without those rows and columns.
+  std::vector<int> reduced(static_cast<std::size_t>(n), -1);
+  std::vector<char> held(static_cast<std::size_t>(C), 0);
+  int kept = 0;
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const int c = component[std::size_t(v)];
+    if (!held[std::size_t(c)]) {
+      held[std::size_t(c)] = 1;
+      continue;
+    }
+    reduced[std::size_t(v)] = kept++;
+  }
+  Eigen::MatrixX3d q = Eigen::MatrixX3d::Zero(n, 3);
+  if (kept > 0) {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(std::size_t(S.nonZeros()));
+    for (Eigen::Index j = 0; j < n; ++j) {
+      if (reduced[std::size_t(j)] < 0) continue;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(S, j); it; ++it)
+        if (reduced[std::size_t(it.index())] >= 0)
+          entries.emplace_back(reduced[std::size_t(it.index())], reduced[std::size_t(j)], -it.value());
+    }
+    Eigen::SparseMatrix<double> K(kept, kept);
+    K.setFromTriplets(entries.begin(), entries.end());
+    Eigen::MatrixX3d rhs(kept, 3), positions(kept, 3);
+    for (Eigen::Index v = 0; v < n; ++v)
+      if (reduced[std::size_t(v)] >= 0) {
+        rhs.row(reduced[std::size_t(v)]) = -g.row(v);
+        positions.row(reduced[std::size_t(v)]) = p.row(v);
+      }
+    solver.set_positions(positions);
+    try {
+      solver.compute(std::move(K));
+    } catch (const SolverError& e) {
+      if (e.status() != SolverStatus::NotPositiveDefinite) throw;
+      throw SolverError(SolverStatus::NotPositiveDefinite,
+                        std::string("regularization without attachment (alpha0 = 0) needs L negative semi-definite "
+                                    "with connected components: ") +
+                            e.what() + "; use alpha0 > 0");
+    }
+    const Eigen::MatrixXd y = solver.solve(rhs);
+    if (!y.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
+    for (Eigen::Index v = 0; v < n; ++v)
+      if (reduced[std::size_t(v)] >= 0) q.row(v) = y.row(reduced[std::size_t(v)]);
+  }
+  // Each component at the input's M_l-weighted centroid.
+  Eigen::MatrixX3d shift = p_sum;
+  for (Eigen::Index v = 0; v < n; ++v) shift.row(component[std::size_t(v)]) -= mass[v] * q.row(v);
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const int c = component[std::size_t(v)];
+    q.row(v) += shift.row(c) / mass_sum[c];
+  }
+  if (report) {
+    report->status = SolverStatus::Success;
+    report->residual = relative_residual(L * q - g, g);
+  }
   return q;
 }
 

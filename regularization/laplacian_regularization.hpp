@@ -13,7 +13,8 @@ namespace corrlap {
 Eigen::SparseMatrix<double> lumped_mass(const Eigen::SparseMatrix<double>& M);
 
 /// The default weight of the attachment term: alpha = alpha0 / h^2 (docs/math.md §9.2, alpha0 = 10),
-/// so that both terms scale alike under refinement (L p' ~ h^2 per vertex, p' - p ~ h).
+/// so that both terms scale alike under refinement (L p' ~ h^2 per vertex, p' - p ~ h). alpha0 = 0
+/// (no attachment, regularize_positions_unattached) gives 0; a negative or non-finite alpha0 throws.
 double regularization_alpha(double h, double alpha0 = 10.0);
 
 /// The largest attachment weight alpha whose system the solve represents in double precision, for
@@ -62,6 +63,18 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
                                                      const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
                                                      double alpha, LinearSolver& solver, SolverReport* report = nullptr,
                                                      double accuracy = 0.0, double* error_bound = nullptr);
+
+/// docs/math.md §9.3: the same energy without the attachment (alpha = 0, paper Fig. 11), whose
+/// minimizers solve L p' = g' (g = -2 M_l H n projected onto the range of L) and are unique up to a
+/// translation per connected component of L's graph; each component is placed with its
+/// M_l-weighted centroid at the input's. One vertex per component is held while `solver` factorizes
+/// -L without it (#V - C by #V - C, SPD for a negative semi-definite L). Throws as
+/// regularize_positions (without alpha), and SolverError NotPositiveDefinite when -L is not
+/// (the message says so). `report`, if given, receives the relative residual |L p' - g'| / |g'|.
+Eigen::MatrixX3d regularize_positions_unattached(const Eigen::SparseMatrix<double>& L,
+                                                 const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
+                                                 const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
+                                                 LinearSolver& solver, SolverReport* report = nullptr);
 
 /// The two terms of the energy above at positions q (for reports): the Laplacian term
 /// |M_l^{-1} L q + 2 H n|^2_{M_l} and the attachment term |q - p|^2_{M_l} (without alpha).

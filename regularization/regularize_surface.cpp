@@ -109,7 +109,7 @@ void check_regularization_options(const RegularizationOptions& o) {
   if (o.size) check_real(*o.size, "size", "the object size", 0.0);
   if (o.curvature_radius) check_real(*o.curvature_radius, "curvature_radius", "the curvature radius", 0.0);
   check_real(o.curvature_spacing, "curvature_spacing", "the curvature site spacing", 0.0, /*open=*/false);
-  check_real(o.alpha0, "alpha0", "alpha0", 0.0);
+  check_real(o.alpha0, "alpha0", "alpha0", 0.0, /*open=*/false);  // 0: no attachment (docs/math.md §9.3)
   if (o.alpha_step) check_real(*o.alpha_step, "alpha_step", "the step of alpha", 0.0);
   if (!std::isfinite(o.h_scale))
     throw InputError("regularization: the mean curvature scale must be a finite number, got " + number_text(o.h_scale),
@@ -244,7 +244,14 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   // With a direct backend, CG preconditioned by a factorization with L's pattern gives the normal
   // equations' solution at a fraction of the cost of factorizing L M_l^{-1} L (the header of
   // regularize_positions_preconditioned); it needs L negative semi-definite, else the direct solve.
-  if (r.solver != "cg") {
+  if (r.alpha == 0.0) {
+    SolverReport unattached;
+    r.mesh.positions =
+        regularize_positions_unattached(ops.L, ops.M, mesh.positions, r.normals, r.H, *solver, &unattached);
+    r.solve_scheme = "unattached";
+    residual = unattached.residual;
+  }
+  if (r.solver != "cg" && r.solve_scheme.empty()) {
     try {
       SolverReport cg;
       const double step = mesh.grid_step();

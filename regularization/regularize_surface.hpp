@@ -62,7 +62,7 @@ struct RegularizationOptions {
   std::optional<double> curvature_radius;
   /// Spacing of the curvature's sites, a fraction of the curvature radius (0: every vertex).
   double curvature_spacing = kCurvatureSiteSpacing;
-  double alpha0 = 10.0;  ///< alpha = alpha0 / (h size)^2
+  double alpha0 = 10.0;  ///< alpha = alpha0 / (h size)^2; 0: no attachment (docs/math.md §9.3, paper Fig. 11)
   /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
   /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.
   std::optional<double> alpha_step;
@@ -99,8 +99,9 @@ struct RegularizedSurface {
   Eigen::MatrixX3d normals;  ///< #V x 3 unit normals n used: the input's, or n' after principal edits
   double h = 0.0, size = 1.0, curvature_radius = 0.0, alpha = 0.0;
   std::string solver;  ///< backend name
-  /// "preconditioned-cg" (regularize_positions_preconditioned, the default with a direct backend)
-  /// or "direct" (regularize_positions: with "cg", or when L is not negative semi-definite).
+  /// "preconditioned-cg" (regularize_positions_preconditioned, the default with a direct backend),
+  /// "direct" (regularize_positions: with "cg", or when L is not negative semi-definite), or
+  /// "unattached" (alpha0 = 0: regularize_positions_unattached).
   std::string solve_scheme;
   int solve_iterations = 0;  ///< CG iterations of the preconditioned scheme
   /// The preconditioned scheme's bound on the RMS error of the positions, in grid steps (0 for the

@@ -6,10 +6,13 @@
 #   scripts/paper_figures.sh [--docs] [OUT_DIR]        (default OUT_DIR corrlap-paper-figures)
 #
 # Parts:
+#   fig11  no attachment (alpha0 = 0) against the default (10): the study's distances and curvature
+#          errors on the three shapes, and the torus coloured by its signed distance to the truth.
 #   fig13  the attachment weight alpha0 swept, corrected (fem) against uncorrected (polydec) and the
 #          baseline [17], on sphere1, torus and goursat at 32 and 64 voxels across: the study's CSV,
 #          its plots against alpha0, a table, and goursat drawn at alpha0 = 0.1 and 1000.
-# Needs a built corrlap (make build) and python3-matplotlib. PARTS="fig13" selects parts.
+# Needs a built corrlap (make build, with its Python module) and python3-matplotlib. PARTS="fig11 fig13"
+# selects parts (default all).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CORRLAP=${CORRLAP:-build/bin/corrlap}
@@ -19,9 +22,84 @@ if [ "${1:-}" = "--docs" ]; then
   shift
 fi
 OUT=${1:-corrlap-paper-figures}
-PARTS=${PARTS:-fig13}
+PARTS=${PARTS:-fig11 fig13}
+export PYTHONPATH="$PWD/build/python${PYTHONPATH:+:$PYTHONPATH}"
 mkdir -p "$OUT"
 IMAGES=docs/images/paper
+
+fig11() {
+  local dir="$OUT/fig11"
+  mkdir -p "$dir"
+  "$CORRLAP" study regularization --shapes sphere1,torus,goursat --resolutions 32,64 --alpha0 0,10 \
+    --methods fem,polydec --overwrite --no-plots --out "$dir/study" 2>"$dir/study.log" >/dev/null
+  /usr/bin/python3 - "$dir/study/regularization.csv" >"$dir/table.md" <<'PY'
+import csv
+import sys
+
+rows = list(csv.DictReader(open(sys.argv[1])))
+print("| shape | N | staircase distance | fem α₀ = 0 | fem α₀ = 10 | polydec α₀ = 0 | polydec α₀ = 10 |"
+      " fem \\|ΔH\\| α₀ = 0 | fem \\|ΔH\\| α₀ = 10 |")
+print("|---|---|---|---|---|---|---|---|---|")
+for shape in ("sphere1", "torus", "goursat"):
+    for n in ("32", "64"):
+        by = {(r["method"], float(r["alpha0"])): r for r in rows if r["shape"] == shape and r["resolution"] == n}
+        if not by:
+            continue
+        d = lambda m, a: f"{float(by[(m, a)]['distance_after']):.3g}"
+        e = lambda m, a: f"{float(by[(m, a)]['curvature_error_after']):.3g}"
+        first = by[("fem", 0.0)]
+        print(f"| {shape} | {n} | {float(first['distance_before']):.3g} | {d('fem', 0.0)} | {d('fem', 10.0)} | "
+              f"{d('polydec', 0.0)} | {d('polydec', 10.0)} | {e('fem', 0.0)} | {e('fem', 10.0)} |")
+PY
+  # The torus (R = 6, r = 2, about the z axis) at 64 voxels across, coloured by the signed distance.
+  for a in 0 10; do
+    "$CORRLAP" regularize --shape torus --h 0.25 --bbox -10 10 --alpha0 "$a" --no-render --out "$dir/torus_$a" \
+      >/dev/null 2>"$dir/torus_$a.log"
+  done
+  /usr/bin/python3 - "$dir" <<'PY'
+import sys
+import numpy as np
+import corrlap
+
+d = sys.argv[1]
+def signed_distance(V):
+    ring = np.hypot(V[:, 0], V[:, 1]) - 6.0
+    return np.hypot(ring, V[:, 2]) - 2.0
+for name, path in (("staircase", f"{d}/torus_0/input.ply"), ("alpha0_0", f"{d}/torus_0/regularized.ply"),
+                   ("alpha0_10", f"{d}/torus_10/regularized.ply")):
+    V, F = corrlap.read_mesh(path)
+    distance = signed_distance(V)
+    corrlap.write_mesh(f"{d}/torus_{name}_distance.ply", V, F, vertex_scalars={"distance": distance})
+    print(f"{name}: mean |distance| {np.abs(distance).mean():.4g}, max {np.abs(distance).max():.4g}")
+PY
+  local view=(--view 0.2,-1,1.1 --size 500 --scalar distance --range -0.12,0.12 --colormap diverging)
+  for name in staircase alpha0_0 alpha0_10; do
+    "$CORRLAP" render "$dir/torus_${name}_distance.ply" "${view[@]}" --out "$dir/torus_$name.png" \
+      >/dev/null 2>>"$dir/render.log"
+  done
+  /usr/bin/python3 - "$dir" <<'PY'
+import sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
+
+d = sys.argv[1]
+fig, axes = plt.subplots(1, 3, figsize=(13, 4.8))
+for ax, (name, title) in zip(axes, (("staircase", "staircase"), ("alpha0_0", "no attachment (α₀ = 0)"),
+                                    ("alpha0_10", "α₀ = 10 (default)"))):
+    ax.imshow(mpimg.imread(f"{d}/torus_{name}.png"))
+    ax.set_title(f"{title}: signed distance to the torus")
+    ax.axis("off")
+fig.tight_layout()
+fig.savefig(f"{d}/fig11_torus.png", dpi=100)
+PY
+  if [ "$DOCS" = 1 ]; then
+    mkdir -p "$IMAGES"
+    cp "$dir/fig11_torus.png" "$IMAGES/fig11_torus.png"
+  fi
+  echo "fig11: $dir/table.md, $dir/fig11_torus.png"
+}
 
 fig13() {
   local dir="$OUT/fig13"
@@ -105,9 +183,10 @@ PY
 
 for part in $PARTS; do
   case "$part" in
+    fig11) fig11 ;;
     fig13) fig13 ;;
     *)
-      echo "paper_figures: unknown part '$part' (known: fig13)" >&2
+      echo "paper_figures: unknown part '$part' (known: fig11 fig13)" >&2
       exit 2
       ;;
   esac

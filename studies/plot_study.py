@@ -341,8 +341,8 @@ def plot_regularization(rows, title, quantity, colors):
 
 def plot_alpha0(rows, title, quantity, colors):
     """One figure of a quality against alpha0 (log x) for one shape and h: one line per method,
-    the staircase dashed and each method without alpha0 (the baseline) dotted, both horizontal;
-    None when no method has two finite values."""
+    the staircase dashed, and dotted horizontal lines for what has no place on a log axis: the
+    baseline (no alpha0) and any method at alpha0 = 0; None when no method has two values."""
     before_column, after_column, label, log_y = ALPHA0_QUANTITIES[quantity]
     usable = (lambda v: positive(v)) if log_y else (lambda v: math.isfinite(v))
     by_method, flat = {}, {}
@@ -354,16 +354,19 @@ def plot_alpha0(rows, title, quantity, colors):
             continue
         if positive(row["alpha0"]):
             by_method.setdefault(row["method"], []).append((row["alpha0"], row[after_column]))
+        elif math.isfinite(row["alpha0"]):
+            flat[f"{row['method']}, alpha0 = 0"] = (row["method"], row[after_column])
         else:
-            flat[row["method"]] = row[after_column]
+            flat[f"{row['method']} (no alpha0)"] = (row["method"], row[after_column])
     by_method = {m: sorted(points) for m, points in by_method.items() if len(points) >= 2}
     if not by_method:
         return None
     fig, ax = plt.subplots(figsize=(6, 4.5))
     if staircase is not None:
         ax.axhline(staircase, linestyle="--", color="grey", label="digital surface")
-    for method in sorted(flat):
-        ax.axhline(flat[method], linestyle=":", color=colors[method], label=f"{method} (no alpha0)")
+    for label_text in sorted(flat):
+        method, value = flat[label_text]
+        ax.axhline(value, linestyle=":", color=colors[method], label=label_text)
     for method in sorted(by_method):
         points = by_method[method]
         ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", color=colors[method], label=method)
@@ -388,17 +391,17 @@ def plot_regularization_study(directory, rows, colors, formats):
     paths = []
     for shape in sorted(shapes):
         shape_rows = shapes[shape]
-        weights = sorted({row["alpha0"] for row in shape_rows if positive(row["alpha0"])})
+        weights = sorted({row["alpha0"] for row in shape_rows if math.isfinite(row["alpha0"])})
         for alpha0 in weights if len(weights) > 1 else [None]:
             selected = [row for row in shape_rows
-                        if alpha0 is None or not positive(row["alpha0"]) or row["alpha0"] == alpha0]
+                        if alpha0 is None or not math.isfinite(row["alpha0"]) or row["alpha0"] == alpha0]
             title = shape if alpha0 is None else f"{shape}, alpha0 = {alpha0:g}"
             suffix = "" if alpha0 is None else f"_alpha0_{alpha0:g}"
             for quantity in REGULARIZATION_QUANTITIES:
                 fig = plot_regularization(selected, title, quantity, colors)
                 if fig is not None:
                     paths += save(fig, directory, f"regularization_{safe_name(shape)}_{quantity}{suffix}", formats)
-        if len(weights) < 2:
+        if len([a for a in weights if a > 0]) < 2:
             continue
         for h in sorted({row["h"] for row in shape_rows if positive(row["h"])}):
             selected = [row for row in shape_rows if row["h"] == h]

@@ -71,9 +71,9 @@ void RegularizationStudyOptions::validate() const {
     throw InputError("study regularization: normals '" + normals + "': expected ii or true", "normals");
   if (alpha0.empty()) throw InputError("study regularization: no alpha0", "alpha0");
   for (double a : alpha0)
-    if (!(a > 0.0) || !std::isfinite(a)) {
+    if (!(a >= 0.0) || !std::isfinite(a)) {
       std::ostringstream os;
-      os << "study regularization: alpha0 must be a positive number, got " << a;
+      os << "study regularization: alpha0 must be a finite number >= 0 (0: no attachment), got " << a;
       throw InputError(os.str(), "alpha0");
     }
   detail::refuse_repeats(alpha0, "alpha0 =", "alpha0", "study regularization");

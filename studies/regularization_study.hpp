@@ -21,8 +21,8 @@ struct RegularizationStudyOptions {
   /// A normal source (parse_normal_source): "ii" (the paper's, alpha = 1/3) or "true"; the baseline
   /// gets the face normals
   std::string normals = "ii";
-  /// Attachment weights swept (as RegularizationOptions::alpha0, each > 0); the baseline has none
-  /// and runs once per (shape, h).
+  /// Attachment weights swept (as RegularizationOptions::alpha0, each >= 0; 0: no attachment, paper
+  /// Fig. 11); the baseline has none and runs once per (shape, h).
   std::vector<double> alpha0 = {10.0};
   double min_aabb = -10.0, max_aabb = 10.0;  ///< digitization box of every shape
   int offset = 5;

@@ -343,8 +343,10 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                                  "curvature radius; the others interpolate them (0: every vertex)")
                      ->check(non_negative_number())
                      ->capture_default_str());
-  only.push_back(cmd->add_option("--alpha0", args->alpha0, "attachment weight: alpha = alpha0 / (h s)^2")
-                     ->check(positive_number())
+  only.push_back(cmd->add_option("--alpha0", args->alpha0,
+                                 "attachment weight: alpha = alpha0 / (h s)^2 (0: no attachment, the shape from the "
+                                 "curvature alone, placed at the input's centroid)")
+                     ->check(non_negative_number())
                      ->capture_default_str());
   only.push_back(
       cmd->add_option("--h-scale", args->h_scale, "curvature editing: H <- S H (paper §4.3)")->capture_default_str());

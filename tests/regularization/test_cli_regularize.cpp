@@ -98,7 +98,14 @@ TEST_CASE("regularize: bad options and surfaces are named") {
   CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --method heat-kernel --out " + dir, nullptr,
                 &err) == 1);
   CHECK(err.find("on faces") != std::string::npos);
-  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --alpha0 0 --out " + dir, nullptr, &err) != 0);
+  CHECK(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --alpha0 -1 --out " + dir, nullptr, &err) != 0);
+  CHECK(err.find("--alpha0: must be a number >= 0 (got -1)") != std::string::npos);
+  // alpha0 = 0 is the unattached solve (paper Fig. 11), not an error.
+  const std::string unattached = corrlap::test::tmp_path("regularize_alpha0_zero");
+  std::filesystem::remove_all(unattached);
+  REQUIRE(run_cli("regularize --shape sphere1 --h 0.2 --bbox -1.5 1.5 --alpha0 0 --no-render --out " + unattached,
+                  nullptr, &err) == 0);
+  CHECK(nlohmann::json::parse(corrlap::test::read_text(unattached + "/metrics.json"))["solve_scheme"] == "unattached");
   // An open surface: a flat 2 x 2 patch of quads.
   const std::string patch = corrlap::test::tmp_path("regularize_patch.obj");
   std::string obj;

@@ -280,3 +280,109 @@ TEST_CASE("enclosed_volume: the staircase holds its voxels, translations change 
   moved.faces = moved.faces.rowwise().reverse().eval();
   CHECK(enclosed_volume(moved) == doctest::Approx(-before).epsilon(1e-10));
 }
+
+TEST_CASE(
+    "without attachment (alpha0 = 0, docs/math.md §9.3): exact data returned, a minimizer, placed per component") {
+  const Sphere& s = sphere();
+  const Eigen::MatrixX3d& p = s.mesh.positions;
+  auto solver = make_linear_solver("cholmod");
+  SUBCASE("exact data is returned unchanged: the centroid fixes the translation") {
+    const Eigen::VectorXd mass = lumped_mass(s.ops.M).diagonal();
+    const Eigen::MatrixX3d Hn = -0.5 * (mass.cwiseInverse().asDiagonal() * (s.ops.L * p));
+    const Eigen::VectorXd H = Hn.rowwise().norm();
+    REQUIRE(H.minCoeff() > 0.0);
+    const Eigen::MatrixX3d n = H.cwiseInverse().asDiagonal() * Hn;
+    SolverReport report;
+    const Eigen::MatrixX3d q = regularize_positions_unattached(s.ops.L, s.ops.M, p, n, H, *solver, &report);
+    // -L has condition ~1e3 on this surface: a backward-stable solve is within ~1e-12.
+    CHECK((q - p).cwiseAbs().maxCoeff() < 1e-9);
+    CHECK(report.residual < 1e-10);
+  }
+  SUBCASE("a minimizer of the Laplacian term, any translation of it too, and the mass-weighted centroid kept") {
+    const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows());
+    const Eigen::MatrixX3d& n = s.normals.vertex;
+    const Eigen::MatrixX3d q = regularize_positions_unattached(s.ops.L, s.ops.M, p, n, H, *solver);
+    const double at_q = regularization_energy(s.ops.L, s.ops.M, p, n, H, q).laplacian;
+    CHECK(at_q < regularization_energy(s.ops.L, s.ops.M, p, n, H, p).laplacian);
+    std::srand(5);
+    for (double eps : {1e-3, 1e-5}) {
+      const Eigen::MatrixX3d d = eps * Eigen::MatrixX3d::Random(p.rows(), 3);
+      CHECK(at_q < regularization_energy(s.ops.L, s.ops.M, p, n, H, q + d).laplacian);
+    }
+    Eigen::MatrixX3d moved = q;
+    moved.rowwise() += Eigen::RowVector3d(0.3, 0.0, -0.2);
+    CHECK(regularization_energy(s.ops.L, s.ops.M, p, n, H, moved).laplacian ==
+          doctest::Approx(at_q).epsilon(1e-6).scale(1e-12));
+    const Eigen::VectorXd mass = lumped_mass(s.ops.M).diagonal();
+    const Eigen::RowVector3d centroid_p = (mass.transpose() * p) / mass.sum();
+    const Eigen::RowVector3d centroid_q = (mass.transpose() * q) / mass.sum();
+    CHECK((centroid_q - centroid_p).norm() < 1e-12);
+    // H = 1 with unit-sphere normals: the shape is a sphere of radius ~1 whatever the attachment.
+    MESSAGE("alpha0 = 0: mean distance " << mean_distance_to_unit_sphere(p) << " -> "
+                                         << mean_distance_to_unit_sphere(q));
+    CHECK(mean_distance_to_unit_sphere(q) < 0.25 * mean_distance_to_unit_sphere(p));
+  }
+  SUBCASE("the limit of the attached solution as alpha -> 0, which picks the translation nearest p") {
+    // Among the minimizers p' + t, |p' + t - p|_{M_l} is least when the centroids agree: the
+    // attached solutions converge to this one, the difference O(alpha).
+    const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows());
+    const Eigen::MatrixX3d& n = s.normals.vertex;
+    const Eigen::MatrixX3d q = regularize_positions_unattached(s.ops.L, s.ops.M, p, n, H, *solver);
+    double previous = 1.0;
+    for (const double alpha0 : {1e-2, 1e-4, 1e-6}) {
+      const Eigen::MatrixX3d attached =
+          regularize_positions(s.ops.L, s.ops.M, p, n, H, regularization_alpha(0.1, alpha0), *solver);
+      const double gap = (attached - q).cwiseAbs().maxCoeff();
+      MESSAGE("alpha0 = " << alpha0 << ": max |attached - unattached| = " << gap);
+      CHECK(gap < previous);
+      previous = gap;
+    }
+    CHECK(previous < 1e-6);
+  }
+  SUBCASE("two components: each solved as if alone, each at its own centroid") {
+    // The sphere and a copy 5 units away, as one block-diagonal system.
+    const Eigen::Index V = p.rows();
+    const auto twice = [&](const SpMat& A) {
+      std::vector<Eigen::Triplet<double>> t;
+      for (Eigen::Index j = 0; j < A.outerSize(); ++j)
+        for (SpMat::InnerIterator it(A, j); it; ++it) {
+          t.emplace_back(it.row(), it.col(), it.value());
+          t.emplace_back(it.row() + V, it.col() + V, it.value());
+        }
+      SpMat B(2 * V, 2 * V);
+      B.setFromTriplets(t.begin(), t.end());
+      return B;
+    };
+    Eigen::MatrixX3d p2(2 * V, 3), n2(2 * V, 3);
+    p2 << p, p.rowwise() + Eigen::RowVector3d(5.0, 0.0, 0.0);
+    n2 << s.normals.vertex, s.normals.vertex;
+    const Eigen::VectorXd H2 = Eigen::VectorXd::Ones(2 * V);
+    const Eigen::MatrixX3d q2 = regularize_positions_unattached(twice(s.ops.L), twice(s.ops.M), p2, n2, H2, *solver);
+    const Eigen::MatrixX3d q =
+        regularize_positions_unattached(s.ops.L, s.ops.M, p, s.normals.vertex, Eigen::VectorXd::Ones(V), *solver);
+    CHECK((q2.topRows(V) - q).cwiseAbs().maxCoeff() < 1e-9);
+    CHECK((q2.bottomRows(V) - (q.rowwise() + Eigen::RowVector3d(5.0, 0.0, 0.0))).cwiseAbs().maxCoeff() < 1e-9);
+  }
+  SUBCASE("an L that is not negative semi-definite is named") {
+    const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows());
+    const SpMat wrong_sign = -s.ops.L;
+    CHECK_THROWS_WITH_AS(regularize_positions_unattached(wrong_sign, s.ops.M, p, s.normals.vertex, H, *solver),
+                         doctest::Contains("alpha0 = 0) needs L negative semi-definite"), SolverError);
+  }
+}
+
+TEST_CASE("regularize_surface with alpha0 = 0: the unattached scheme, close to the sphere; a negative alpha0 named") {
+  RegularizationOptions o;
+  o.alpha0 = 0.0;
+  const RegularizedSurface r = regularize_surface(sphere().mesh, sphere().normals, o);
+  CHECK(r.solve_scheme == "unattached");
+  CHECK(r.alpha == 0.0);
+  CHECK(r.solve_residual < 1e-10);
+  const double before = mean_distance_to_unit_sphere(sphere().mesh.positions);
+  const double after = mean_distance_to_unit_sphere(r.mesh.positions);
+  MESSAGE("sphere1 h = 0.1, fem, alpha0 = 0: mean distance " << before << " -> " << after);
+  CHECK(after < 0.5 * before);
+  o.alpha0 = -1.0;
+  CHECK_THROWS_WITH_AS(regularize_surface(sphere().mesh, sphere().normals, o),
+                       doctest::Contains("alpha0 = -1: alpha0 must be a finite number >= 0"), InputError);
+}

@@ -125,8 +125,9 @@ TEST_CASE("regularization study: bad options are named") {
   o.normals = "mesh";
   CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("expected ii or true"), InputError);
   o.normals = "ii";
-  o.alpha0 = {1.0, 0.0};
-  CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("alpha0 must be a positive number, got 0"), InputError);
+  o.alpha0 = {1.0, -1.0};
+  CHECK_THROWS_WITH_AS(o.validate(),
+                       doctest::Contains("alpha0 must be a finite number >= 0 (0: no attachment), got -1"), InputError);
   o.alpha0 = {1.0, 1.0};
   CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("alpha0 = 1 is given twice"), InputError);
   o.alpha0 = {};
@@ -165,7 +166,7 @@ TEST_CASE("corrlap study regularization: the table, the figures' data, errors") 
   CHECK(test::run_cli("study regularization --alpha0 1,x --out " + dir + "_bad", &out, &err) == 1);
   CHECK(err.find("--alpha0: 'x' is not a number") != std::string::npos);
   CHECK(test::run_cli("study regularization --alpha0 1,-2 --out " + dir + "_bad", &out, &err) == 1);
-  CHECK(err.find("alpha0 must be a positive number, got -2") != std::string::npos);
+  CHECK(err.find("alpha0 must be a finite number >= 0 (0: no attachment), got -2") != std::string::npos);
   // A sweep: one row per alpha0 for fem, one for the baseline.
   REQUIRE(test::run_cli(args + " --overwrite --alpha0 0.1,10", &out, &err) == 0);
   const auto swept = read_regularization_csv(dir + "/regularization.csv");
