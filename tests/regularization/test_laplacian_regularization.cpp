@@ -371,7 +371,7 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("regularize_surface with alpha0 = 0: the unattached scheme, close to the sphere; a negative alpha0 named") {
+TEST_CASE("regularize_surface with alpha0 = 0: the unattached scheme, close to the sphere, a negative alpha0 named") {
   RegularizationOptions o;
   o.alpha0 = 0.0;
   const RegularizedSurface r = regularize_surface(sphere().mesh, sphere().normals, o);
