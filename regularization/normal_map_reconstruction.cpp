@@ -1,7 +1,11 @@
 #include "normal_map_reconstruction.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/regularization/surface_quality.hpp>
+#include <numbers>
 #include <string>
 
 namespace corrlap {
@@ -111,6 +115,20 @@ DistanceToMesh distance_to_mesh(const SurfelMesh& mesh, const TriangleLocator& f
   }
   if (!cp.empty()) d.mean /= double(cp.size());
   return d;
+}
+
+double normal_angle_to_map(const SurfelMesh& mesh, const TriangleLocator& fine,
+                           const Eigen::MatrixX3d& fine_vertex_normals) {
+  if (mesh.num_vertices() == 0) return 0.0;
+  if (fine_vertex_normals.rows() != fine.vertices().rows())
+    throw InputError("normal map: " + std::to_string(fine_vertex_normals.rows()) + " normals for " +
+                     std::to_string(fine.vertices().rows()) + " vertices of the fine mesh");
+  const Eigen::MatrixX3d map =
+      interpolate_normals(fine, fine_vertex_normals, fine.triangles(), mesh.positions, "vertex");
+  const Eigen::MatrixX3d own = geometric_vertex_normals(mesh);
+  double sum = 0.0;
+  for (Eigen::Index v = 0; v < own.rows(); ++v) sum += std::acos(std::clamp(own.row(v).dot(map.row(v)), -1.0, 1.0));
+  return sum / double(own.rows()) * 180.0 / std::numbers::pi;
 }
 
 }  // namespace corrlap

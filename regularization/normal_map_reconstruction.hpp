@@ -40,4 +40,11 @@ struct DistanceToMesh {
 };
 DistanceToMesh distance_to_mesh(const SurfelMesh& mesh, const TriangleLocator& fine);
 
+/// Mean angle, in degrees, between the mesh's own geometric vertex normals (what a viewer shades
+/// with, surface_quality.hpp) and the normal map at each vertex (the fine mesh's vertex normals
+/// interpolated at its closest point): how far the shading of the result is from the model's, which
+/// the distance alone does not show (a staircase's ripples cost little distance and much angle).
+double normal_angle_to_map(const SurfelMesh& mesh, const TriangleLocator& fine,
+                           const Eigen::MatrixX3d& fine_vertex_normals);
+
 }  // namespace corrlap

@@ -95,6 +95,7 @@ void run(const ReconstructArgs& a) {
   o.alpha_step = report.h;
   check_methods(&mesh);
   const DistanceToMesh before = distance_to_mesh(mesh, locator);
+  const double angle_before = normal_angle_to_map(mesh, locator, fine_normals);
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
   write_mesh(out.file("input.ply"), mesh, input_attr);
@@ -111,6 +112,7 @@ void run(const ReconstructArgs& a) {
   m["alpha0"] = a.alpha0;
   m["distance_mean_before"] = before.mean;
   m["distance_max_before"] = before.max;
+  m["normal_angle_before_deg"] = angle_before;
   RenderOptions view;
   if (!a.no_render) {
     write_png(out.file("fine.png"), render_mesh(fine, nullptr, view));
@@ -127,6 +129,7 @@ void run(const ReconstructArgs& a) {
     for (const auto& w : r.warnings) std::cerr << "warning: " << method << ": " << w << "\n";
     const double seconds = t.lap();
     const DistanceToMesh after = distance_to_mesh(r.mesh, locator);
+    const double angle_after = normal_angle_to_map(r.mesh, locator, fine_normals);
     MeshAttributes attr;
     attr.vertex_scalars = {{"H", r.H}};
     write_mesh(out.file("reconstructed_" + method + ".ply"), r.mesh, attr);
@@ -135,11 +138,13 @@ void run(const ReconstructArgs& a) {
     nlohmann::json entry;
     entry["distance_mean_after"] = after.mean;
     entry["distance_max_after"] = after.max;
+    entry["normal_angle_after_deg"] = angle_after;
     entry["time_s"] = seconds;
     entry["alpha"] = r.alpha;
     m["methods"][method] = entry;
     std::cerr << "  " << method << ": mean distance to the fine mesh " << before.mean << " -> " << after.mean
-              << " (max " << before.max << " -> " << after.max << "), " << seconds << " s\n";
+              << " (max " << before.max << " -> " << after.max << "), normal angle to the map " << angle_before
+              << " -> " << angle_after << " deg, " << seconds << " s\n";
   }
   m["time_s"] = stages;
   std::ofstream(out.file("metrics.json")) << m.dump(2) << "\n";

@@ -75,7 +75,19 @@ TEST_CASE("normal map on a sphere: sampled normals are radial, regularization mo
   MESSAGE("mean distance to the fine sphere " << before.mean << " -> " << after.mean << " (max " << before.max << " -> "
                                               << after.max << ")");
   CHECK(after.mean < 0.3 * before.mean);
+  // The shading: the subdivided staircase's vertex normals are tens of degrees off the map (most are
+  // axis-aligned), the regularized surface's about one.
+  const double angle_before = normal_angle_to_map(mesh, locator, N),
+               angle_after = normal_angle_to_map(r.mesh, locator, N);
+  MESSAGE("mean normal angle to the map " << angle_before << " -> " << angle_after << " degrees");
+  CHECK(angle_before > 10.0);
+  CHECK(angle_after < 0.25 * angle_before);
+  // On the fine sphere itself the angle is that of its own facets' normals against the map's.
+  SurfelMesh on_sphere = mesh;
+  on_sphere.positions = mesh.positions.rowwise().normalized();
+  CHECK(normal_angle_to_map(on_sphere, locator, N) < 0.5);  // measured 0.1
   CHECK_THROWS_AS(sample_normal_map(mesh, locator, N.topRows(5)), InputError);
+  CHECK_THROWS_AS(normal_angle_to_map(mesh, locator, N.topRows(5)), InputError);
 }
 
 TEST_CASE("corrlap reconstruct: files, metrics, the corrected method closer than the staircase") {
