@@ -11,10 +11,12 @@
 
 namespace corrlap {
 
-/// The paper's curvature radius for its reconstructions (Fig. 16): 0.2 of a unit-sized model, as a
-/// fraction of the object size (default_curvature_radius, whose floor in coarse voxels applies: the
-/// coarse voxels come from a mesh file).
-inline constexpr double kReconstructionCurvatureRadiusFraction = 0.2;
+/// The default curvature radius of a reconstruction, in coarse voxels. The normals come from the
+/// model (the normal map), not from an estimator on the staircase, so the ball need only average
+/// the staircase's positions; the paper's 0.2 of the object size (Fig. 16) rounds the bunny's thin
+/// parts and loses to the uncorrected operator (docs/regularization.md, "Reconstruction from a
+/// normal map"). The same as the floor of voxels from a file, kVoxelMinCurvatureRadius.
+inline constexpr double kReconstructionCurvatureRadiusVoxels = 2.0;
 
 /// Every quad split into s x s quads, s = 2^levels, by bilinear interpolation of its corners
 /// (exact on planar surfels). A point on an edge is shared by the faces that meet there, so a

@@ -11,6 +11,10 @@
 #   fig12  the bunny at 256^3 (scripts/fetch_bunny.sh; network the first time): the staircase,
 #          the baseline [17], corrected (fem) and uncorrected (polydec), drawn alike, with the
 #          enclosed volume of each against the staircase's (a voxel count: no shrinkage).
+#   fig16  reconstruction from a normal map (the bunny as its own normal map): at the paper's setting
+#          (64 voxels, 3 subdivisions) and a finer one (128, 2), with the default curvature radius
+#          (2 coarse voxels) and the paper's (0.2 s), corrected (fem) against uncorrected (polydec);
+#          distances and normal angles to the model, and the three surfaces drawn at 64.
 #   fig13  the attachment weight alpha0 swept, corrected (fem) against uncorrected (polydec) and the
 #          baseline [17], on sphere1, torus and goursat at 32 and 64 voxels across: the study's CSV,
 #          its plots against alpha0, a table, and goursat drawn at alpha0 = 0.1 and 1000.
@@ -25,7 +29,7 @@ if [ "${1:-}" = "--docs" ]; then
   shift
 fi
 OUT=${1:-corrlap-paper-figures}
-PARTS=${PARTS:-fig11 fig12 fig13}
+PARTS=${PARTS:-fig11 fig12 fig13 fig16}
 export PYTHONPATH="$PWD/build/python${PYTHONPATH:+:$PYTHONPATH}"
 mkdir -p "$OUT"
 IMAGES=docs/images/paper
@@ -170,6 +174,71 @@ PY
   echo "fig12: $dir/table.md, $dir/fig12_bunny.png"
 }
 
+fig16() {
+  local dir="$OUT/fig16"
+  mkdir -p "$dir"
+  [ -s "$OUT/bunny.obj" ] || scripts/fetch_bunny.sh "$OUT/bunny.obj"
+  local setting n k size
+  for setting in 64:3 128:2; do
+    n=${setting%%:*}
+    k=${setting#*:}
+    "$CORRLAP" reconstruct --mesh-file "$OUT/bunny.obj" --resolution "$n" --subdivide "$k" --no-render \
+      --out "$dir/r${n}_default" >/dev/null 2>"$dir/r${n}_default.log"
+    size=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['size'])" \
+      "$dir/r${n}_default/metrics.json")
+    "$CORRLAP" reconstruct --mesh-file "$OUT/bunny.obj" --resolution "$n" --subdivide "$k" --no-render \
+      --curvature-radius "$(/usr/bin/python3 -c "print(0.2 * $size)")" --out "$dir/r${n}_paper" >/dev/null \
+      2>"$dir/r${n}_paper.log"
+  done
+  /usr/bin/python3 - "$dir" >"$dir/table.md" <<'PY'
+import json
+import sys
+
+d = sys.argv[1]
+print("| N, subdivisions | curvature radius | staircase: distance / angle | fem: distance / angle | polydec: distance / angle |")
+print("|---|---|---|---|---|")
+for n, k in ((64, 3), (128, 2)):
+    for run, label in (("paper", "0.2 s (the paper's)"), ("default", "2 coarse voxels (default)")):
+        m = json.load(open(f"{d}/r{n}_{run}/metrics.json"))
+        f, p = m["methods"]["fem"], m["methods"]["polydec"]
+        print(f"| {n}, {k} | {label}: {m['curvature_radius']:.3g} | {m['distance_mean_before']:.3g} / "
+              f"{m['normal_angle_before_deg']:.3g}° | {f['distance_mean_after']:.3g} / {f['normal_angle_after_deg']:.3g}° | "
+              f"{p['distance_mean_after']:.3g} / {p['normal_angle_after_deg']:.3g}° |")
+PY
+  local view=(--view 0.4,0.3,1 --up 0,1,0 --size 500 --scalar none --no-legend)
+  "$CORRLAP" render "$dir/r64_default/input.ply" "${view[@]}" --out "$dir/input.png" >/dev/null 2>>"$dir/render.log"
+  for run in default paper; do
+    for m in fem polydec; do
+      "$CORRLAP" render "$dir/r64_$run/reconstructed_$m.ply" "${view[@]}" --out "$dir/${run}_$m.png" >/dev/null \
+        2>>"$dir/render.log"
+    done
+  done
+  /usr/bin/python3 - "$dir" <<'PY'
+import sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
+
+d = sys.argv[1]
+panels = (("input", "subdivided staircase (64, 3)"), ("default_fem", "corrected (fem), radius 2 voxels"),
+          ("default_polydec", "uncorrected (polydec), radius 2 voxels"), ("paper_fem", "fem, the paper's radius 0.2 s"),
+          ("paper_polydec", "polydec, the paper's radius 0.2 s"))
+fig, axes = plt.subplots(1, 5, figsize=(20, 4.6))
+for ax, (name, title) in zip(axes, panels):
+    ax.imshow(mpimg.imread(f"{d}/{name}.png"))
+    ax.set_title(title, fontsize=10)
+    ax.axis("off")
+fig.tight_layout()
+fig.savefig(f"{d}/fig16_bunny.png", dpi=80)
+PY
+  if [ "$DOCS" = 1 ]; then
+    mkdir -p "$IMAGES"
+    cp "$dir/fig16_bunny.png" "$IMAGES/fig16_bunny.png"
+  fi
+  echo "fig16: $dir/table.md, $dir/fig16_bunny.png"
+}
+
 fig13() {
   local dir="$OUT/fig13"
   mkdir -p "$dir"
@@ -255,8 +324,9 @@ for part in $PARTS; do
     fig11) fig11 ;;
     fig12) fig12 ;;
     fig13) fig13 ;;
+    fig16) fig16 ;;
     *)
-      echo "paper_figures: unknown part '$part' (known: fig11 fig12 fig13)" >&2
+      echo "paper_figures: unknown part '$part' (known: fig11 fig12 fig13 fig16)" >&2
       exit 2
       ;;
   esac

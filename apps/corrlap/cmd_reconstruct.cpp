@@ -85,11 +85,9 @@ void run(const ReconstructArgs& a) {
             << a.subdivide << " times: " << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces\n";
 
   o.size = size;
-  // Paper Fig. 16: curvature radius 0.2 and |H| <= 10 for a unit-sized model; the radius at least
-  // the floor of voxels from a file, in coarse voxels (the staircase's).
-  o.curvature_radius = a.curvature_radius ? *a.curvature_radius
-                                          : default_curvature_radius(size, report.h, /*voxels_from_file=*/true,
-                                                                     kReconstructionCurvatureRadiusFraction);
+  // Paper Fig. 16: |H| <= 10 for a unit-sized model. The radius in coarse voxels (the staircase's),
+  // not the paper's 0.2 size: kReconstructionCurvatureRadiusVoxels says why.
+  o.curvature_radius = a.curvature_radius ? *a.curvature_radius : kReconstructionCurvatureRadiusVoxels * report.h;
   o.h_clamp = a.h_clamp ? *a.h_clamp : 10.0 / size;
   // The positions are wrong by up to a coarse voxel, not a subdivided one: alpha from the coarse h.
   o.alpha_step = report.h;
@@ -170,9 +168,8 @@ RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
                   "vertex discretizations to compare (a corrected one and polydec, the uncorrected one)")
       ->capture_default_str();
   cmd->add_option("--curvature-radius", args->curvature_radius,
-                  "ball radius of the mean curvature (default " + number_text(kReconstructionCurvatureRadiusFraction) +
-                      " s, s = half the longest side, paper Fig. 16; at least " +
-                      number_text(kVoxelMinCurvatureRadius) + " coarse voxels)")
+                  "ball radius of the mean curvature (default " + number_text(kReconstructionCurvatureRadiusVoxels) +
+                      " coarse voxels; the paper's Fig. 16 uses 0.2 s, s = half the longest side)")
       ->check(positive_number());
   cmd->add_option("--h-clamp", args->h_clamp, "clamp H to [-MAX, MAX] (default 10 / s, paper Fig. 16)")
       ->check(positive_number());

@@ -106,6 +106,13 @@ TEST_CASE("corrlap reconstruct: files, metrics, the corrected method closer than
   CHECK(fem < 0.3 * before);
   CHECK(m["subdivide"] == 2);
   CHECK(m["h_clamp"].get<double>() > 0);
+  // The default radius is in coarse voxels (the normals come from the map, not from the staircase).
+  CHECK(m["curvature_radius"].get<double>() ==
+        doctest::Approx(kReconstructionCurvatureRadiusVoxels * m["h"].get<double>()));
+  const double angle_before = m["normal_angle_before_deg"], angle_fem = m["methods"]["fem"]["normal_angle_after_deg"];
+  MESSAGE("normal angle to the map " << angle_before << " -> " << angle_fem << " (fem), "
+                                     << m["methods"]["polydec"]["normal_angle_after_deg"].get<double>() << " (polydec)");
+  CHECK(angle_fem < 0.25 * angle_before);
   CHECK(test::run_cli("reconstruct --mesh-file " + obj + " --methods nosuch --out " + dir, &out, &err) == 1);
   CHECK(test::run_cli("reconstruct --mesh-file " + dir + "/missing.obj --out " + dir, &out, &err) == 1);
 }
