@@ -34,6 +34,35 @@ export PYTHONPATH="$PWD/build/python${PYTHONPATH:+:$PYTHONPATH}"
 mkdir -p "$OUT"
 IMAGES=docs/images/paper
 
+# montage OUT.png ROWS COLS "picture.png|title" ...: the pictures side by side, titled.
+montage() {
+  /usr/bin/python3 - "$@" <<'PY'
+import sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
+
+out, rows, cols = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+panels = [entry.split("|", 1) for entry in sys.argv[4:]]
+fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 4.2 * rows), squeeze=False)
+for ax, (path, title) in zip(axes.flat, panels):
+    ax.imshow(mpimg.imread(path))
+    ax.set_title(title, fontsize=10)
+    ax.axis("off")
+fig.tight_layout()
+fig.savefig(out, dpi=90)
+PY
+}
+
+# publish PICTURE NAME: with --docs, copies the picture to docs/images/paper/NAME.
+publish() {
+  if [ "$DOCS" = 1 ]; then
+    mkdir -p "$IMAGES"
+    cp "$1" "$IMAGES/$2"
+  fi
+}
+
 fig11() {
   local dir="$OUT/fig11"
   mkdir -p "$dir"
@@ -84,27 +113,9 @@ PY
     "$CORRLAP" render "$dir/torus_${name}_distance.ply" "${view[@]}" --out "$dir/torus_$name.png" \
       >/dev/null 2>>"$dir/render.log"
   done
-  /usr/bin/python3 - "$dir" <<'PY'
-import sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.image as mpimg
-import matplotlib.pyplot as plt
-
-d = sys.argv[1]
-fig, axes = plt.subplots(1, 3, figsize=(13, 4.8))
-for ax, (name, title) in zip(axes, (("staircase", "staircase"), ("alpha0_0", "no attachment (α₀ = 0)"),
-                                    ("alpha0_10", "α₀ = 10 (default)"))):
-    ax.imshow(mpimg.imread(f"{d}/torus_{name}.png"))
-    ax.set_title(f"{title}: signed distance to the torus")
-    ax.axis("off")
-fig.tight_layout()
-fig.savefig(f"{d}/fig11_torus.png", dpi=100)
-PY
-  if [ "$DOCS" = 1 ]; then
-    mkdir -p "$IMAGES"
-    cp "$dir/fig11_torus.png" "$IMAGES/fig11_torus.png"
-  fi
+  montage "$dir/fig11_torus.png" 1 3 "$dir/torus_staircase.png|staircase: signed distance to the torus" \
+    "$dir/torus_alpha0_0.png|no attachment (α₀ = 0)" "$dir/torus_alpha0_10.png|α₀ = 10 (default)"
+  publish "$dir/fig11_torus.png" fig11_torus.png
   echo "fig11: $dir/table.md, $dir/fig11_torus.png"
 }
 
@@ -149,28 +160,9 @@ for name, label in (("alignment", "[17] (alignment)"), ("fem", "corrected (fem)"
     shift = m.get("displacement_max", float("nan")) / m["h"]
     print(f"| {label} | {volume(V, F) / staircase:.5f} | {area:.4f} | {shift:.3g} |")
 PY
-  /usr/bin/python3 - "$dir" <<'PY'
-import sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.image as mpimg
-import matplotlib.pyplot as plt
-
-d = sys.argv[1]
-panels = (("staircase", "voxels (256³)"), ("alignment", "[17] (alignment)"), ("fem", "corrected (fem)"),
-          ("polydec", "uncorrected (polydec)"))
-fig, axes = plt.subplots(1, 4, figsize=(16, 4.6))
-for ax, (name, title) in zip(axes, panels):
-    ax.imshow(mpimg.imread(f"{d}/{name}.png"))
-    ax.set_title(title)
-    ax.axis("off")
-fig.tight_layout()
-fig.savefig(f"{d}/fig12_bunny.png", dpi=90)
-PY
-  if [ "$DOCS" = 1 ]; then
-    mkdir -p "$IMAGES"
-    cp "$dir/fig12_bunny.png" "$IMAGES/fig12_bunny.png"
-  fi
+  montage "$dir/fig12_bunny.png" 1 4 "$dir/staircase.png|voxels (256³)" "$dir/alignment.png|[17] (alignment)" \
+    "$dir/fem.png|corrected (fem)" "$dir/polydec.png|uncorrected (polydec)"
+  publish "$dir/fig12_bunny.png" fig12_bunny.png
   echo "fig12: $dir/table.md, $dir/fig12_bunny.png"
 }
 
@@ -213,29 +205,10 @@ PY
         2>>"$dir/render.log"
     done
   done
-  /usr/bin/python3 - "$dir" <<'PY'
-import sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.image as mpimg
-import matplotlib.pyplot as plt
-
-d = sys.argv[1]
-panels = (("input", "subdivided staircase (64, 3)"), ("default_fem", "corrected (fem), radius 2 voxels"),
-          ("default_polydec", "uncorrected (polydec), radius 2 voxels"), ("paper_fem", "fem, the paper's radius 0.2 s"),
-          ("paper_polydec", "polydec, the paper's radius 0.2 s"))
-fig, axes = plt.subplots(1, 5, figsize=(20, 4.6))
-for ax, (name, title) in zip(axes, panels):
-    ax.imshow(mpimg.imread(f"{d}/{name}.png"))
-    ax.set_title(title, fontsize=10)
-    ax.axis("off")
-fig.tight_layout()
-fig.savefig(f"{d}/fig16_bunny.png", dpi=80)
-PY
-  if [ "$DOCS" = 1 ]; then
-    mkdir -p "$IMAGES"
-    cp "$dir/fig16_bunny.png" "$IMAGES/fig16_bunny.png"
-  fi
+  montage "$dir/fig16_bunny.png" 1 5 "$dir/input.png|subdivided staircase (64, 3)" \
+    "$dir/default_fem.png|corrected (fem), radius 2 voxels" "$dir/default_polydec.png|uncorrected (polydec), 2 voxels" \
+    "$dir/paper_fem.png|fem, the paper's radius 0.2 s" "$dir/paper_polydec.png|polydec, the paper's 0.2 s"
+  publish "$dir/fig16_bunny.png" fig16_bunny.png
   echo "fig16: $dir/table.md, $dir/fig16_bunny.png"
 }
 
@@ -285,37 +258,19 @@ PY
         >/dev/null 2>>"$dir/render.log"
     done
   done
-  /usr/bin/python3 - "$dir" <<'PY'
-import sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.image as mpimg
-import matplotlib.pyplot as plt
-
-d = sys.argv[1]
-fig, axes = plt.subplots(2, 2, figsize=(8, 8))
-for i, a in enumerate(("0.1", "1000")):
-    for j, (m, label) in enumerate((("fem", "corrected (fem)"), ("polydec", "uncorrected (polydec)"))):
-        ax = axes[i][j]
-        ax.imshow(mpimg.imread(f"{d}/goursat_{m}_{a}.png"))
-        ax.set_title(f"{label}, α₀ = {a}")
-        ax.axis("off")
-fig.tight_layout()
-fig.savefig(f"{d}/fig13_goursat.png", dpi=100)
-PY
-  if [ "$DOCS" = 1 ]; then
-    mkdir -p "$IMAGES"
-    cp "$dir/fig13_goursat.png" "$IMAGES/fig13_goursat.png"
-    # The plots at the finer step (64 voxels across) of sphere1 and the torus.
-    local shape q finest
-    for shape in sphere1 torus; do
-      for q in area distance; do
-        finest=$(ls "$dir/study/plots/alpha0_${shape}_h"*"_$q.png" | sed 's/.*_h\([0-9.e-]*\)_.*/\1 &/' | sort -g |
-          head -1 | cut -d' ' -f2)
-        cp "$finest" "$IMAGES/fig13_${shape}_64_$q.png"
-      done
+  montage "$dir/fig13_goursat.png" 2 2 "$dir/goursat_fem_0.1.png|corrected (fem), α₀ = 0.1" \
+    "$dir/goursat_polydec_0.1.png|uncorrected (polydec), α₀ = 0.1" "$dir/goursat_fem_1000.png|corrected (fem), α₀ = 1000" \
+    "$dir/goursat_polydec_1000.png|uncorrected (polydec), α₀ = 1000"
+  publish "$dir/fig13_goursat.png" fig13_goursat.png
+  # The plots at the finer step (64 voxels across) of sphere1 and the torus.
+  local shape q finest
+  for shape in sphere1 torus; do
+    for q in area distance; do
+      finest=$(ls "$dir/study/plots/alpha0_${shape}_h"*"_$q.png" | sed 's/.*_h\([0-9.e-]*\)_.*/\1 &/' | sort -g |
+        head -1 | cut -d' ' -f2)
+      publish "$finest" "fig13_${shape}_64_$q.png"
     done
-  fi
+  done
   echo "fig13: $dir/table.md, $dir/fig13_goursat.png, $dir/study/plots/"
 }
 
