@@ -278,8 +278,7 @@ Eigen::MatrixX3d regularize_positions_unattached(const Eigen::SparseMatrix<doubl
   const Eigen::VectorXd mass = lumped_mass(M).diagonal();
   const Eigen::Index n = p.rows();
   // Connected components of L's graph (its exact zeros are no edges): the null space of L.
-  Eigen::SparseMatrix<double> S = L;
-  S.makeCompressed();
+  const Eigen::SparseMatrix<double>& S = L;
   std::vector<int> component(static_cast<std::size_t>(n), -1);
   int C = 0;
   std::vector<int> stack;

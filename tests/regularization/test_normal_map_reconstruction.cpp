@@ -111,7 +111,8 @@ TEST_CASE("corrlap reconstruct: files, metrics, the corrected method closer than
         doctest::Approx(kReconstructionCurvatureRadiusVoxels * m["h"].get<double>()));
   const double angle_before = m["normal_angle_before_deg"], angle_fem = m["methods"]["fem"]["normal_angle_after_deg"];
   MESSAGE("normal angle to the map " << angle_before << " -> " << angle_fem << " (fem), "
-                                     << m["methods"]["polydec"]["normal_angle_after_deg"].get<double>() << " (polydec)");
+                                     << m["methods"]["polydec"]["normal_angle_after_deg"].get<double>()
+                                     << " (polydec)");
   CHECK(angle_fem < 0.25 * angle_before);
   CHECK(test::run_cli("reconstruct --mesh-file " + obj + " --methods nosuch --out " + dir, &out, &err) == 1);
   CHECK(test::run_cli("reconstruct --mesh-file " + dir + "/missing.obj --out " + dir, &out, &err) == 1);
