@@ -328,11 +328,16 @@ def plot_regularization(rows, title, quantity, colors):
     for method in sorted(by_method):
         points = sorted(by_method[method])
         ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", color=colors[method], label=method)
-    ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("grid step h")
-    ax.set_ylabel(label)
-    ax.set_title(f"regularization, {title}: {label}")
+    return finish_axes(fig, ax, "grid step h", label, f"regularization, {title}: {label}")
+
+
+def finish_axes(fig, ax, xlabel, ylabel, title):
+    """The regularization figures' common ending: log x, labels, title, grid, legend."""
+    ax.set_xscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
@@ -370,16 +375,9 @@ def plot_alpha0(rows, title, quantity, colors):
     for method in sorted(by_method):
         points = by_method[method]
         ax.plot([p[0] for p in points], [p[1] for p in points], marker="o", color=colors[method], label=method)
-    ax.set_xscale("log")
     if log_y:
         ax.set_yscale("log")
-    ax.set_xlabel("attachment weight alpha0")
-    ax.set_ylabel(label)
-    ax.set_title(f"regularization, {title}: {label}")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small")
-    fig.tight_layout()
-    return fig
+    return finish_axes(fig, ax, "attachment weight alpha0", label, f"regularization, {title}: {label}")
 
 
 def plot_regularization_study(directory, rows, colors, formats):
