@@ -5,6 +5,10 @@
 #
 #   scripts/curvature_editing_gallery.sh [OUT_DIR] [OUT_PNG]
 #
+# ALPHA0 (default 10, the regularization's) is the attachment weight of every run: at 10 the edited
+# shapes stay near the input and differ mostly in colour; at 0.1 the edits move the surface by
+# voxels (docs/regularization.md, "Curvature editing"). RESOLUTION (default 256) is the bunny's.
+#
 # Needs a built corrlap (make build), network access for the bunny the first time
 # (scripts/fetch_bunny.sh) and python3-matplotlib for the montage. About a minute on 2 cores.
 set -euo pipefail
@@ -13,6 +17,7 @@ CORRLAP=${CORRLAP:-build/bin/corrlap}
 OUT=${1:-corrlap-curvature-editing}
 PNG=${2:-$OUT/curvature_editing_bunny.png}
 RESOLUTION=${RESOLUTION:-256}
+ALPHA0=${ALPHA0:-10}
 mkdir -p "$OUT"
 [ -s "$OUT/bunny.obj" ] || scripts/fetch_bunny.sh "$OUT/bunny.obj"
 "$CORRLAP" digitize --mesh-file "$OUT/bunny.obj" --resolution "$RESOLUTION" --volume-out "$OUT/bunny.vol" \
@@ -20,7 +25,7 @@ mkdir -p "$OUT"
 # The bunny's ears are thinner than the default II radius 3 h^(1/3) (the regularization refuses
 # it, naming the vertices where |H| > 1/h): radius 1 h^(1/3), 26 voxels at 256^3. Voxels touching
 # along an edge at a few places of the voxelization: --allow-nonmanifold.
-common=(--volume "$OUT/bunny.vol" --threshold 127 --allow-nonmanifold --ii-radius 1 --no-render)
+common=(--volume "$OUT/bunny.vol" --threshold 127 --allow-nonmanifold --ii-radius 1 --alpha0 "$ALPHA0" --no-render)
 edits=("plain:" "h_scale_2:--h-scale 2" "h_clamp_5:--h-clamp 5" "k2_scale_2:--k2 scale:2" "k1_set_0:--k1 set:0")
 for entry in "${edits[@]}"; do
   name=${entry%%:*}
@@ -35,15 +40,15 @@ for entry in "${edits[@]}"; do
   name=${entry%%:*}
   "$CORRLAP" render "$OUT/$name/regularized.ply" "${view[@]}" --out "$OUT/$name.png"
 done
-/usr/bin/python3 - "$OUT" "$PNG" <<'PY'
+/usr/bin/python3 - "$OUT" "$PNG" "$RESOLUTION" "$ALPHA0" <<'PY'
 import sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
-out, png = sys.argv[1], sys.argv[2]
-panels = [("voxels", "voxels (256³)"), ("plain", "regularized"), ("h_scale_2", "H × 2"),
+out, png, resolution, alpha0 = sys.argv[1:5]
+panels = [("voxels", f"voxels ({resolution}³)"), ("plain", "regularized"), ("h_scale_2", "H × 2"),
           ("h_clamp_5", "H clamped to [-5, 5]"), ("k2_scale_2", "larger principal curvature × 2"),
           ("k1_set_0", "smaller principal curvature = 0")]
 fig, axes = plt.subplots(2, 3, figsize=(12, 8))
@@ -51,7 +56,7 @@ for ax, (name, title) in zip(axes.flat, panels):
     ax.imshow(mpimg.imread(f"{out}/{name}.png"))
     ax.set_title(title)
     ax.axis("off")
-fig.suptitle("corrlap regularize with curvature edits (paper §4.3, Fig. 17/18); colour: H, one range")
+fig.suptitle(f"corrlap regularize with curvature edits (paper §4.3, Fig. 17/18), α₀ = {alpha0}; colour: H, one range")
 fig.tight_layout()
 fig.savefig(png, dpi=72)
 print("wrote", png)

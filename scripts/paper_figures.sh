@@ -18,8 +18,16 @@
 #   fig13  the attachment weight alpha0 swept, corrected (fem) against uncorrected (polydec) and the
 #          baseline [17], on sphere1, torus and goursat at 32 and 64 voxels across: the study's CSV,
 #          its plots against alpha0, a table, and goursat drawn at alpha0 = 0.1 and 1000.
-# Needs a built corrlap (make build, with its Python module) and python3-matplotlib. PARTS="fig11 fig13"
-# selects parts (default all).
+#   fig14  a CAD-like part with sharp edges (scripts/cad_part.py, standing in for the fandisk) at
+#          256 voxels across: [17] (with II and with convolved normals), corrected (fem) with the
+#          default curvature radius and with 4 voxels, uncorrected (polydec); exact distances and
+#          normal angles on the flats and at the edges, and the part drawn.
+#   fig15  the regularization study (sphere1, torus, goursat at 24, 48 and 96 voxels across): the
+#          distance and curvature error of each method, and goursat's plots against h.
+#   fig17  the curvature-editing gallery (scripts/curvature_editing_gallery.sh) at alpha0 = 10 and
+#          0.1: how far each edit moves the bunny, and the gallery at 0.1.
+# Needs a built corrlap (make build, with its Python module), python3-matplotlib and python3-scipy.
+# PARTS="fig11 fig13" selects parts (default all).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CORRLAP=${CORRLAP:-build/bin/corrlap}
@@ -29,7 +37,7 @@ if [ "${1:-}" = "--docs" ]; then
   shift
 fi
 OUT=${1:-corrlap-paper-figures}
-PARTS=${PARTS:-fig11 fig12 fig13 fig16}
+PARTS=${PARTS:-fig11 fig12 fig13 fig14 fig15 fig16 fig17}
 export PYTHONPATH="$PWD/build/python${PYTHONPATH:+:$PYTHONPATH}"
 mkdir -p "$OUT"
 IMAGES=docs/images/paper
@@ -274,14 +282,137 @@ PY
   echo "fig13: $dir/table.md, $dir/fig13_goursat.png, $dir/study/plots/"
 }
 
+fig14() {
+  local dir="$OUT/fig14"
+  mkdir -p "$dir"
+  /usr/bin/python3 scripts/cad_part.py write "$dir/part.obj"
+  local common=(--mesh-file "$dir/part.obj" --resolution 256 --no-render)
+  "$CORRLAP" regularize "${common[@]}" --method fem --out "$dir/fem" >/dev/null 2>"$dir/fem.log"
+  local h r4
+  h=$(/usr/bin/python3 -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['h']))" "$dir/fem/metrics.json")
+  r4=$(/usr/bin/python3 -c "print(repr(4 * $h))")
+  local runs=("fem_r4:--method fem --curvature-radius $r4" "polydec:--method polydec"
+    "alignment:--baseline alignment" "alignment_convolved:--baseline alignment --normals convolved")
+  for entry in "${runs[@]}"; do
+    local name=${entry%%:*} flags=${entry#*:}
+    # shellcheck disable=SC2086  # the run's flags are words
+    "$CORRLAP" regularize "${common[@]}" $flags --out "$dir/$name" >/dev/null 2>"$dir/$name.log"
+  done
+  local names=(staircase:fem/input.ply alignment_convolved:alignment_convolved/regularized.ply
+    alignment:alignment/regularized.ply fem:fem/regularized.ply fem_r4:fem_r4/regularized.ply
+    polydec:polydec/regularized.ply)
+  for entry in "${names[@]}"; do
+    /usr/bin/python3 scripts/cad_part.py measure "$dir/${entry#*:}" "$h" >"$dir/${entry%%:*}.json"
+  done
+  /usr/bin/python3 - "$dir" "$h" >"$dir/table.md" <<'PY'
+import json
+import sys
+
+d, h = sys.argv[1], float(sys.argv[2])
+curvature = json.load(open(f"{d}/fem/metrics.json"))["curvature_radius"]
+rows = (("staircase", "staircase"), ("alignment_convolved", "[17], convolved normals (the reference's test)"),
+        ("alignment", "[17], II normals"), ("fem", f"corrected (fem), curvature radius {curvature / h:.3g} voxels (default)"),
+        ("fem_r4", "corrected (fem), curvature radius 4 voxels"), ("polydec", "uncorrected (polydec), default radius"))
+print("| surface | mean / max distance (voxels) | normal angle: edges (< 4 voxels) | near (4–16) | flats (≥ 16) |"
+      " area / part's | volume / part's |")
+print("|---|---|---|---|---|---|---|")
+for name, label in rows:
+    m = json.load(open(f"{d}/{name}.json"))
+    a = m["angle_deg"]
+    print(f"| {label} | {m['distance_mean_vox']:.3g} / {m['distance_max_vox']:.3g} | {a['edges']:.3g}° | "
+          f"{a['near']:.3g}° | {a['flats']:.3g}° | {m['area_ratio']:.4f} | {m['volume_ratio']:.4f} |")
+PY
+  local view=(--view 1,-0.8,1.2 --size 500 --scalar none --no-legend)
+  "$CORRLAP" render "$dir/fem/input.ply" "${view[@]}" --out "$dir/staircase.png" >/dev/null 2>>"$dir/render.log"
+  for name in alignment_convolved fem fem_r4 polydec; do
+    "$CORRLAP" render "$dir/$name/regularized.ply" "${view[@]}" --out "$dir/$name.png" >/dev/null \
+      2>>"$dir/render.log"
+  done
+  montage "$dir/fig14_part.png" 1 5 "$dir/staircase.png|voxels (256 across)" \
+    "$dir/alignment_convolved.png|[17] (convolved normals)" "$dir/fem.png|corrected (fem), default" \
+    "$dir/fem_r4.png|fem, curvature radius 4 voxels" "$dir/polydec.png|uncorrected (polydec)"
+  publish "$dir/fig14_part.png" fig14_part.png
+  echo "fig14: $dir/table.md, $dir/fig14_part.png"
+}
+
+fig15() {
+  local dir="$OUT/fig15"
+  mkdir -p "$dir"
+  "$CORRLAP" study regularization --shapes sphere1,torus,goursat --resolutions 24,48,96 \
+    --methods fem,polydec,alignment --overwrite --out "$dir/study" 2>"$dir/study.log" >/dev/null
+  /usr/bin/python3 - "$dir/study/regularization.csv" >"$dir/table.md" <<'PY'
+import csv
+import sys
+
+rows = list(csv.DictReader(open(sys.argv[1])))
+print("| shape | N | h | vertices | distance: staircase → fem | polydec | [17] | curvature error: staircase → fem |"
+      " polydec | [17] |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for shape in ("sphere1", "torus", "goursat"):
+    for n in ("24", "48", "96"):
+        by = {r["method"]: r for r in rows if r["shape"] == shape and r["resolution"] == n}
+        if not by:
+            continue
+        f, p, b = by["fem"], by["polydec"], by["alignment"]
+        g = lambda r, k: f"{float(r[k]):.3g}"
+        print(f"| {shape} | {n} | {float(f['h']):.3g} | {f['vertices']} | {g(f, 'distance_before')} → "
+              f"{g(f, 'distance_after')} | {g(p, 'distance_after')} | {g(b, 'distance_after')} | "
+              f"{g(f, 'curvature_error_before')} → {g(f, 'curvature_error_after')} | "
+              f"{g(p, 'curvature_error_after')} | {g(b, 'curvature_error_after')} |")
+PY
+  local q
+  for q in distance curvature; do
+    publish "$dir/study/plots/regularization_goursat_$q.png" "fig15_goursat_$q.png"
+  done
+  echo "fig15: $dir/table.md, $dir/study/plots/"
+}
+
+fig17() {
+  local dir="$OUT/fig17"
+  mkdir -p "$dir"
+  [ -s "$OUT/bunny.obj" ] || scripts/fetch_bunny.sh "$OUT/bunny.obj"
+  local a
+  for a in 10 0.1; do
+    mkdir -p "$dir/alpha0_$a"
+    cp "$OUT/bunny.obj" "$dir/alpha0_$a/bunny.obj"
+    ALPHA0=$a CORRLAP=$CORRLAP scripts/curvature_editing_gallery.sh "$dir/alpha0_$a" >"$dir/alpha0_$a.log" 2>&1
+  done
+  # How far each edit moves the surface from the unedited result (the same vertices: positions in
+  # voxels, the volume having no geometry).
+  /usr/bin/python3 - "$dir" >"$dir/table.md" <<'PY'
+import sys
+import numpy as np
+import corrlap
+
+d = sys.argv[1]
+edits = (("h_scale_2", "H × 2"), ("h_clamp_5", "H clamped to [−5, 5]"), ("k2_scale_2", "larger principal curvature × 2"),
+         ("k1_set_0", "smaller principal curvature = 0"))
+print("| edit | mean / max move at α₀ = 10 (voxels) | at α₀ = 0.1 |")
+print("|---|---|---|")
+for name, label in edits:
+    cells = []
+    for a in ("10", "0.1"):
+        plain, _ = corrlap.read_mesh(f"{d}/alpha0_{a}/plain/regularized.ply")
+        edited, _ = corrlap.read_mesh(f"{d}/alpha0_{a}/{name}/regularized.ply")
+        move = np.linalg.norm(edited - plain, axis=1)
+        cells.append(f"{move.mean():.3g} / {move.max():.3g}")
+    print(f"| {label} | {cells[0]} | {cells[1]} |")
+PY
+  publish "$dir/alpha0_0.1/curvature_editing_bunny.png" fig17_bunny.png
+  echo "fig17: $dir/table.md, $dir/alpha0_0.1/curvature_editing_bunny.png"
+}
+
 for part in $PARTS; do
   case "$part" in
     fig11) fig11 ;;
     fig12) fig12 ;;
     fig13) fig13 ;;
+    fig14) fig14 ;;
+    fig15) fig15 ;;
     fig16) fig16 ;;
+    fig17) fig17 ;;
     *)
-      echo "paper_figures: unknown part '$part' (known: fig11 fig12 fig13 fig16)" >&2
+      echo "paper_figures: unknown part '$part' (known: fig11 fig12 fig13 fig14 fig15 fig16 fig17)" >&2
       exit 2
       ;;
   esac
