@@ -10,7 +10,7 @@
 # voxels (docs/regularization.md, "Curvature editing"). RESOLUTION (default 256) is the bunny's.
 #
 # Needs a built corrlap (make build), network access for the bunny the first time
-# (scripts/fetch_bunny.sh) and python3-matplotlib for the montage. About a minute on 2 cores.
+# (scripts/fetch_bunny.sh) and python3-matplotlib for the montage. Under a minute on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CORRLAP=${CORRLAP:-build/bin/corrlap}
@@ -24,8 +24,11 @@ mkdir -p "$OUT"
   --out "$OUT/bunny_voxels.obj"
 # The bunny's ears are thinner than the default II radius 3 h^(1/3) (the regularization refuses
 # it, naming the vertices where |H| > 1/h): radius 1 h^(1/3), 26 voxels at 256^3. Voxels touching
-# along an edge at a few places of the voxelization: --allow-nonmanifold.
-common=(--volume "$OUT/bunny.vol" --threshold 127 --allow-nonmanifold --ii-radius 1 --alpha0 "$ALPHA0" --no-render)
+# along an edge at a few places of the voxelization: --allow-nonmanifold. World units (the longest
+# side spans 2) for the outputs, the units the edits and the colour range are given in: in the
+# volume's own units (voxels) H would be 128 times smaller.
+common=(--volume "$OUT/bunny.vol" --threshold 127 --allow-nonmanifold --ii-radius 1 --alpha0 "$ALPHA0"
+  --output-units world --no-render)
 edits=("plain:" "h_scale_2:--h-scale 2" "h_clamp_5:--h-clamp 5" "k2_scale_2:--k2 scale:2" "k1_set_0:--k1 set:0")
 for entry in "${edits[@]}"; do
   name=${entry%%:*}

@@ -377,9 +377,9 @@ fig17() {
     cp "$OUT/bunny.obj" "$dir/alpha0_$a/bunny.obj"
     ALPHA0=$a CORRLAP=$CORRLAP scripts/curvature_editing_gallery.sh "$dir/alpha0_$a" >"$dir/alpha0_$a.log" 2>&1
   done
-  # How far each edit moves the surface from the unedited result (the same vertices: positions in
-  # voxels, the volume having no geometry).
+  # How far each edit moves the surface from the unedited result (the same vertices), in voxels.
   /usr/bin/python3 - "$dir" >"$dir/table.md" <<'PY'
+import json
 import sys
 import numpy as np
 import corrlap
@@ -394,12 +394,14 @@ for name, label in edits:
     for a in ("10", "0.1"):
         plain, _ = corrlap.read_mesh(f"{d}/alpha0_{a}/plain/regularized.ply")
         edited, _ = corrlap.read_mesh(f"{d}/alpha0_{a}/{name}/regularized.ply")
-        move = np.linalg.norm(edited - plain, axis=1)
+        h = json.load(open(f"{d}/alpha0_{a}/plain/metrics.json"))["h"]
+        move = np.linalg.norm(edited - plain, axis=1) / h
         cells.append(f"{move.mean():.3g} / {move.max():.3g}")
     print(f"| {label} | {cells[0]} | {cells[1]} |")
 PY
+  publish "$dir/alpha0_10/curvature_editing_bunny.png" fig17_bunny_alpha0_10.png
   publish "$dir/alpha0_0.1/curvature_editing_bunny.png" fig17_bunny.png
-  echo "fig17: $dir/table.md, $dir/alpha0_0.1/curvature_editing_bunny.png"
+  echo "fig17: $dir/table.md, $dir/alpha0_*/curvature_editing_bunny.png"
 }
 
 for part in $PARTS; do
