@@ -93,13 +93,18 @@ Eigen::MatrixX3d interpolate_normals(const TriangleLocator& fine, const Eigen::M
   }
   return n;
 }
+
+// One normal per vertex of the fine mesh, or a named error.
+void check_normal_count(const TriangleLocator& fine, const Eigen::MatrixX3d& fine_vertex_normals) {
+  if (fine_vertex_normals.rows() != fine.vertices().rows())
+    throw InputError("normal map: " + std::to_string(fine_vertex_normals.rows()) + " normals for " +
+                     std::to_string(fine.vertices().rows()) + " vertices of the fine mesh");
+}
 }  // namespace
 
 NormalFields sample_normal_map(const SurfelMesh& mesh, const TriangleLocator& fine,
                                const Eigen::MatrixX3d& fine_vertex_normals) {
-  if (fine_vertex_normals.rows() != fine.vertices().rows())
-    throw InputError("normal map: " + std::to_string(fine_vertex_normals.rows()) + " normals for " +
-                     std::to_string(fine.vertices().rows()) + " vertices of the fine mesh");
+  check_normal_count(fine, fine_vertex_normals);
   NormalFields out;
   out.vertex = interpolate_normals(fine, fine_vertex_normals, fine.triangles(), mesh.positions, "vertex");
   out.face = interpolate_normals(fine, fine_vertex_normals, fine.triangles(), mesh.face_centroids(), "face");
@@ -120,9 +125,7 @@ DistanceToMesh distance_to_mesh(const SurfelMesh& mesh, const TriangleLocator& f
 double normal_angle_to_map(const SurfelMesh& mesh, const TriangleLocator& fine,
                            const Eigen::MatrixX3d& fine_vertex_normals) {
   if (mesh.num_vertices() == 0) return 0.0;
-  if (fine_vertex_normals.rows() != fine.vertices().rows())
-    throw InputError("normal map: " + std::to_string(fine_vertex_normals.rows()) + " normals for " +
-                     std::to_string(fine.vertices().rows()) + " vertices of the fine mesh");
+  check_normal_count(fine, fine_vertex_normals);
   const Eigen::MatrixX3d map =
       interpolate_normals(fine, fine_vertex_normals, fine.triangles(), mesh.positions, "vertex");
   const Eigen::MatrixX3d own = geometric_vertex_normals(mesh);
