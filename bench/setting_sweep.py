@@ -7,7 +7,8 @@ grid shifts and measures): the mean distance to the truth, in voxels, averaged o
 
 --radii gives the curvature ball in voxels (0: corrlap's default); each becomes
 --curvature-radius in the volume's world units (the longest side spans 2). --flags gives whole
-flag sets. The bunny (--bunny) is voxelized once, the analytic shapes --shifts times."""
+flag sets; --grid runs every flag set with every radius. The bunny (--bunny) is voxelized once, the
+analytic shapes --shifts times."""
 import argparse
 import os
 import shlex
@@ -34,10 +35,16 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--corrlap", default=cs.default_cli())
     ap.add_argument("--work", default="setting_sweep_work", help="directory of the volumes and outputs")
+    ap.add_argument("--grid", action="store_true",
+                    help="every flag set with every radius (--flags x --radii) instead of each on its own")
     args = ap.parse_args()
     args.shift = None
-    variants = [("r=%g" % r if r else "default", r, []) for r in args.radii]
-    variants += [("[%s]" % f, 0.0, shlex.split(f)) for f in args.flags]
+    if args.grid:
+        variants = [("[%s] r=%s" % (f, "%g" % r if r else "default"), r, shlex.split(f))
+                    for f in args.flags for r in args.radii]
+    else:
+        variants = [("r=%g" % r if r else "default", r, []) for r in args.radii]
+        variants += [("[%s]" % f, 0.0, shlex.split(f)) for f in args.flags]
     if not variants:
         ap.error("give --radii or --flags")
     inputs = [(name, k, shift) for name in args.shapes for k, shift in enumerate(cs.grid_shifts(args))]
