@@ -64,11 +64,12 @@ def test_measures_of_the_part_itself_and_of_a_scaled_copy():
     assert m["distance_max"] < 1e-12
     assert abs(m["area_ratio"] - 1.0) < 1e-12 and abs(m["volume_ratio"] - 1.0) < 1e-12
     assert all(a < 1e-3 or math.isnan(a) for a in m["angle_deg"].values())
-    # Scaled by 1.01 about the part's centre of the slab: the volume by 1.01^3, the area by 1.01^2.
+    # Scaled by 1.01 about the origin (inside the part): the volume by 1.01^3, the area by 1.01^2.
     scaled = cad.measure(1.01 * verts, faces, h)
     assert abs(scaled["volume_ratio"] - 1.01 ** 3) < 1e-9
     assert abs(scaled["area_ratio"] - 1.01 ** 2) < 1e-9
-    # The farthest vertex moves by 1 % of its distance to the origin.
+    # No vertex moves farther than 1 % of the largest radius, and the corners, moved outwards along
+    # their normal cones, move about that far from the part.
     assert abs(scaled["distance_max"] - 0.01 * np.linalg.norm(verts, axis=1).max()) < 0.002
 
 
