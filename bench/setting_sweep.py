@@ -39,6 +39,8 @@ def main():
                     help="every flag set with every radius (--flags x --radii) instead of each on its own")
     args = ap.parse_args()
     args.shift = None
+    if args.grid and not (args.radii and args.flags):
+        ap.error("--grid runs every flag set with every radius: give both --flags and --radii")
     if args.grid:
         variants = [("[%s] r=%s" % (f, "%g" % r if r else "default"), r, shlex.split(f))
                     for f in args.flags for r in args.radii]

@@ -206,7 +206,11 @@ def write_obj(path):
 
 def main(argv):
     if len(argv) == 3 and argv[1] == "write":
-        write_obj(argv[2])
+        try:
+            write_obj(argv[2])
+        except OSError as e:
+            print("cad_part: cannot write %s: %s" % (argv[2], e.strerror or e), file=sys.stderr)
+            return 2
         return 0
     if len(argv) == 4 and argv[1] == "measure":
         try:
@@ -216,7 +220,14 @@ def main(argv):
         if not (h > 0 and math.isfinite(h)):
             print("cad_part: H must be a positive grid step, got '%s'" % argv[3], file=sys.stderr)
             return 2
-        verts, tris = surface_truth.read_mesh(argv[2])
+        try:
+            verts, tris = surface_truth.read_mesh(argv[2])
+        except OSError as e:
+            print("cad_part: cannot read %s: %s" % (argv[2], e.strerror or e), file=sys.stderr)
+            return 2
+        except ValueError as e:
+            print("cad_part: %s" % e, file=sys.stderr)
+            return 2
         if len(tris) == 0:
             print("cad_part: %s has no faces" % argv[2], file=sys.stderr)
             return 2

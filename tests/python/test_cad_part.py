@@ -78,8 +78,8 @@ def test_distance_to_the_sharp_edges():
     assert np.abs(cad.signed_distance(samples)).max() < 1e-12
     h = 0.01
     local = np.array([
-        [0.0, -0.2, 0.4],   # on the top cap: 0.4 from the bottom rim, 0.7 from the top one
-        [0.2, -0.6, 0.1],   # on the bottom face: 0.3 from the top rim
+        [0.0, -0.2, 0.4],   # on the top cap: 0.4 from its edge at y = -0.6, 0.7 from the one at y = 0.5
+        [0.2, -0.6, 0.1],   # on the side face y = -0.6: 0.3 from the top cap's edge
         [-0.3, 0.25, 0.0],  # on the notch's floor: 0.1 from its right (concave) corner edge
         [-0.7, 0.5, 0.0],   # where the arc meets the top face: no sharp edge there; the notch 0.25 away
     ])
@@ -96,3 +96,6 @@ def test_the_command_line(tmp_path):
     assert m["distance_max"] < 1e-12 and set(m["angle_deg"]) == {"edges", "near", "flats"}
     bad = subprocess.run([sys.executable, SCRIPT, "measure", str(obj), "-1"], capture_output=True, text=True)
     assert bad.returncode == 2 and "positive grid step" in bad.stderr
+    missing = subprocess.run([sys.executable, SCRIPT, "measure", str(tmp_path / "none.ply"), "0.05"],
+                             capture_output=True, text=True)
+    assert missing.returncode == 2 and "cannot read" in missing.stderr and "Traceback" not in missing.stderr
