@@ -61,6 +61,7 @@
 #include <corrlap/problems/test_functions.hpp>
 
 // Regularization: positions from the corrected Laplacian and Delta p = -2 H n (paper §4.1).
+#include <corrlap/regularization/attachment_bias.hpp>
 #include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/normal_map_reconstruction.hpp>

@@ -195,7 +195,7 @@ VoxelGrid resample_isotropic(const VoxelGrid& grid, VolumeGeometry& geometry, st
 }
 
 // The voxels of a volume input, centred, cubic, with their index -> physical map.
-VoxelGrid volume_voxels(const SurfaceInput& input, VolumeGeometry& geometry) {
+VoxelGrid volume_voxels(const SurfaceInput& input, VolumeGeometry& geometry, double* anisotropy = nullptr) {
   VoxelGrid grid;
   std::optional<double> h;
   if (const auto* v = std::get_if<VolumeFileInput>(&input)) {
@@ -217,6 +217,7 @@ VoxelGrid volume_voxels(const SurfaceInput& input, VolumeGeometry& geometry) {
     h = a.h;
   }
   if (geometry.isotropic()) return grid;
+  if (anisotropy) *anisotropy = geometry.spacing.maxCoeff() / geometry.spacing.minCoeff();
   return resample_isotropic(grid, geometry, h);
 }
 
@@ -334,7 +335,7 @@ LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messag
     s.shape = make_implicit_shape(shape->shape, shape->center);
   const bool volume = std::holds_alternative<VolumeFileInput>(input) || std::holds_alternative<VolumeArrayInput>(input);
   VolumeGeometry geometry;
-  s.grid = volume ? volume_voxels(input, geometry) : load_voxels(input, messages);
+  s.grid = volume ? volume_voxels(input, geometry, &s.anisotropy) : load_voxels(input, messages);
   if (s.grid->count() == 0)
     throw InputError("the volume is empty: no voxel is inside, so the surface has no surfel (" + s.description + ")");
   // A volume's box is its voxels [0, size - 1] - shift, padded by one voxel (read_volume_as_voxels).

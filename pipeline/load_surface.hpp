@@ -127,6 +127,7 @@ struct LoadedSurface {
   double h = 0.0;                      ///< grid step (a quad mesh: its mean edge length, SurfelMesh::grid_step)
   VoxelFrame frame;                    ///< voxel indices -> world coordinates -> physical coordinates
   int components = 0;                  ///< connected components of the surface (all kept)
+  double anisotropy = 1.0;             ///< a volume's coarsest over finest voxel side (> 1: resampled to cubes)
   std::string description;             ///< provenance for logs and metrics ("sphere1, h=0.1")
 
   const ImplicitShape* shape_ptr() const { return shape ? &*shape : nullptr; }

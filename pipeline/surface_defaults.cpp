@@ -8,6 +8,10 @@ namespace {
 RegularizationOptions with_surface_defaults(const LoadedSurface& surface, RegularizationOptions options) {
   check_regularization_options(surface.mesh, options);
   if (!options.curvature_radius) options.curvature_radius = default_curvature_radius(surface, options.size);
+  // The automatic alpha0's bias test is calibrated on cubic voxels (docs/math.md §9.4): resampled
+  // anisotropic voxels leave terraces as tall as the coarse side, which it would take for detail
+  // and keep. Such volumes get the fixed alpha0.
+  if (surface.anisotropy > 1.0 + 1e-6) options.alpha0_auto = false;
   return options;
 }
 }  // namespace

@@ -8,6 +8,7 @@
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
+#include <corrlap/regularization/attachment_bias.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <numbers>
@@ -227,7 +228,9 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   if (!curvature) curvature = &computed.emplace(regularization_curvature(mesh, normals, o));
   r.size = curvature->size;
   r.curvature_radius = curvature->curvature_radius;
-  r.alpha = regularization_alpha(alpha_h(mesh, o) * r.size, o.alpha0);
+  const double alpha_step = alpha_h(mesh, o);
+  r.alpha0 = o.alpha0;
+  r.alpha = regularization_alpha(alpha_step * r.size, o.alpha0);
   r.H = curvature->H;
   r.normals = curvature->normals;
   r.normal_angle_change_deg = curvature->normal_angle_change_deg;
@@ -241,41 +244,90 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
 
   r.mesh = mesh;
   double residual = 0.0;
-  // With a direct backend, CG preconditioned by a factorization with L's pattern gives the normal
-  // equations' solution at a fraction of the cost of factorizing L M_l^{-1} L (the header of
-  // regularize_positions_preconditioned); it needs L negative semi-definite, else the direct solve.
-  if (r.alpha == 0.0) {
-    SolverReport unattached;
-    r.mesh.positions =
-        regularize_positions_unattached(ops.L, ops.M, mesh.positions, r.normals, r.H, *solver, &unattached);
-    r.solve_scheme = "unattached";
-    residual = unattached.residual;
-  }
-  if (r.solver != "cg" && r.solve_scheme.empty()) {
-    try {
-      SolverReport cg;
-      const double step = mesh.grid_step();
-      double bound = 0.0;
-      r.mesh.positions = regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha,
-                                                             *solver, &cg, o.solve_accuracy * step, &bound);
-      r.solve_scheme = "preconditioned-cg";
-      r.solve_iterations = cg.iterations;
-      r.solve_error_bound = bound / step;
-      residual = cg.residual;
-    } catch (const SolverError& e) {
-      if (e.status() != SolverStatus::NotPositiveDefinite) throw;
-      r.warnings.push_back("regularization: " + std::string(e.what()) +
-                           "; L is not negative semi-definite, solved the normal equations directly");
+  // One solve: the positions, and what the result reports of it.
+  struct Solved {
+    Eigen::MatrixX3d positions;
+    std::string scheme;
+    int iterations = 0;
+    double error_bound = 0.0, residual = 0.0;
+  };
+  const auto solve_at = [&](double alpha) -> Solved {
+    Solved out;
+    if (alpha == 0.0) {
+      SolverReport unattached;
+      out.positions =
+          regularize_positions_unattached(ops.L, ops.M, mesh.positions, r.normals, r.H, *solver, &unattached);
+      out.scheme = "unattached";
+      out.residual = unattached.residual;
     }
+    // With a direct backend, CG preconditioned by a factorization with L's pattern gives the normal
+    // equations' solution at a fraction of the cost of factorizing L M_l^{-1} L (the header of
+    // regularize_positions_preconditioned); it needs L negative semi-definite, else the direct solve.
+    if (r.solver != "cg" && out.scheme.empty()) {
+      try {
+        SolverReport cg;
+        const double step = mesh.grid_step();
+        double bound = 0.0;
+        out.positions = regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, alpha,
+                                                            *solver, &cg, o.solve_accuracy * step, &bound);
+        out.scheme = "preconditioned-cg";
+        out.iterations = cg.iterations;
+        out.error_bound = bound / step;
+        out.residual = cg.residual;
+      } catch (const SolverError& e) {
+        if (e.status() != SolverStatus::NotPositiveDefinite) throw;
+        r.warnings.push_back("regularization: " + std::string(e.what()) +
+                             "; L is not negative semi-definite, solved the normal equations directly");
+      }
+    }
+    if (out.scheme.empty()) {
+      SolverReport direct;
+      out.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, alpha, *solver, &direct);
+      out.scheme = "direct";
+      out.residual = direct.residual;
+    }
+    const SolverReport& backend = solver->info();
+    r.factorize_seconds += backend.analyze_seconds + backend.factorize_seconds;
+    r.factor_nonzeros = backend.factor_nonzeros;
+    r.factor_flops = backend.factor_flops;
+    return out;
+  };
+  std::vector<Solved> solved;
+  solved.push_back(solve_at(r.alpha));
+  // Curvature edits move the surface away from the staircase on purpose: the bias test would undo them.
+  const bool edited = o.h_scale != 1.0 || o.h_clamp || o.k1_edit.active() || o.k2_edit.active();
+  if (o.alpha0_auto && !edited) {
+    // docs/math.md §9.4: raise alpha0 while the result keeps away from the staircase's local mean
+    // and the raise buys the bias back.
+    const Eigen::VectorXd mass = ops.M * Eigen::VectorXd::Ones(ops.M.cols());
+    const auto bias_of = [&](const Eigen::MatrixX3d& q) {
+      return attachment_bias(mesh.faces, mesh.positions, q, r.normals, mass, alpha_step);
+    };
+    r.alpha0_trials.push_back({r.alpha0, bias_of(solved.back().positions)});
+    // The largest alpha0 the solve represents on this surface (check_regularization_options).
+    const double scale = alpha_step * r.size;
+    const double largest =
+        std::min(alpha0_for_wavelength(kAutoAlpha0MinWavelength, r.size / alpha_step),
+                 max_regularization_alpha(surface_area(mesh), mesh.positions.cwiseAbs().maxCoeff()) * scale * scale);
+    for (double next = next_alpha0(r.alpha0_trials, kAttachmentBiasLimit, largest); next > 0.0;
+         next = next_alpha0(r.alpha0_trials, kAttachmentBiasLimit, largest)) {
+      solved.push_back(solve_at(regularization_alpha(scale, next)));
+      r.alpha0_trials.push_back({next, bias_of(solved.back().positions)});
+    }
+    const std::size_t kept = chosen_alpha0_trial(r.alpha0_trials);
+    r.alpha0 = r.alpha0_trials[kept].alpha0;
+    r.alpha = regularization_alpha(scale, r.alpha0);
+    solved.resize(kept + 1);
   }
-  if (r.solve_scheme.empty()) {
-    SolverReport direct;
-    r.mesh.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, r.alpha, *solver, &direct);
-    r.solve_scheme = "direct";
-    residual = direct.residual;
-  }
+  Solved& result = solved.back();
+  r.mesh.positions = std::move(result.positions);
+  r.solve_scheme = result.scheme;
+  r.solve_iterations = result.iterations;
+  r.solve_error_bound = result.error_bound;
+  residual = result.residual;
   r.solve_seconds = watch.lap();
   r.solve_residual = residual;
+
   // A solve stopped at a proven accuracy has its error bound instead: its relative residual is
   // dominated by high frequencies of no consequence (1e-3 on small surfaces) and says nothing more.
   const bool proven = r.solve_scheme == "preconditioned-cg" && o.solve_accuracy > 0.0;

@@ -6,6 +6,7 @@
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
+#include <corrlap/regularization/attachment_bias.hpp>
 #include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/solution_check.hpp>
@@ -63,6 +64,11 @@ struct RegularizationOptions {
   /// Spacing of the curvature's sites, a fraction of the curvature radius (0: every vertex).
   double curvature_spacing = kCurvatureSiteSpacing;
   double alpha0 = 10.0;  ///< alpha = alpha0 / (h size)^2; 0: no attachment (docs/math.md §9.3, paper Fig. 11)
+  /// Choose alpha0 from the data, starting at alpha0 (docs/math.md §9.4, attachment_bias.hpp): solve,
+  /// and while the result keeps away from the staircase's local mean and raising alpha0 brings it
+  /// back, raise alpha0 and solve again (not from alpha0 = 0, no attachment asked, nor with curvature
+  /// edits, which move the surface away on purpose). False: alpha0 as given (the paper's protocol).
+  bool alpha0_auto = true;
   /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
   /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.
   std::optional<double> alpha_step;
@@ -98,6 +104,10 @@ struct RegularizedSurface {
   Eigen::VectorXd H;         ///< #V mean curvature used (after the edits)
   Eigen::MatrixX3d normals;  ///< #V x 3 unit normals n used: the input's, or n' after principal edits
   double h = 0.0, size = 1.0, curvature_radius = 0.0, alpha = 0.0;
+  double alpha0 = 0.0;  ///< the alpha0 of the result (the options', or the automatic choice's)
+  /// With alpha0_auto: every alpha0 solved with and the bias of its result, in order (the last is
+  /// the result's).
+  std::vector<Alpha0Trial> alpha0_trials;
   std::string solver;  ///< backend name
   /// "preconditioned-cg" (regularize_positions_preconditioned, the default with a direct backend),
   /// "direct" (regularize_positions: with "cg", or when L is not negative semi-definite), or
@@ -111,6 +121,9 @@ struct RegularizedSurface {
   SolutionCheck check;  ///< the result against the input (check_solution; no residual test at a proven accuracy)
   RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
   double curvature_seconds = 0.0, operators_seconds = 0.0, solve_seconds = 0.0;
+  /// Of solve_seconds, the backend's analyses and factorizations (0 for iterative backends), and
+  /// the last factor's size as the backend reports it (0 where it does not).
+  double factorize_seconds = 0.0, factor_nonzeros = 0.0, factor_flops = 0.0;
   double normal_angle_change_deg = 0.0;  ///< mean angle between n' and n (0 without principal edits)
   std::vector<std::string> warnings;     ///< from the operators
 };

@@ -121,6 +121,7 @@ void run_regularization_study(const RegularizationStudyOptions& o,
       const double area_before = surface_area(mesh);
       const double volume_before = enclosed_volume(mesh);
       RegularizationOptions options;
+      options.alpha0_auto = false;  // the paper's protocol: each alpha0 swept as it is
       options.solver.set("solver", o.linear_solver);
       std::optional<RegularizationCurvature> curvature;  // the same for every Laplacian method and alpha0
       for (const std::string& method : o.methods) {

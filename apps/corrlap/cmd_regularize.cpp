@@ -40,7 +40,7 @@ struct RegularizeArgs {
   NormalOptions normals;
   std::optional<double> size, curvature_radius;
   double curvature_spacing = kCurvatureSiteSpacing;
-  double alpha0 = 10.0;
+  std::string alpha0 = RegularizationOptions{}.alpha0_auto ? "auto" : number_text(RegularizationOptions{}.alpha0);
   double h_scale = 1.0;
   std::optional<double> h_clamp;
   std::string k1_edit, k2_edit;  // principal-curvature edits (paper §4.3), parsed by PrincipalCurvatureEdit
@@ -211,8 +211,13 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   m["normals"] = a.normals.describe(surface);
   m["size"] = r.size;
   m["curvature_radius"] = r.curvature_radius;
-  m["alpha0"] = a.alpha0;
+  m["alpha0"] = r.alpha0;
   m["alpha"] = r.alpha;
+  if (o.alpha0_auto) {
+    nlohmann::json trials = nlohmann::json::array();
+    for (const Alpha0Trial& t : r.alpha0_trials) trials.push_back({{"alpha0", t.alpha0}, {"bias", t.bias}});
+    m["alpha0_auto"] = {{"bias_limit", kAttachmentBiasLimit}, {"trials", trials}};
+  }
   m["h_scale"] = a.h_scale;
   m["h_clamp"] = a.h_clamp ? nlohmann::json(*a.h_clamp) : nlohmann::json(nullptr);
   m["output_units"] = units.name();
@@ -230,6 +235,11 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
     m["solve_accuracy"] = o.solve_accuracy;
     m["solve_error_bound"] = r.solve_error_bound;
   }
+  if (r.factor_nonzeros > 0.0) {
+    m["solve_factorize_s"] = r.factorize_seconds;
+    m["factor_nonzeros"] = r.factor_nonzeros;
+    m["factor_flops"] = r.factor_flops;
+  }
   m["solve_residual"] = r.solve_residual;
   m["area_ratio"] = r.check.area_ratio;
   m["extent_ratio"] = r.check.extent_ratio;
@@ -238,7 +248,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
   add_geometry_metrics(m, surface, r.mesh, r.curvature_radius, units);
   write_metrics(dir, m);
-  std::cerr << "regularize: " << a.method.method << ", alpha = " << a.alpha0 << " / (h size)^2 = " << r.alpha << ", "
+  std::cerr << "regularize: " << a.method.method << ", alpha = " << r.alpha0 << " / (h size)^2 = " << r.alpha << ", "
             << r.solver << ": max displacement " << m["displacement_max"].get<double>();
   if (surface.shape)
     std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
@@ -271,7 +281,8 @@ void run(const RegularizeArgs& a) {
   o.size = a.size;
   o.curvature_radius = a.curvature_radius;
   o.curvature_spacing = a.curvature_spacing;
-  o.alpha0 = a.alpha0;
+  o.alpha0_auto = a.alpha0 == "auto";
+  o.alpha0 = o.alpha0_auto ? RegularizationOptions{}.alpha0 : std::stod(a.alpha0);  // checked by the option
   o.h_scale = a.h_scale;
   o.h_clamp = a.h_clamp;
   if (!a.k1_edit.empty()) o.k1_edit = PrincipalCurvatureEdit::parse(a.k1_edit);
@@ -345,8 +356,12 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
                      ->capture_default_str());
   only.push_back(cmd->add_option("--alpha0", args->alpha0,
                                  "attachment weight: alpha = alpha0 / (h s)^2 (0: no attachment, the shape from the "
-                                 "curvature alone, placed at the input's centroid)")
-                     ->check(non_negative_number())
+                                 "curvature alone, placed at the input's centroid; auto: from " +
+                                     number_text(RegularizationOptions{}.alpha0) +
+                                     " up while the result keeps away from the input's local mean and a larger "
+                                     "alpha0 brings it back: detail a few voxels wide; docs/regularization.md)")
+                     ->check(non_negative_number_or("auto"))
+                     ->capture_default_str()
                      ->capture_default_str());
   only.push_back(
       cmd->add_option("--h-scale", args->h_scale, "curvature editing: H <- S H (paper §4.3)")->capture_default_str());

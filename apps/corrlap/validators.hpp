@@ -38,6 +38,19 @@ inline CLI::Validator non_negative_number() {
   return detail::number_check("a number >= 0", [](double v) { return v >= 0.0; });
 }
 
+/// A finite number >= 0, or the word `word` (e.g. "auto").
+inline CLI::Validator non_negative_number_or(const std::string& word) {
+  const CLI::Validator number = non_negative_number();
+  return CLI::Validator(
+      [word, number](std::string& text) -> std::string {
+        if (text == word) return {};
+        std::string copy = text;
+        const std::string error = number(copy);
+        return error.empty() ? error : error + " or '" + word + "'";
+      },
+      "a number >= 0 or '" + word + "'");
+}
+
 /// "a,b,,c" -> {"a", "b", "c"}: the comma lists of --methods, --shapes, --functions.
 inline std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> items;

@@ -76,6 +76,13 @@ def _real(value, name, required=False):
     return float(value)
 
 
+def _alpha0(value):
+    """None for 'auto' (the library's automatic choice), else the number."""
+    if isinstance(value, str) and value == "auto":
+        return None
+    return _real(value, "alpha0", required=True)
+
+
 def _integer(value, name):
     """An integer argument: an int or a numpy integer (never a float such as 5.5, never a bool),
     within the library's int range."""
@@ -162,7 +169,7 @@ def write_volume(path, array, affine=None, space=None):
                        "" if space is None else str(space))
 
 
-def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0=10.0,
+def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0="auto",
                       curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
                       space=None, curvature_spacing=None, **params):
     """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
@@ -191,7 +198,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
     V, F, warnings = _core.regularize_volume(
         volume, _real(label, "label"), _real(threshold, "threshold"),
         None if affine is None else _np.asarray(affine, dtype=_np.float64), _real(h, "h"), str(method), params,
-        _real(alpha0, "alpha0", required=True), _real(curvature_radius, "curvature_radius"),
+        _alpha0(alpha0), _real(curvature_radius, "curvature_radius"),
         _real(curvature_spacing, "curvature_spacing"), _real(size, "size"),
         str(solver), dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"),
         "" if space is None else str(space))
@@ -371,7 +378,7 @@ def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, p
     return (values if positive else -values), vectors
 
 
-def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0=10.0,
+def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0="auto",
                curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
                return_curvature=False, allow_nonmanifold=False, curvature_spacing=None, **params):
     """Regularized positions of a closed digital surface (paper 4.1, docs/regularization.md): the
@@ -380,7 +387,9 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
 
     V (#V, 3), F (#F, 4); face_normals (#F, 3) and/or vertex_normals (#V, 3) (default: normalized
     sums of the face normals). method: a vertex-based discretization (its parameters as keywords).
-    h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2;
+    h: grid step (None: the mean edge length); alpha0: attachment alpha = alpha0 / (h size)^2, or
+    'auto' (as `--alpha0 auto`: from {alpha0_start} up while the result keeps away from the input's
+    local mean and a larger alpha0 brings it back; docs/regularization.md; the paper uses 10);
     curvature_radius, size: as `corrlap regularize --mesh` (defaults {curvature_radius_fraction} size and half the
     bounding box). curvature_spacing: the curvature ball is walked at vertices this fraction of the
     radius apart and interpolated between them (None: the library's {curvature_site_spacing}, as
@@ -397,8 +406,7 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     Returns P (#V, 3), and H (#V,) too when return_curvature.
     """
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
-                                      _real(alpha0, "alpha0", required=True),
-                                      _real(curvature_radius, "curvature_radius"),
+                                      _alpha0(alpha0), _real(curvature_radius, "curvature_radius"),
                                       _real(curvature_spacing, "curvature_spacing"), _real(size, "size"), str(solver),
                                       dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"))
     _warn(warnings)
@@ -465,7 +473,8 @@ def _document_defaults():
               "{voxel_min_curvature_radius}": _core.VOXEL_MIN_CURVATURE_RADIUS,
               "{curvature_radius_fraction}": _core.CURVATURE_RADIUS_FRACTION,
               "{curvature_site_spacing}": _core.CURVATURE_SITE_SPACING,
-              "{solve_accuracy}": _core.SOLVE_ACCURACY}
+              "{solve_accuracy}": _core.SOLVE_ACCURACY,
+              "{alpha0_start}": _core.ALPHA0_START}
     for function in (ii_normals, curvature, regularize, regularize_volume):
         for name, value in values.items():
             function.__doc__ = function.__doc__.replace(name, f"{value:g}")

@@ -29,8 +29,9 @@ VoxelGrid array_voxels(py::handle volume, std::optional<double> h, double thresh
 
 /// The options of regularize and regularize_volume from their common keywords (regularization.cpp);
 /// unset curvature_radius, curvature_spacing and size keep the library's defaults.
-RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params, double alpha0,
-                                                 std::optional<double> curvature_radius,
+/// alpha0: a number, or nullopt for the library's automatic choice (RegularizationOptions::alpha0_auto).
+RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params,
+                                                 std::optional<double> alpha0, std::optional<double> curvature_radius,
                                                  std::optional<double> curvature_spacing, std::optional<double> size,
                                                  const std::string& solver, const py::dict& solver_options,
                                                  std::optional<double> solve_accuracy);

@@ -10,8 +10,8 @@
 
 namespace corrlap::python {
 
-RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params, double alpha0,
-                                                 std::optional<double> curvature_radius,
+RegularizationOptions regularization_options_arg(const std::string& method, const py::dict& params,
+                                                 std::optional<double> alpha0, std::optional<double> curvature_radius,
                                                  std::optional<double> curvature_spacing, std::optional<double> size,
                                                  const std::string& solver, const py::dict& solver_options,
                                                  std::optional<double> solve_accuracy) {
@@ -19,7 +19,8 @@ RegularizationOptions regularization_options_arg(const std::string& method, cons
   if (solve_accuracy) o.solve_accuracy = *solve_accuracy;  // checked with the rest (check_regularization_options)
   o.method = method;
   o.method_params = config_arg(params, method);
-  o.alpha0 = alpha0;
+  o.alpha0_auto = !alpha0;
+  if (alpha0) o.alpha0 = *alpha0;
   o.curvature_radius = curvature_radius;
   if (curvature_spacing) o.curvature_spacing = *curvature_spacing;
   o.size = size;
@@ -35,12 +36,13 @@ void bind_regularization(py::module_& m) {
   m.attr("CURVATURE_RADIUS_FRACTION") = kCurvatureRadiusFraction;
   m.attr("CURVATURE_SITE_SPACING") = kCurvatureSiteSpacing;
   m.attr("SOLVE_ACCURACY") = kRegularizationSolveAccuracy;
+  m.attr("ALPHA0_START") = RegularizationOptions{}.alpha0;
   m.def(
       "regularize",
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
-         std::optional<double> h, const py::dict& params, double alpha0, std::optional<double> curvature_radius,
-         std::optional<double> curvature_spacing, std::optional<double> size, const std::string& solver,
-         const py::dict& solver_options, std::optional<double> solve_accuracy) {
+         std::optional<double> h, const py::dict& params, std::optional<double> alpha0,
+         std::optional<double> curvature_radius, std::optional<double> curvature_spacing, std::optional<double> size,
+         const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)

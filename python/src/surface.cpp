@@ -188,7 +188,7 @@ void bind_surface(py::module_& m) {
   m.def(
       "regularize_volume",
       [](py::handle volume, std::optional<double> label, std::optional<double> threshold, py::handle affine,
-         std::optional<double> h, const std::string& method, const py::dict& params, double alpha0,
+         std::optional<double> h, const std::string& method, const py::dict& params, std::optional<double> alpha0,
          std::optional<double> curvature_radius, std::optional<double> curvature_spacing, std::optional<double> size,
          const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy,
          const std::string& space) {

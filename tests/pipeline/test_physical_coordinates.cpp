@@ -102,7 +102,11 @@ Regularized regularize_physical(const SampledVolume& v) {
   // In (resampled) voxels: radius k h^alpha = k h.
   request.ii = IIParams{.k = 7.5 / v.geometry.spacing.minCoeff(), .alpha = 1.0};
   const NormalFields n = resolve_normals(s, NormalKind::Vertex, request);
-  const RegularizedSurface r = regularize_surface(s.mesh, n, RegularizationOptions{});
+  // The three scans at one fixed alpha0: the automatic choice is off for resampled voxels
+  // (pipeline/surface_defaults.cpp), and this compares the scans, not the choice.
+  RegularizationOptions fixed;
+  fixed.alpha0_auto = false;
+  const RegularizedSurface r = regularize_surface(s.mesh, n, fixed);
   Regularized out;
   out.physical = s.frame.to_physical(r.mesh.positions);
   for (Eigen::Index i = 0; i < out.physical.rows(); ++i) {

@@ -387,3 +387,15 @@ def test_regularize_without_attachment(sphere):
     r, r0 = np.linalg.norm(free, axis=1), np.linalg.norm(V, axis=1)
     assert r.std() < 0.1 * r0.std()
     assert abs(r.mean() - 1.0) <= abs(r0.mean() - 1.0)
+
+
+def test_regularize_alpha0_auto(sphere):
+    """alpha0='auto' is the default (docs/math.md §9.4): on a smooth sphere it keeps alpha0 = 10, so
+    the result is the fixed alpha0's to the bit; another word is refused, naming alpha0."""
+    V, F, fn = sphere
+    default = corrlap.regularize(V, F, face_normals=fn)
+    auto = corrlap.regularize(V, F, face_normals=fn, alpha0="auto")
+    fixed = corrlap.regularize(V, F, face_normals=fn, alpha0=10)
+    assert np.array_equal(default, auto) and np.array_equal(auto, fixed)
+    with pytest.raises((TypeError, ValueError), match="alpha0"):
+        corrlap.regularize(V, F, face_normals=fn, alpha0="automatic")
