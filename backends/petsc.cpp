@@ -166,7 +166,8 @@ class PrefixedOptions {
     std::vector<std::string> names;
     for (const auto& option : options_) {
       PetscBool used = PETSC_TRUE;
-      PetscOptionsUsed(nullptr, ("-" + prefix_ + option.first).c_str(), &used);
+      PetscOptionsUsed(nullptr, (prefix_ + option.first).c_str(), &used);  // the database's names have no '-'
+
       if (used == PETSC_FALSE) names.push_back(option.first);
     }
     return names;
@@ -449,6 +450,8 @@ void PetscLinearSolver::factorize(const SpMat& A) {
   // cg's rtol then means what it means for the "cg" backend: the true residual.
   if (s.effective_ksp_type() == "cg") check(KSPSetNormType(s.ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType", true);
   check(KSPSetOptionsPrefix(s.ksp, s.passed.prefix().c_str()), "KSPSetOptionsPrefix");
+  // The factor (MUMPS) reads its -mat_ options under the matrix's prefix.
+  check(MatSetOptionsPrefix(s.A, s.passed.prefix().c_str()), "MatSetOptionsPrefix");
   check(KSPSetFromOptions(s.ksp), "KSPSetFromOptions", true);
   const PetscErrorCode setup = KSPSetUp(s.ksp);
   if (setup != 0) {
@@ -603,6 +606,13 @@ EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   SpMat K = -L, Mc = M;
   K.makeCompressed();
   Mc.makeCompressed();
+  // LOBPCG iterates on K - shift M, positive definite: K's exact zero eigenvalue broke the
+  // Rayleigh-Ritz step's B-orthogonality (LAPACK sygvd failures). Its values are mu - shift.
+  const bool lobpcg = s.method == "lobpcg";
+  if (lobpcg) {
+    K -= s.shift * Mc;
+    K.makeCompressed();
+  }
   const RowBlock rows = row_block(n);
   OwnedMat Kp, Mp;
   create_matrix(K, rows, Kp);
@@ -633,12 +643,10 @@ EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
     check(STGetKSP(st, &ksp), "STGetKSP");
     setup_ksp(ksp, "preonly", "cholesky", "mumps");
   } else {
-    // LOBPCG iterates on K, M themselves; the preconditioner is built from K - shift M (positive
-    // definite, unlike K) and never factorized.
+    // The preconditioner is built from K - shift M itself and never factorized.
     check(EPSSetType(eps, EPSLOBPCG), "EPSSetType");
     check(EPSSetWhichEigenpairs(eps, EPS_SMALLEST_REAL), "EPSSetWhichEigenpairs");
     check(STSetType(st, STPRECOND), "STSetType");
-    check(STSetShift(st, s.shift), "STSetShift");
     check(STGetKSP(st, &ksp), "STGetKSP");
     setup_ksp(ksp, "preonly", s.pc_type, "");
   }
@@ -667,7 +675,7 @@ EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   for (PetscInt i = 0; i < converged; ++i) {
     PetscScalar re = 0.0, im = 0.0;
     check(EPSGetEigenpair(eps, i, &re, &im, v, nullptr), "EPSGetEigenpair");
-    values[i] = re;
+    values[i] = lobpcg ? re + s.shift : re;
     gather(v, vectors.col(i).data());
   }
   std::vector<Eigen::Index> order(static_cast<std::size_t>(converged));

@@ -194,10 +194,10 @@ TEST_CASE("petsc and slepc: bad options and divergence are errors that name the 
   auto good = petsc({"ksp_type=cg", "pc_type=gamg", "pc_gamg_threshold=0.02", "rtol=1e-8"});
   good->compute(A);
   CHECK(good->solve(B).allFinite());
-  // Indefinite: CG on L (negative semi-definite) stops with PETSc's reason.
-  SpMat negative = -test::shifted(surface("sphere"), 1.0);
+  // Indefinite (mu = 2 and 6 are the sphere's second and third values): CG stops with PETSc's reason.
+  const SpMat indefinite = test::shifted(surface("sphere"), -3.0);
   auto cg = petsc({"ksp_type=cg", "pc_type=none"});
-  cg->compute(negative);
+  cg->compute(indefinite);
   CHECK_THROWS_WITH_AS(cg->solve(B), doctest::Contains("DIVERGED_INDEFINITE"), SolverError);
 }
 
