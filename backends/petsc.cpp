@@ -9,6 +9,7 @@
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
