@@ -4,6 +4,9 @@
 #include "eigen_direct.hpp"
 #include "iterative.hpp"
 #include "spectra_eigs.hpp"
+#if defined(CORRLAP_WITH_PETSC)
+#include "petsc.hpp"
+#endif
 
 namespace corrlap {
 
@@ -17,12 +20,20 @@ void register_builtin_linear_solvers(LinearSolverRegistry& r) {
         [] { return std::make_unique<CholmodSolver>(); });
   r.add("cg", "preconditioned conjugate gradient (none/jacobi/ichol)",
         [] { return std::make_unique<ConjugateGradientSolver>(); });
+#if defined(CORRLAP_WITH_PETSC)
+  r.add("petsc", "PETSc KSP under MPI (MUMPS Cholesky, CG + GAMG/hypre, ...; MPIAIJ assembled through COO)",
+        [] { return std::make_unique<PetscLinearSolver>(); });
+#endif
 }
 void register_builtin_eigen_solvers(EigenSolverRegistry& r) {
   r.add("shift-invert", "Spectra SymGEigsShiftSolver, shift-invert with any linear solver; dense below dense_threshold",
         [] { return std::make_unique<ShiftInvertEigenSolver>(); });
   r.add("dense", "Eigen GeneralizedSelfAdjointEigenSolver on dense matrices (small problems)",
         [] { return std::make_unique<DenseEigenSolver>(); });
+#if defined(CORRLAP_WITH_PETSC)
+  r.add("slepc", "SLEPc EPS under MPI (GHEP, shift-invert with MUMPS, or LOBPCG + GAMG/hypre)",
+        [] { return std::make_unique<SlepcEigenSolver>(); });
+#endif
 }
 }  // namespace
 

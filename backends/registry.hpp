@@ -19,7 +19,8 @@ EigenSolverRegistry& eigen_solver_registry();
 /// `options` (backend keys, see `corrlap backends`), e.g.
 ///   auto solver = make_linear_solver("cholmod");
 ///   solver->compute(A);  Eigen::MatrixXd X = solver->solve(B);
-/// Names: cholmod (kDefaultLinearSolver), eigen-ldlt, eigen-llt, cg. An unknown name or key is an
+/// Names: cholmod (kDefaultLinearSolver), eigen-ldlt, eigen-llt, cg; petsc in a build with
+/// -DCORRLAP_WITH_PETSC=ON (backends/petsc.hpp). An unknown name or key is an
 /// InputError listing the valid ones; a key "solver" in `options` naming another backend too.
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name = kDefaultLinearSolver,
                                                  const Config& options = {});
@@ -31,8 +32,8 @@ std::unique_ptr<LinearSolver> make_linear_solver(const Config& config,
 
 /// An eigen solver for L u = lambda M u (docs/math.md §10.5): "shift-invert" (kDefaultEigenSolver,
 /// Spectra's shift-invert Lanczos; its linear solver is options' key "solver", default
-/// kDefaultLinearSolver) or "dense". Its solve(L, M, k) returns the k values -lambda >= 0 of
-/// smallest magnitude, ascending. Unknown names or keys are InputErrors listing the valid ones.
+/// kDefaultLinearSolver) or "dense"; "slepc" with -DCORRLAP_WITH_PETSC=ON. Its solve(L, M, k) returns the k values
+/// -lambda >= 0 of smallest magnitude, ascending. Unknown names or keys are InputErrors listing the valid ones.
 std::unique_ptr<EigenSolver> make_eigen_solver(const std::string& name = kDefaultEigenSolver,
                                                const Config& options = {});
 

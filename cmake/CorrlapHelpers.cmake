@@ -19,16 +19,21 @@ function(corrlap_warnings target)
   endif()
 endfunction()
 
-# corrlap_library(<folder-name> [PUBLIC deps...] [PRIVATE deps...])
+# corrlap_library(<folder-name> [PUBLIC deps...] [PRIVATE deps...] [EXCLUDE files...])
 # One library per top-level folder: every .cpp below the folder belongs to it. Headers below the
 # folder are installed with their sub-folders, except those in a detail/ folder: internal headers
 # (TBB, intrinsics, assembly machinery) are never installed, so installed headers include Eigen and
-# the standard library only (tests/install_tree_check.cmake verifies it).
+# the standard library only (tests/install_tree_check.cmake verifies it). EXCLUDE: sources and headers
+# (relative to the folder) left out, for an optional backend that is not configured.
 function(corrlap_library name)
-  cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE;EXCLUDE" ${ARGN})
   file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
   file(GLOB_RECURSE headers CONFIGURE_DEPENDS RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}
     ${CMAKE_CURRENT_SOURCE_DIR}/*.hpp ${CMAKE_CURRENT_SOURCE_DIR}/*.inc)
+  foreach(excluded ${ARG_EXCLUDE})
+    list(REMOVE_ITEM sources ${CMAKE_CURRENT_SOURCE_DIR}/${excluded})
+    list(REMOVE_ITEM headers ${excluded})
+  endforeach()
   add_library(corrlap_${name} ${sources})
   add_library(corrlap::${name} ALIAS corrlap_${name})
   set_target_properties(corrlap_${name} PROPERTIES EXPORT_NAME ${name} OUTPUT_NAME corrlap_${name}

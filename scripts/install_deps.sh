@@ -5,6 +5,8 @@
 # --bench also installs what bench/compare_surfaces.py runs against (VTK, scikit-image, Open3D)
 # and GNU time (its peak-memory figures);
 # `make test` does not need them (their test skips with a message).
+# --petsc also installs PETSc, SLEPc and Open MPI (the petsc/slepc backends, -DCORRLAP_WITH_PETSC=ON;
+# docs/backends.md).
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config python3
           libeigen3-dev libsuitesparse-dev libopenblas-dev libspectra-dev libtbb-dev
@@ -16,7 +18,8 @@ for arg in "$@"; do
   case "$arg" in
     --vtk) packages+=(python3-vtk9) ;;
     --bench) packages+=(python3-vtk9 python3-skimage python3-open3d time) ;;
-    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk, --bench)" >&2; exit 2 ;;
+    --petsc) packages+=(libpetsc-real-dev libslepc-real-dev openmpi-bin libopenmpi-dev) ;;
+    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk, --bench, --petsc)" >&2; exit 2 ;;
   esac
 done
 missing=()

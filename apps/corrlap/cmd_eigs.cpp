@@ -3,6 +3,7 @@
 // (L - sigma M)^{-1}; the solver itself takes the dense path where that is cheaper (small n).
 #include <algorithm>
 #include <chrono>
+#include <corrlap/backends/parallel.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/output_folder.hpp>
@@ -28,8 +29,8 @@ struct EigsArgs {
 
 void run(const EigsArgs& a) {
   if (a.k <= 0) throw InputError("-k must be positive");
-  std::optional<StagedFile> out;  // checked before the computation
-  if (!a.out.empty()) out.emplace(a.out);
+  std::optional<StagedFile> out;  // checked before the computation; under mpirun rank 0 writes
+  if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const OperatorOptions::Input in = a.options.prepare();
   // -lambda has the units 1 / length^2: converted from the computation's world units to the output's.
   const OutputUnits units = a.output.parse(in.frame);
@@ -39,7 +40,11 @@ void run(const EigsArgs& a) {
   const Eigen::Index n = ops.L.rows();
   Config config = a.solver.config();
   if (!config.has("solver")) config.set("solver", kDefaultLinearSolver);
-  auto eig = make_eigen_solver(kDefaultEigenSolver, config);
+  // --solver names a linear solver for the shift-invert Lanczos, or an eigen solver of its own
+  // (slepc), which then takes the options.
+  const std::string named = config.get_string("solver", kDefaultLinearSolver);
+  const bool own_eigen_solver = !linear_solver_registry().contains(named) && eigen_solver_registry().contains(named);
+  auto eig = make_eigen_solver(own_eigen_solver ? named : kDefaultEigenSolver, config);
   // The unknowns' positions order the factorization (LinearSolver::set_positions).
   eig->set_positions(ops.domain == Operators::Domain::Vertices ? in.mesh.positions : in.mesh.face_centroids());
   const auto t0 = std::chrono::steady_clock::now();
@@ -48,7 +53,9 @@ void run(const EigsArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!r.values.allFinite()) throw NumericalError("eigs: the eigen solver returned a value that is not finite");
   const Eigen::VectorXd values = units.inverse_areas(r.values);
-  if (a.out.empty()) {
+  if (!is_output_rank()) {
+    // rank 0 prints or writes the values
+  } else if (a.out.empty()) {
     for (Eigen::Index i = 0; i < values.size(); ++i) std::printf("%.17g\n", values[i]);
   } else {
     write_scalars(out->path(), values, units.scalar_comments("eigenvalues mu of -L u = mu M u, ascending", 2));
@@ -68,8 +75,9 @@ void run(const EigsArgs& a) {
   if (r.values.size() < a.k) std::cerr << "eigs: only " << r.values.size() << " eigenvalues exist\n";
   std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << n << " x " << n << " problem with "
             << (r.method == "dense" ? std::string("the dense solver (cheaper at this size)")
+                : own_eigen_solver  ? r.method + " (" + std::to_string(r.iterations) + " iterations)"
                                     : eig->name() + " (" + config.get_string("solver", "") + ", " +
-                                          std::to_string(r.iterations) + " restarts)")
+                                         std::to_string(r.iterations) + " restarts)")
             << " in " << seconds << " s; values in 1/length^2 of " << units.name() << " units\n";
 }
 
@@ -81,8 +89,10 @@ RegisterCommand reg(31, "eigs", [](CLI::App& app) {
   cmd->add_option("--out", args->out, "write one value per line (ascending, %.17g) instead of printing");
   args->output.add_options(*cmd, /*with_space=*/false);
   args->solver.add_options(*cmd, std::string("linear solver for shift-invert Lanczos (cholmod, eigen-ldlt, "
-                                             "eigen-llt, cg; default ") +
-                                     kDefaultLinearSolver + "); small problems take the dense path when it is cheaper");
+                                             "eigen-llt, cg, petsc; default ") +
+                                     kDefaultLinearSolver +
+                                     "; small problems take the dense path when it is cheaper), or an eigen solver of "
+                                     "its own: slepc (built with PETSc, under mpirun)");
   cmd->callback([args] { run(*args); });
 });
 

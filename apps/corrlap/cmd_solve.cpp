@@ -3,6 +3,7 @@
 //   --system poisson: the pure-Neumann Poisson problem L g = M b of docs/math.md §10.4 (-L pinned);
 //   --system heat:    the diffusion step (M - dt L) X = L u of docs/math.md §10.3, dt = dt-factor * h.
 #include <cmath>
+#include <corrlap/backends/parallel.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/stopwatch.hpp>
@@ -50,8 +51,8 @@ void run(const SolveArgs& a) {
   const Config params = a.method.config();
   const TestFunction* analytic = has_test_function(a.rhs) ? &test_function(a.rhs) : nullptr;
 
-  std::optional<StagedFile> out;  // checked before the computation
-  if (!a.out.empty()) out.emplace(a.out);
+  std::optional<StagedFile> out;  // checked before the computation; under mpirun rank 0 writes
+  if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
 
   const Stopwatch watch;
   const LoadedSurface surface = a.source.load();

@@ -2,10 +2,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <corrlap/backends/parallel.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/memory_budget.hpp>
 #include <corrlap/core/threads.hpp>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -79,6 +81,9 @@ void use_huge_pages(char** argv) {
 int main(int argc, char** argv) {
   using namespace corrlap;
   cli::use_huge_pages(argv);
+  // Under mpirun every rank runs the command (the PETSc backends solve together); rank 0 alone
+  // prints results. Errors and warnings (stderr) stay on every rank: any rank may be the one failing.
+  if (!is_output_rank() && std::freopen("/dev/null", "w", stdout) == nullptr) return 2;
   CLI::App app{"corrlap: corrected Laplace-Beltrami operators for digital surfaces"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "corrlap 0.1.0");

@@ -6,6 +6,7 @@
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
+#include <string>
 
 namespace corrlap::test {
 
@@ -14,13 +15,14 @@ struct FlatFem {
   Eigen::SparseMatrix<double> L, M;
 };
 
-inline FlatFem flat_fem_sphere(double h, double radius_scale = 1.0) {
+/// The flat FEM on the digitization of a named shape of make_implicit_shape in [-bbox, bbox]^3.
+inline FlatFem flat_fem_shape(const std::string& shape, double h, double bbox, double radius_scale = 1.0) {
   DigitizationParams p;
   p.h = h;
-  p.min_aabb = -2;
-  p.max_aabb = 2;
+  p.min_aabb = -bbox;
+  p.max_aabb = bbox;
   FlatFem r;
-  r.mesh = extract_surface(digitize(make_implicit_shape("sphere1"), p));
+  r.mesh = extract_surface(digitize(make_implicit_shape(shape), p));
   // docs/math.md §4.5: standard bilinear stiffness; docs/math.md §4.4: consistent mass h^2/36 [...].
   const double K[4][4] = {{4, -1, -2, -1}, {-1, 4, -1, -2}, {-2, -1, 4, -1}, {-1, -2, -1, 4}};
   const double Mm[4][4] = {{4, 2, 1, 2}, {2, 4, 2, 1}, {1, 2, 4, 2}, {2, 1, 2, 4}};
@@ -40,6 +42,10 @@ inline FlatFem flat_fem_sphere(double h, double radius_scale = 1.0) {
   r.L.makeCompressed();
   r.M.makeCompressed();
   return r;
+}
+
+inline FlatFem flat_fem_sphere(double h, double radius_scale = 1.0) {
+  return flat_fem_shape("sphere1", h, 2.0, radius_scale);
 }
 
 /// -L + c M: symmetric positive definite for c > 0, same pattern for every c.

@@ -1,0 +1,65 @@
+#pragma once
+// PETSc and SLEPc behind the LinearSolver and EigenSolver contracts ("petsc", "slepc"), built only
+// with -DCORRLAP_WITH_PETSC=ON (docs/backends.md, "PETSc and SLEPc under MPI").
+//
+// Every rank of MPI_COMM_WORLD calls the same methods with the same (whole, serial) matrices; each
+// rank hands PETSc the triplets of its contiguous block of rows (COO assembly into an MPIAIJ
+// matrix), PETSc solves in parallel, and every rank gets the whole solution back. This is the step
+// before the distributed front end (issue 36, item 3), where no rank holds the whole surface.
+// Run without mpirun, the process is an MPI singleton and everything happens on one rank.
+//
+// PETSc and SLEPc are initialized on first use (SlepcInitialize, which calls MPI_Init) and
+// finalized once at exit. No PETSc header leaks from here (pimpl).
+#include <corrlap/core/linear_solver.hpp>
+#include <memory>
+
+namespace corrlap {
+
+/// "petsc": a KSP with named options (ksp_type, pc_type = cholesky (MUMPS) | gamg | hypre | jacobi |
+/// none, rtol, max_it) and a pass-through of any other ksp_* / pc_* / mat_* key as the PETSc
+/// option -ksp_* / -pc_* / -mat_*. A system whose rows sum to zero (A 1 = 0, e.g. -L) gets the
+/// constant null space, and the solution with zero mean is returned. Divergence throws SolverError
+/// naming PETSc's reason.
+class PetscLinearSolver : public LinearSolver {
+ public:
+  PetscLinearSolver();
+  ~PetscLinearSolver() override;
+
+  std::string name() const override { return "petsc"; }
+  std::vector<ParameterInfo> options() const override;
+  void configure(const Config& options) override;
+  void analyze(const Eigen::SparseMatrix<double>& A) override;
+  void factorize(const Eigen::SparseMatrix<double>& A) override;
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& B) override;
+  const SolverReport& info() const override;
+
+  /// True when the last factorize() found A 1 = 0 and set the constant null space.
+  bool singular() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// "slepc": the k smallest mu = -lambda of L u = lambda M u (the convention of the other eigen
+/// solvers: ascending, M-orthonormal vectors), as the generalized Hermitian problem
+/// K u = mu M u with K = -L (EPS_GHEP). method = shift-invert (default): Krylov-Schur on
+/// (K - sigma M)^{-1} M with the target sigma just below 0 (K is singular), MUMPS's Cholesky in the
+/// spectral transform; method = lobpcg: LOBPCG preconditioned by GAMG or hypre on K - sigma M, for
+/// sizes where a factorization does not fit.
+class SlepcEigenSolver : public EigenSolver {
+ public:
+  SlepcEigenSolver();
+  ~SlepcEigenSolver() override;
+
+  std::string name() const override { return "slepc"; }
+  std::vector<ParameterInfo> options() const override;
+  void configure(const Config& options) override;
+  EigenResult solve(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, int k) override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace corrlap

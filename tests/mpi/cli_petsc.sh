@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# The CLI with the PETSc backends under `mpirun -np 2` (ctest petsc_mpi_cli): `solve --solver petsc`
+# equals CHOLMOD's solution and `eigs --solver slepc` the serial eigenvalues; only rank 0 prints
+# and writes; `corrlap backends` lists both.
+# Usage: cli_petsc.sh CORRLAP MPIEXEC WORK_DIR
+set -euo pipefail
+cli=$1 mpiexec=$2 work=$3
+rm -rf "$work" && mkdir -p "$work"
+surface=(--shape sphere1 --h 0.1 --method fem --normals true)
+
+"$cli" backends > "$work/backends.txt"
+grep -q "^  petsc " "$work/backends.txt" || { echo "corrlap backends does not list petsc"; exit 1; }
+grep -q "^  slepc " "$work/backends.txt" || { echo "corrlap backends does not list slepc"; exit 1; }
+
+"$cli" solve "${surface[@]}" --rhs expx --solver cholmod --out "$work/cholmod.txt" > /dev/null
+"$mpiexec" -n 2 "$cli" solve "${surface[@]}" --rhs expx --solver petsc --out "$work/petsc.txt" --json \
+  > "$work/petsc.json"
+"$mpiexec" -n 2 "$cli" solve "${surface[@]}" --rhs expx --solver petsc --solver-option ksp_type=cg \
+  --solver-option pc_type=gamg --solver-option rtol=1e-10 --out "$work/gamg.txt" > /dev/null
+# One JSON object: rank 1 printed nothing.
+[ "$(grep -c '"solver": "petsc"' "$work/petsc.json")" = 1 ] || { echo "expected one JSON object"; cat "$work/petsc.json"; exit 1; }
+ls -a "$work" | grep -q corrlap-tmp && { echo "a temporary file was left behind"; exit 1; }
+
+"$cli" eigs "${surface[@]}" -k 12 --solver cholmod > "$work/eigs_serial.txt" 2> /dev/null
+"$mpiexec" -n 2 "$cli" eigs "${surface[@]}" -k 12 --solver slepc > "$work/eigs_slepc.txt" 2> "$work/eigs_slepc.err"
+grep -q "slepc" "$work/eigs_slepc.err" || { echo "eigs did not report the slepc solver"; cat "$work/eigs_slepc.err"; exit 1; }
+
+# Plain Python (no numpy: whatever python3 is first on PATH).
+python3 - "$work" <<'PY'
+import sys
+work = sys.argv[1]
+def load(name):
+    with open(f"{work}/{name}") as f:
+        return [float(line) for line in f if line.strip() and not line.startswith("#")]
+def rel(a, b):
+    assert len(a) == len(b), (len(a), len(b))
+    return max(abs(x - y) for x, y in zip(a, b)) / max(abs(y) for y in b)
+g0 = load("cholmod.txt")
+for name, tol in (("petsc.txt", 1e-10), ("gamg.txt", 1e-6)):
+    assert rel(load(name), g0) < tol, (name, rel(load(name), g0))
+e0, e = load("eigs_serial.txt"), load("eigs_slepc.txt")
+assert len(e) == 12, len(e)  # printed by rank 0 only
+assert rel(e, e0) < 1e-8, rel(e, e0)
+print("petsc CLI: solve and eigs under mpirun -np 2 equal the serial results")
+PY
