@@ -65,7 +65,7 @@ double next_alpha0(const std::vector<Alpha0Trial>& trials, double limit, double 
     slope = bias_slope(trials[trials.size() - 2], last);
     if (slope < kAutoAlpha0MinSlope) return 0.0;
   }
-  const double factor = std::clamp(std::pow(last.bias / (0.8 * limit), 1.0 / slope), 1.5, 100.0);
+  const double factor = std::clamp(std::pow(last.bias / (0.8 * limit), 1.0 / slope), 1.5, 1e4);
   return std::min(last.alpha0 * factor, largest);
 }
 

@@ -59,7 +59,7 @@ double bias_slope(const Alpha0Trial& a, const Alpha0Trial& b);
 /// last bias is within `limit`, the last raise bought less than kAutoAlpha0MinSlope, the last
 /// alpha0 reached `largest`, or the solves are used up. The bias falls like a power of alpha0: the
 /// next alpha0 is where the line through the last two trials in log-log (slope 0.4 after the
-/// first) meets 0.8 limit, at least 1.5 and at most 100 times the last, and at most `largest`.
+/// first) meets 0.8 limit, at least 1.5 and at most 10 000 times the last, and at most `largest`.
 double next_alpha0(const std::vector<Alpha0Trial>& trials, double limit, double largest,
                    int max_solves = kAutoAlpha0MaxSolves);
 
