@@ -5,7 +5,7 @@
 // Every rank of MPI_COMM_WORLD calls the same methods with the same (whole, serial) matrices; each
 // rank hands PETSc the triplets of its contiguous block of rows (COO assembly into an MPIAIJ
 // matrix), PETSc solves in parallel, and every rank gets the whole solution back. This is the step
-// before the distributed front end (issue 36, item 3), where no rank holds the whole surface.
+// before a distributed front end (not built yet), where no rank would hold the whole surface.
 // Run without mpirun, the process is an MPI singleton and everything happens on one rank.
 //
 // PETSc and SLEPc are initialized on first use (SlepcInitialize, which calls MPI_Init) and
