@@ -132,7 +132,8 @@ fig12() {
   mkdir -p "$dir"
   [ -s "$OUT/bunny.obj" ] || scripts/fetch_bunny.sh "$OUT/bunny.obj"
   "$CORRLAP" digitize --mesh-file "$OUT/bunny.obj" --resolution 256 --volume-out "$dir/bunny256.vol" >/dev/null
-  local runs=("fem:--method fem" "polydec:--method polydec" "alignment:--baseline alignment")
+  # The paper's protocol: alpha0 = 10 (regularize's default is now chosen from the data).
+  local runs=("fem:--method fem --alpha0 10" "polydec:--method polydec --alpha0 10" "alignment:--baseline alignment")
   for entry in "${runs[@]}"; do
     local name=${entry%%:*} flags=${entry#*:}
     # shellcheck disable=SC2086  # the run's flags are words
@@ -287,11 +288,13 @@ fig14() {
   mkdir -p "$dir"
   /usr/bin/python3 scripts/cad_part.py write "$dir/part.obj"
   local common=(--mesh-file "$dir/part.obj" --resolution 256 --no-render)
-  "$CORRLAP" regularize "${common[@]}" --method fem --out "$dir/fem" >/dev/null 2>"$dir/fem.log"
+  # The paper's protocol: alpha0 = 10; fem_auto is regularize's default, alpha0 chosen from the data.
+  "$CORRLAP" regularize "${common[@]}" --method fem --alpha0 10 --out "$dir/fem" >/dev/null 2>"$dir/fem.log"
   local h r4
   h=$(/usr/bin/python3 -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['h']))" "$dir/fem/metrics.json")
   r4=$(/usr/bin/python3 -c "print(repr(4 * $h))")
-  local runs=("fem_r4:--method fem --curvature-radius $r4" "polydec:--method polydec"
+  local runs=("fem_r4:--method fem --alpha0 10 --curvature-radius $r4" "polydec:--method polydec --alpha0 10"
+    "fem_auto:--method fem"
     "alignment:--baseline alignment" "alignment_convolved:--baseline alignment --normals convolved")
   for entry in "${runs[@]}"; do
     local name=${entry%%:*} flags=${entry#*:}
@@ -300,7 +303,7 @@ fig14() {
   done
   local names=(staircase:fem/input.ply alignment_convolved:alignment_convolved/regularized.ply
     alignment:alignment/regularized.ply fem:fem/regularized.ply fem_r4:fem_r4/regularized.ply
-    polydec:polydec/regularized.ply)
+    polydec:polydec/regularized.ply fem_auto:fem_auto/regularized.ply)
   for entry in "${names[@]}"; do
     /usr/bin/python3 scripts/cad_part.py measure "$dir/${entry#*:}" "$h" >"$dir/${entry%%:*}.json"
   done
@@ -312,7 +315,8 @@ d, h = sys.argv[1], float(sys.argv[2])
 curvature = json.load(open(f"{d}/fem/metrics.json"))["curvature_radius"]
 rows = (("staircase", "staircase"), ("alignment_convolved", "[17], convolved normals (the reference's test)"),
         ("alignment", "[17], II normals"), ("fem", f"corrected (fem), curvature radius {curvature / h:.3g} voxels (default)"),
-        ("fem_r4", "corrected (fem), curvature radius 4 voxels"), ("polydec", "uncorrected (polydec), default radius"))
+        ("fem_r4", "corrected (fem), curvature radius 4 voxels"), ("polydec", "uncorrected (polydec), default radius"),
+        ("fem_auto", "corrected (fem), default radius, alpha0 chosen from the data (regularize's default)"))
 print("| surface | mean / max distance (voxels) | normal angle: edges (< 4 voxels) | near (4–16) | flats (≥ 16) |"
       " area / part's | volume / part's |")
 print("|---|---|---|---|---|---|---|")
