@@ -563,7 +563,7 @@ std::vector<ParameterInfo> SlepcEigenSolver::options() const {
       {"shift", "-0.001", "target in units of mu = -lambda; must be < 0 (K - shift M must be positive definite)"},
       {"tolerance", "1e-10", "relative accuracy of the eigenpairs (SLEPc's convergence test)"},
       {"max_iterations", "1000", "restarts (shift-invert) or iterations (lobpcg)"},
-      {"ncv", "0", "subspace size (0: SLEPc's choice)"},
+      {"ncv", "0", "subspace size (0: max(3 nev, nev + 40), at most n)"},
       {"guard", "auto",
        "extra eigenpairs computed and dropped, so that a multiple value at position k has all its copies "
        "(auto: max(6, k/4))"},
@@ -639,8 +639,11 @@ EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   check(EPSCreate(PETSC_COMM_WORLD, eps.out()), "EPSCreate");
   check(EPSSetOperators(eps, Kp, Mp), "EPSSetOperators");
   check(EPSSetProblemType(eps, EPS_GHEP), "EPSSetProblemType");
-  check(EPSSetDimensions(eps, nev, s.ncv > 0 ? PetscInt(s.ncv) : PETSC_DEFAULT, PETSC_DEFAULT), "EPSSetDimensions",
-        true);
+  // A wide subspace by default: the sphere's eigenvalues come in near-degenerate clusters (2l + 1
+  // each), and with SLEPc's default (about 2 nev) a run on two ranks now and then skipped a member.
+  const PetscInt ncv =
+      s.ncv > 0 ? PetscInt(s.ncv) : std::min<PetscInt>(PetscInt(n), std::max<PetscInt>(3 * nev, nev + 40));
+  check(EPSSetDimensions(eps, nev, ncv, PETSC_DEFAULT), "EPSSetDimensions", true);
   check(EPSSetTolerances(eps, s.tolerance, s.max_iterations), "EPSSetTolerances");
   ST st = nullptr;
   KSP ksp = nullptr;

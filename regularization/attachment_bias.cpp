@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <numbers>
 #include <string>
 
 namespace corrlap {
@@ -47,7 +48,7 @@ double attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMaj
 double alpha0_for_wavelength(double wavelength, double size_steps) {
   if (!(wavelength > 0.0) || !(size_steps > 0.0))
     throw InputError("alpha0_for_wavelength: the wavelength and the size must be positive");
-  const double k = 2.0 * 3.14159265358979323846 / wavelength;
+  const double k = 2.0 * std::numbers::pi / wavelength;
   return k * k * k * k * size_steps * size_steps;
 }
 

@@ -17,14 +17,14 @@ inline constexpr double kAttachmentBiasLimit = 0.02;
 inline constexpr int kAttachmentBiasRounds = 16;
 /// The automatic choice solves at most this many times ...
 inline constexpr int kAutoAlpha0MaxSolves = 4;
+/// ... and raises alpha0 at most until the result follows the staircase at every wavelength longer
+/// than this many steps (alpha0_for_wavelength).
+inline constexpr double kAutoAlpha0MinWavelength = 2.0;
 /// A raise of alpha0 is kept only if the bias fell at least like alpha0^-kAutoAlpha0MinSlope: detail
 /// the curvature ball smoothed comes back fast (about alpha0^-0.4), the bias of a smooth shape's
 /// staircase near the limit hardly moves (about alpha0^-0.1), and raising alpha0 there only adds
 /// the stairs back.
 inline constexpr double kAutoAlpha0MinSlope = 0.2;
-/// ... and raises alpha0 at most until the result follows the staircase at every wavelength longer
-/// than this many steps (alpha0_for_wavelength).
-inline constexpr double kAutoAlpha0MinWavelength = 2.0;
 
 /// The alpha0 at which the regularization's filter hands over from the staircase to the curvature
 /// target at `wavelength` steps, on a surface of size `size_steps` steps: with -L u = lambda M u

@@ -276,8 +276,10 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
         out.residual = cg.residual;
       } catch (const SolverError& e) {
         if (e.status() != SolverStatus::NotPositiveDefinite) throw;
-        r.warnings.push_back("regularization: " + std::string(e.what()) +
-                             "; L is not negative semi-definite, solved the normal equations directly");
+        // Once, though every trial of the automatic alpha0 meets it.
+        const std::string warning = "regularization: " + std::string(e.what()) +
+                                    "; L is not negative semi-definite, solved the normal equations directly";
+        if (std::find(r.warnings.begin(), r.warnings.end(), warning) == r.warnings.end()) r.warnings.push_back(warning);
       }
     }
     if (out.scheme.empty()) {
