@@ -2,6 +2,7 @@
 // staircased digital surface, new vertex positions whose corrected Laplacian matches -2 H n, with
 // n the estimated (II) normals and H the corrected mean curvature.
 #include <cmath>
+#include <corrlap/backends/parallel.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/mesh_topology.hpp>
@@ -133,6 +134,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   const AlignmentResult r = direct ? alignment_minimizer(mesh, normals.face, *solver, params)
                                    : alignment_regularization(mesh, normals.face, params);
   stages["solve_s"] = t.lap();
+  if (!is_output_rank()) return;  // under mpirun rank 0 writes (every rank computed the same result)
   SurfelMesh result = mesh;
   result.positions = r.positions;
   MeshAttributes input_attr;
@@ -176,9 +178,10 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   check_regularizable(mesh, "regularize");
   if (a.baseline.empty()) check_regularization_options(mesh, o);
   stages["surface_s"] = t.lap();
-  std::cerr << "regularize: " << description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
-            << " faces, " << surface.components << " component" << (surface.components == 1 ? "" : "s")
-            << ", h = " << mesh.grid_step() << "\n";
+  if (is_output_rank())
+    std::cerr << "regularize: " << description << ": " << mesh.num_vertices() << " vertices, " << mesh.num_faces()
+              << " faces, " << surface.components << " component" << (surface.components == 1 ? "" : "s")
+              << ", h = " << mesh.grid_step() << "\n";
   if (!a.baseline.empty()) {
     run_alignment_baseline(a, surface, dir, shown, description, stages, t);
     return;
@@ -192,6 +195,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   stages["operators_s"] = r.operators_seconds;
   stages["solve_s"] = r.solve_seconds;
   t.restart();
+  if (!is_output_rank()) return;  // under mpirun rank 0 writes (every rank computed the same result)
 
   MeshAttributes input_attr;
   input_attr.vertex_normals = normals.vertex;
@@ -293,13 +297,16 @@ void run(const RegularizeArgs& a) {
   // The options first: a bad name or value fails before the (possibly long) normals.
   check_regularization_options(o);
 
-  // Checked before the (possibly long) computation; written whole at the end or not at all.
-  OutputFolder out(a.out);
+  // Checked before the (possibly long) computation; written whole at the end or not at all. Under
+  // mpirun only rank 0 writes: the other ranks compute alongside (the PETSc backends solve together).
+  std::optional<OutputFolder> out;
+  if (is_output_rank()) out.emplace(a.out);
+  const auto folder = [&](const std::string& name) { return out ? out->file(name) : std::string(); };
   if (!a.source.all_labels()) {
     Stopwatch t;
     const LoadedSurface surface = a.source.load();
-    regularize_one(a, o, surface, a.source.describe(), out.path(), a.out, t);
-    out.commit();
+    regularize_one(a, o, surface, a.source.describe(), out ? out->path() : std::string(), a.out, t);
+    if (out) out->commit();
     return;
   }
   // --labels all: the file read once, one surface per label in OUT/label-N/ (docs/io.md).
@@ -310,23 +317,25 @@ void run(const RegularizeArgs& a) {
         Eigen::Vector3i(a.source.raw_dimensions[0], a.source.raw_dimensions[1], a.source.raw_dimensions[2]);
   const VolumeData data = in_cli_terms([&] { return read_volume_data(a.source.volume, read); });
   const std::vector<double> labels = in_cli_terms([&] { return volume_labels(data); });
-  std::cerr << "regularize: " << a.source.volume << ": " << labels.size() << " label" << (labels.size() == 1 ? "" : "s")
-            << "\n";
+  if (out)
+    std::cerr << "regularize: " << a.source.volume << ": " << labels.size() << " label"
+              << (labels.size() == 1 ? "" : "s") << "\n";
   std::optional<double> h;
   if (a.source.h_option && a.source.h_option->count() > 0) h = a.source.h;
   nlohmann::json index = nlohmann::json::array();
   for (const double label : labels) {
     const std::string name = "label-" + label_name(label);
     const std::string description = a.source.volume + ", label " + label_name(label);
-    const std::string dir = out.file(name);
-    std::filesystem::create_directories(dir);
+    const std::string dir = folder(name);
+    if (out) std::filesystem::create_directories(dir);
     const LoadedSurface surface =
         in_cli_terms([&] { return load_surface(volume_array(data, InsideRule::label(label), h)); }, description);
     regularize_one(a, o, surface, description, dir, a.out + "/" + name, t);
     index.push_back({{"label", label}, {"folder", name}});
   }
-  std::ofstream(out.file("labels.json")) << index.dump(2) << "\n";
-  out.commit();
+  if (!out) return;
+  std::ofstream(out->file("labels.json")) << index.dump(2) << "\n";
+  out->commit();
 }
 
 RegisterCommand reg(42, "regularize", [](CLI::App& app) {
