@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# `corrlap regularize --solver petsc` under `mpirun -np 2` (ctest petsc_mpi_regularize): on an
-# implicit shape and on a volume file, the regularized surface equals the serial CHOLMOD one to
+# `corrlap regularize --solver petsc` under mpirun (ctest petsc_mpi_regularize): on an implicit
+# shape with 1, 2 and 4 ranks and on a volume file with 2, the regularized surface equals the serial CHOLMOD one to
 # 1e-8 of the object's size with the same automatic alpha0, and rank 0 alone writes and reports.
 # Usage: cli_regularize_petsc.sh CORRLAP MPIEXEC WORK_DIR
 set -euo pipefail
@@ -8,22 +8,28 @@ cli=$1 mpiexec=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
 
 "$cli" digitize --shape torus --h 0.4 --out "$work/torus.obj" --volume-out "$work/torus.vol" > /dev/null
-for input in "--shape goursat --h 0.4" "--volume $work/torus.vol"; do
+# The shape with 1, 2 and 4 ranks (4 oversubscribed), the volume file with 2.
+for run in "2 --shape goursat --h 0.4" "1 --shape goursat --h 0.4" "4 --shape goursat --h 0.4" \
+           "2 --volume $work/torus.vol"; do
+  np=${run%% *} input=${run#* }
   name=$(echo "$input" | cut -d' ' -f2 | xargs basename)
-  # shellcheck disable=SC2086  # $input is a list of arguments
-  "$cli" regularize $input --no-render --out "$work/$name-serial" 2> "$work/$name-serial.err"
+  [ -d "$work/$name-serial" ] ||
+    # shellcheck disable=SC2086  # $input is a list of arguments
+    "$cli" regularize $input --no-render --out "$work/$name-serial" 2> "$work/$name-serial.err"
+  oversubscribe=()
+  [ "$np" -gt 2 ] && oversubscribe=(--oversubscribe)
   # shellcheck disable=SC2086
-  "$mpiexec" -n 2 "$cli" regularize $input --no-render --solver petsc --out "$work/$name-petsc" \
-    2> "$work/$name-petsc.err"
-  # One report (rank 0's), and no folder or temporary file from rank 1.
-  [ "$(grep -c '^regularize: ' "$work/$name-petsc.err")" = 2 ] ||
-    { echo "expected rank 0's two report lines"; cat "$work/$name-petsc.err"; exit 1; }
-  [ "$(grep -c 'wrote ' "$work/$name-petsc.err")" = 1 ] || { echo "expected one 'wrote'"; exit 1; }
+  "$mpiexec" -n "$np" "${oversubscribe[@]}" "$cli" regularize $input --no-render --solver petsc \
+    --out "$work/$name-petsc-np$np" 2> "$work/$name-petsc-np$np.err"
+  # One report (rank 0's), and no folder or temporary file from the other ranks.
+  [ "$(grep -c '^regularize: ' "$work/$name-petsc-np$np.err")" = 2 ] ||
+    { echo "expected rank 0's two report lines"; cat "$work/$name-petsc-np$np.err"; exit 1; }
+  [ "$(grep -c 'wrote ' "$work/$name-petsc-np$np.err")" = 1 ] || { echo "expected one 'wrote'"; exit 1; }
   ls -a "$work" | grep -q corrlap-tmp && { echo "a temporary folder was left behind"; exit 1; }
-  grep -q '"solver": "petsc"' "$work/$name-petsc/metrics.json" || { echo "metrics.json does not name petsc"; exit 1; }
+  grep -q '"solver": "petsc"' "$work/$name-petsc-np$np/metrics.json" || { echo "metrics.json does not name petsc"; exit 1; }
 
   # Plain Python (no numpy: whatever python3 is first on PATH).
-  python3 - "$work/$name-serial" "$work/$name-petsc" <<'PY'
+  python3 - "$work/$name-serial" "$work/$name-petsc-np$np" "$np" <<'PY'
 import json, struct, sys
 
 def positions(folder):
@@ -46,6 +52,6 @@ worst = max(abs(a - b) for p, q in zip(serial, petsc) for a, b in zip(p, q))
 assert worst <= 1e-8 * size, (worst, size)
 a0 = [json.load(open(f"{d}/metrics.json"))["alpha0"] for d in sys.argv[1:3]]
 assert abs(a0[0] - a0[1]) <= 1e-10 * a0[0], a0
-print(f"{sys.argv[2]}: max difference {worst / size:.2e} of the size, alpha0 {a0[1]:.6g}")
+print(f"{sys.argv[2]} ({sys.argv[3]} ranks): max difference {worst / size:.2e} of the size, alpha0 {a0[1]:.6g}")
 PY
 done
