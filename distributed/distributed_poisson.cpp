@@ -87,13 +87,16 @@ DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& s, 
   petsc_check(MatScale(A, -1.0), "MatScale");
   Vec rhs = owned_vector(s, -Mbc), x = nullptr;
   petsc_check(VecDuplicate(rhs, &x), "VecDuplicate");
+  // MatZeroRowsColumns reads all of x (0 times garbage can be NaN): zero except the pinned value.
+  petsc_check(VecSet(x, 0.0), "VecSet");
   const PetscInt pin = PetscInt(pin_row);
   const bool owner = pin >= s.row_begin && pin < s.row_begin + n;
   if (owner) petsc_check(VecSetValue(x, pin, pin_value, INSERT_VALUES), "VecSetValue");
   petsc_check(VecAssemblyBegin(x), "VecAssemblyBegin");
   petsc_check(VecAssemblyEnd(x), "VecAssemblyEnd");
   petsc_check(MatZeroRowsColumns(A, owner ? 1 : 0, &pin, 1.0, x, rhs), "MatZeroRowsColumns");
-  petsc_check(MatSetOption(A, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  // Flagged symmetric like the petsc backend's matrices (MUMPS's symmetric mode).
+  petsc_check(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
 
   KSP ksp = nullptr;
   PC pc = nullptr;
@@ -103,9 +106,28 @@ DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& s, 
   petsc_check(KSPGetPC(ksp, &pc), "KSPGetPC");
   petsc_check(PCSetType(pc, PCCHOLESKY), "PCSetType");
   petsc_check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
+  // MUMPS sizes its workspace from the analysis plus ICNTL(14) percent (default 20); on sphere1 at
+  // h = 0.025 over 2 ranks the factorization needed more (INFOG(1) = -9, "out of memory").
+  Mat factor = nullptr;
+  petsc_check(PCFactorSetUpMatSolverType(pc), "PCFactorSetUpMatSolverType");
+  petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
+  petsc_check(MatMumpsSetIcntl(factor, 14, 100), "MatMumpsSetIcntl");
   petsc_check(KSPSetUp(ksp), "KSPSetUp (MUMPS's Cholesky)");
   result.report.factorize_seconds = watch.lap();
   petsc_check(KSPSolve(ksp, rhs, x), "KSPSolve");
+  KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
+  petsc_check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+  if (reason < 0) {
+    PCFailedReason failed = PC_NOERROR;
+    PCGetFailedReason(pc, &failed);
+    KSPDestroy(&ksp);
+    VecDestroy(&rhs);
+    VecDestroy(&x);
+    MatDestroy(&A);
+    throw SolverError(failed == PC_FACTOR_OUTMEMORY ? SolverStatus::OutOfMemory : SolverStatus::NumericalIssue,
+                      std::string("distributed Poisson: MUMPS's Cholesky failed: ") + KSPConvergedReasons[reason] +
+                          " (PC " + PCFailedReasons[failed] + ")");
+  }
   result.report.solve_seconds = watch.lap();
   result.report.status = SolverStatus::Success;
   result.report.ordering = "mumps";

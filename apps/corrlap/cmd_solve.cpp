@@ -64,20 +64,31 @@ bool distributed_front_end_applies(const SolveArgs& a) {
          a.system == "poisson" && has_test_function(a.rhs);
 }
 
-void run_distributed(const SolveArgs& a) {
+// False when the distributed front end refused the input (pinched voxels, normals the serial method
+// would clamp): its refusals are collective, so every rank then takes the serial front end.
+bool run_distributed(const SolveArgs& a) {
   std::optional<StagedFile> out;  // checked before the computation; rank 0 writes
   if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const Stopwatch watch;
   const SurfaceInput input = a.source.input();
   const auto& shape_input = std::get<ImplicitShapeInput>(input);
   const ImplicitShape shape = make_implicit_shape(shape_input.shape, shape_input.center);
-  const DistributedSurface surface = distributed_surface(shape, shape_input.digitization);
-  const DistributedFem fem(surface, true_face_normals(shape, surface.mesh));
+  std::optional<DistributedSurface> surface_part;
+  std::optional<DistributedFem> fem_part;
+  try {
+    surface_part.emplace(distributed_surface(shape, shape_input.digitization));
+    fem_part.emplace(*surface_part, true_face_normals(shape, surface_part->mesh));
+  } catch (const InputError& e) {
+    if (is_output_rank()) std::cerr << "note: " << e.what() << "; using the serial front end\n";
+    return false;
+  }
+  const DistributedSurface& surface = *surface_part;
+  const DistributedFem& fem = *fem_part;
   const double assemble_s = watch.elapsed();
   const TestFunction& function = test_function(a.rhs);
   const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, shape_input.center);
   const Eigen::VectorXd g = gather_on_rank0(surface, r.g);
-  if (!is_output_rank()) return;
+  if (!is_output_rank()) return true;
   const OutputUnits units = a.output.parse(VoxelFrame(a.source.h, Eigen::Vector3d::Zero()));
   if (out) {
     write_scalars(out->path(), g);
@@ -111,7 +122,7 @@ void run_distributed(const SolveArgs& a) {
     j["error_linf"] = unit_sphere ? nlohmann::json(r.errors.linf) : nlohmann::json(nullptr);
     j["error_l2"] = unit_sphere ? nlohmann::json(r.errors.l2) : nlohmann::json(nullptr);
     std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
-    return;
+    return true;
   }
   std::cout << "surface     " << a.source.describe() << " (" << surface.num_vertices << " vertices)\n"
             << "front end   distributed over " << surface.ranks << " ranks (docs/distributed.md)\n"
@@ -127,20 +138,13 @@ void run_distributed(const SolveArgs& a) {
               << " (M-weighted, docs/math.md §10.4)\n";
   else
     std::cout << "error       n/a (analytic solution known for x2/expx/p6 on the unit sphere only)\n";
+  return true;
 }
 #endif
 
 void run(const SolveArgs& a) {
 #if defined(CORRLAP_WITH_PETSC)
-  if (distributed_front_end_applies(a)) {
-    // Its refusals (pinched voxels, normals the serial method would clamp) are collective: every
-    // rank then takes the serial front end.
-    try {
-      return run_distributed(a);
-    } catch (const InputError& e) {
-      if (is_output_rank()) std::cerr << "note: " << e.what() << "; using the serial front end\n";
-    }
-  }
+  if (distributed_front_end_applies(a) && run_distributed(a)) return;
 #endif
   // Backend configuration first: a bad key fails before the (possibly long) assembly.
   const Config config = a.solver.config();

@@ -25,10 +25,11 @@ struct Case {
   std::string shape;
   double h, bbox;
 };
-// sphere1 at three steps; the torus (genus 1) and goursat (non-convex) at two.
-const std::vector<Case> kCases = {{"sphere1", 0.2, 2.0}, {"sphere1", 0.1, 2.0}, {"sphere1", 0.07, 2.0},
-                                  {"torus", 0.5, 10.0},  {"torus", 0.35, 10.0}, {"goursat", 0.5, 10.0},
-                                  {"goursat", 0.3, 10.0}};
+// sphere1 at three steps and in the CLI's default box; the torus (genus 1) and goursat (non-convex)
+// at two steps.
+const std::vector<Case> kCases = {{"sphere1", 0.2, 2.0},  {"sphere1", 0.1, 2.0},   {"sphere1", 0.07, 2.0},
+                                  {"torus", 0.5, 10.0},   {"torus", 0.35, 10.0},   {"goursat", 0.5, 10.0},
+                                  {"goursat", 0.3, 10.0}, {"sphere1", 0.025, 10.0}};
 
 DigitizationParams params_of(const Case& c) {
   DigitizationParams p;
@@ -156,7 +157,7 @@ TEST_CASE("distributed fem: L and M equal the serial corrected FEM entry by entr
 }
 
 TEST_CASE("distributed Poisson solve equals CHOLMOD's serial solve_poisson to 1e-10") {
-  for (const Case& c : {kCases[1], kCases[4]}) {
+  for (const Case& c : {kCases[1], kCases[4], kCases[7]}) {
     CAPTURE(c.shape);
     const ImplicitShape shape = make_implicit_shape(c.shape);
     const DistributedSurface d = distributed_surface(shape, params_of(c));
