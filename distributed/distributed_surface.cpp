@@ -8,6 +8,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/surface/partial_digitization.hpp>
 #include <corrlap/surface/surfel_order.hpp>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace corrlap {
