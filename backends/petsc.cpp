@@ -320,6 +320,8 @@ SolverStatus status_of(KSPConvergedReason reason) {
 
 }  // namespace
 
+void ensure_petsc_runtime() { Runtime::ensure(); }
+
 // ---- petsc: the linear solver -----------------------------------------------------------------
 
 struct PetscLinearSolver::Impl {

@@ -4,8 +4,9 @@
 //
 // Every rank of MPI_COMM_WORLD calls the same methods with the same (whole, serial) matrices; each
 // rank hands PETSc the triplets of its contiguous block of rows (COO assembly into an MPIAIJ
-// matrix), PETSc solves in parallel, and every rank gets the whole solution back. This is the step
-// before a distributed front end (not built yet), where no rank would hold the whole surface.
+// matrix), PETSc solves in parallel, and every rank gets the whole solution back. The distributed
+// front end (distributed/, docs/distributed.md), where no rank holds the whole surface, builds its
+// own PETSc matrices instead.
 // Run without mpirun, the process is an MPI singleton and everything happens on one rank.
 //
 // PETSc and SLEPc are initialized on first use (SlepcInitialize, which calls MPI_Init) and
@@ -14,6 +15,10 @@
 #include <memory>
 
 namespace corrlap {
+
+/// Starts PETSc and SLEPc (and MPI) if they are not running yet; they are finalized at exit. For
+/// code that calls PETSc itself (distributed/) before any solver exists.
+void ensure_petsc_runtime();
 
 /// "petsc": a KSP with named options (ksp_type, pc_type = cholesky (MUMPS) | gamg | hypre | jacobi |
 /// none, rtol, max_it) and a pass-through of any other ksp_* / pc_* / mat_* key as the PETSc

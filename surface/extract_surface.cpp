@@ -14,6 +14,8 @@
 #include <ctime>
 #include <sstream>
 
+#include "surfel_order.hpp"
+
 namespace corrlap {
 
 namespace {
@@ -144,6 +146,14 @@ inline DecodedFace decode(std::uint64_t key) {
   d.axis = (d.kc[0] % 2 == 0) ? 0 : (d.kc[1] % 2 == 0 ? 1 : 2);  // the even coordinate
   return d;
 }
+inline Surfel surfel_of(const DecodedFace& d, const Eigen::Vector3i& lo) {
+  Surfel s;
+  s.axis = d.axis;
+  s.outward = (d.axis == 1) == d.positive ? 1 : -1;
+  // kc_rel = 2 (z - lo) + e_k + 1
+  for (int a = 0; a < 3; ++a) s.lower_voxel[a] = (d.kc[a] - (a == d.axis ? 2 : 1)) / 2 + lo[a];
+  return s;
+}
 // Relative pointel (Khalimsky / 2) of corner c of the face (docs/math.md §1.4): base order
 // B = [(i-,j-),(i-,j+),(i+,j+),(i+,j-)], reversed for negative surfels.
 inline void corner_pointel(const DecodedFace& d, int c, int q[3]) {
@@ -203,6 +213,17 @@ std::array<bool, 256> pointel_needs_split_table() {
   return table;
 }
 
+// Whether split_pinched_pointels looks at pointel q: a pinched configuration of its cube, or a
+// pointel on the box's faces, where the surfels toward voxels outside the box do not exist.
+bool pointel_flagged(const VoxelGrid& grid, const Eigen::Vector3i& q) {
+  static const std::array<bool, 256> needs = pointel_needs_split_table();
+  if ((q.array() - 1 < grid.lower().array()).any() || (q.array() > grid.upper().array()).any()) return true;
+  int config = 0;
+  for (int d = 0; d < 8; ++d)
+    if (grid.get(q.x() - 1 + (d & 1), q.y() - 1 + ((d >> 1) & 1), q.z() - 1 + ((d >> 2) & 1))) config |= 1 << d;
+  return needs[std::size_t(config)];
+}
+
 // Splits every pinched pointel of `mesh` (extracted from `grid`) into one vertex per sheet: faces
 // around a vertex that share a linel stay together, and at a linel with four surfels they pair up
 // toward the inside voxel (interior adjacency: inside voxels touching along an edge only are apart).
@@ -212,8 +233,6 @@ std::array<bool, 256> pointel_needs_split_table() {
 // Both ends decide by the same cubes, so they agree. New vertices are appended in order (original
 // vertex, then the smallest face of the sheet), so that manifold surfaces keep the reference numbering.
 void split_pinched_pointels(const VoxelGrid& grid, SurfelMesh& mesh) {
-  static const std::array<bool, 256> needs = pointel_needs_split_table();
-  const Eigen::Vector3i lo = grid.lower(), up = grid.upper();
   const double h = grid.h();
   const int V = mesh.num_vertices(), F = mesh.num_faces();
   auto pointel = [&](int v) {
@@ -227,15 +246,7 @@ void split_pinched_pointels(const VoxelGrid& grid, SurfelMesh& mesh) {
   std::vector<std::uint8_t> flagged(std::size_t(V), 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, V, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int v = r.begin(); v != r.end(); ++v) {
-      const Eigen::Vector3i q = pointel(v);
-      if ((q.array() - 1 < lo.array()).any() || (q.array() > up.array()).any()) {
-        flagged[std::size_t(v)] = 1;
-        continue;
-      }
-      int config = 0;
-      for (int d = 0; d < 8; ++d)
-        if (grid.get(q.x() - 1 + (d & 1), q.y() - 1 + ((d >> 1) & 1), q.z() - 1 + ((d >> 2) & 1))) config |= 1 << d;
-      flagged[std::size_t(v)] = needs[std::size_t(config)];
+      flagged[std::size_t(v)] = pointel_flagged(grid, pointel(v));
     }
   });
   // 2. Faces at the flagged vertices, by vertex then face.
@@ -322,6 +333,65 @@ void split_pinched_pointels(const VoxelGrid& grid, SurfelMesh& mesh) {
     mesh.positions.row(V + Eigen::Index(i)) = mesh.positions.row(copies_of[i]);
 }
 
+// Steps 1 and 2 of extract_surface: the surfel keys in face order, and where each bucket
+// (positive, kc_x) starts. `check_count` sees the number of surfels before the sort allocates.
+struct SortedKeys {
+  std::vector<std::uint64_t> keys;
+  std::vector<std::uint32_t> bucket_start;  // 2 (2 n_x + 2) + 1 entries
+};
+template <class CheckCount, class Lap>
+SortedKeys sorted_surfel_keys(const VoxelGrid& grid, CheckCount check_count, Lap lap) {
+  const Eigen::Vector3i n = grid.size();
+  // 1. Surfel keys of chunks of y rows, in parallel (docs/math.md §1.3).
+  const int chunks = std::min(n.y(), 64);
+  std::vector<std::vector<std::uint64_t>> chunk_keys(std::size_t(chunks), std::vector<std::uint64_t>{});
+  auto chunk_begin = [&](int c) { return int((std::int64_t(n.y()) * c) / chunks); };
+  const std::vector<std::uint8_t> states = row_states(grid);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    scan_rows(grid, states, chunk_begin(c), chunk_begin(c + 1), chunk_keys[std::size_t(c)]);
+  });
+  std::size_t F = 0;
+  for (const auto& v : chunk_keys) F += v.size();
+  check_count(F);
+  lap("transitions");
+
+  // 2. Face order (docs/math.md §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the
+  //    chunks are in y order and each chunk is already in (kc_y, kc_z) order (see scan_rows).
+  const std::size_t NKX = 2 * std::size_t(n.x()) + 2, NB = 2 * NKX;
+  auto bucket = [&](std::uint64_t key) { return std::size_t(key >> 63) * NKX + std::size_t((key >> 42) & kMask); };
+  std::vector<std::uint32_t> counts(std::size_t(chunks) * NB, 0);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    std::uint32_t* cnt = counts.data() + std::size_t(c) * NB;
+    for (std::uint64_t k : chunk_keys[std::size_t(c)]) ++cnt[bucket(k)];
+  });
+  SortedKeys out;
+  std::vector<std::uint32_t>& bucket_start = out.bucket_start;
+  bucket_start.resize(NB + 1);
+  {
+    std::uint32_t run = 0;
+    for (std::size_t b = 0; b < NB; ++b) {
+      bucket_start[b] = run;
+      for (int c = 0; c < chunks; ++c) {
+        std::uint32_t& x = counts[std::size_t(c) * NB + b];
+        const std::uint32_t k = x;
+        x = run;  // becomes the chunk's write offset in bucket b
+        run += k;
+      }
+    }
+    bucket_start[NB] = run;
+  }
+  std::vector<std::uint64_t>& keys = out.keys;
+  keys.resize(F);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    std::uint32_t* off = counts.data() + std::size_t(c) * NB;
+    for (std::uint64_t k : chunk_keys[std::size_t(c)]) keys[off[bucket(k)]++] = k;
+    std::vector<std::uint64_t>().swap(chunk_keys[std::size_t(c)]);
+  });
+  std::vector<std::uint32_t>().swap(counts);
+  lap("face order");
+  return out;
+}
+
 }  // namespace
 
 SurfelMesh extract_surface(const VoxelGrid& grid) { return extract_surface(grid, nullptr); }
@@ -346,59 +416,26 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   if ((n.array() * 2 + 4 >= (1 << kBits)).any())
     throw InputError("surface extraction: the box is too large (more than 1M voxels along an axis)");
 
-  // 1. Surfel keys of chunks of y rows, in parallel (docs/math.md §1.3).
-  const int chunks = std::min(n.y(), 64);
-  std::vector<std::vector<std::uint64_t>> chunk_keys(std::size_t(chunks), std::vector<std::uint64_t>{});
-  auto chunk_begin = [&](int c) { return int((std::int64_t(n.y()) * c) / chunks); };
-  const std::vector<std::uint8_t> states = row_states(grid);
-  tbb::parallel_for(0, chunks, [&](int c) {
-    scan_rows(grid, states, chunk_begin(c), chunk_begin(c + 1), chunk_keys[std::size_t(c)]);
-  });
-  std::size_t F = 0;
-  for (const auto& v : chunk_keys) F += v.size();
-  if (F == 0)
-    throw InputError(
-        "surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the box)");
-  // Corner occurrences 4 f + c must fit in 32 bits with one value left as the "none" marker.
-  if (F >= (std::size_t{1} << 30)) throw InputError("surface extraction: 2^30 or more surfels");
-  // The mesh and the extraction's own arrays, before they are allocated: at most
-  // kExtractionBytesPerSurfel per surfel (bench/RESULTS.md, "memory budget").
-  check_memory_budget(double(F) * kExtractionBytesPerSurfel + double(grid.memory_bytes()),
-                      "surface extraction of " + std::to_string(F) + " surfels",
-                      "use a larger grid step h or a smaller box");
-  lap("transitions");
-
-  // 2. Face order (docs/math.md §1.4): stable counting sort by bucket (positive, kc_x); within a bucket the
-  //    chunks are in y order and each chunk is already in (kc_y, kc_z) order (see scan_rows).
-  const std::size_t NKX = 2 * std::size_t(n.x()) + 2, NB = 2 * NKX;
-  auto bucket = [&](std::uint64_t key) { return std::size_t(key >> 63) * NKX + std::size_t((key >> 42) & kMask); };
-  std::vector<std::uint32_t> counts(std::size_t(chunks) * NB, 0);
-  tbb::parallel_for(0, chunks, [&](int c) {
-    std::uint32_t* cnt = counts.data() + std::size_t(c) * NB;
-    for (std::uint64_t k : chunk_keys[std::size_t(c)]) ++cnt[bucket(k)];
-  });
-  std::vector<std::uint32_t> bucket_start(NB + 1);
-  {
-    std::uint32_t run = 0;
-    for (std::size_t b = 0; b < NB; ++b) {
-      bucket_start[b] = run;
-      for (int c = 0; c < chunks; ++c) {
-        std::uint32_t& x = counts[std::size_t(c) * NB + b];
-        const std::uint32_t k = x;
-        x = run;  // becomes the chunk's write offset in bucket b
-        run += k;
-      }
-    }
-    bucket_start[NB] = run;
-  }
-  std::vector<std::uint64_t> keys(F);
-  tbb::parallel_for(0, chunks, [&](int c) {
-    std::uint32_t* off = counts.data() + std::size_t(c) * NB;
-    for (std::uint64_t k : chunk_keys[std::size_t(c)]) keys[off[bucket(k)]++] = k;
-    std::vector<std::uint64_t>().swap(chunk_keys[std::size_t(c)]);
-  });
-  std::vector<std::uint32_t>().swap(counts);
-  lap("face order");
+  const std::size_t NKX = 2 * std::size_t(n.x()) + 2;
+  SortedKeys sorted = sorted_surfel_keys(
+      grid,
+      [&](std::size_t F) {
+        if (F == 0)
+          throw InputError(
+              "surface extraction: the volume has no surfel (it is empty, full, or touches no voxel pair inside the "
+              "box)");
+        // Corner occurrences 4 f + c must fit in 32 bits with one value left as the "none" marker.
+        if (F >= (std::size_t{1} << 30)) throw InputError("surface extraction: 2^30 or more surfels");
+        // The mesh and the extraction's own arrays, before they are allocated: at most
+        // kExtractionBytesPerSurfel per surfel (bench/RESULTS.md, "memory budget").
+        check_memory_budget(double(F) * kExtractionBytesPerSurfel + double(grid.memory_bytes()),
+                            "surface extraction of " + std::to_string(F) + " surfels",
+                            "use a larger grid step h or a smaller box");
+      },
+      lap);
+  const std::vector<std::uint64_t>& keys = sorted.keys;
+  const std::vector<std::uint32_t>& bucket_start = sorted.bucket_start;
+  const std::size_t F = keys.size();
 
   SurfelMesh mesh;
   mesh.h = grid.h();
@@ -406,12 +443,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   mesh.faces.resize(Eigen::Index(F), 4);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, F, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t f = r.begin(); f != r.end(); ++f) {
-      const DecodedFace d = decode(keys[f]);
-      Surfel& s = mesh.surfels[f];
-      s.axis = d.axis;
-      s.outward = (d.axis == 1) == d.positive ? 1 : -1;
-      // kc_rel = 2 (z - lo) + e_k + 1
-      for (int a = 0; a < 3; ++a) s.lower_voxel[a] = (d.kc[a] - (a == d.axis ? 2 : 1)) / 2 + lo[a];
+      mesh.surfels[f] = surfel_of(decode(keys[f]), lo);
     }
   });
   lap("surfels");
@@ -483,7 +515,7 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
           int q[3];
           corner_pointel(d, c, q);
           // pointel relative index q -> Khalimsky 2(q + lo); corner in grid units = (kc - 1) / 2
-          for (int a = 0; a < 3; ++a) mesh.positions(Eigen::Index(id), a) = (double(2 * (q[a] + lo[a]) - 1) * 0.5) * h;
+          for (int a = 0; a < 3; ++a) mesh.positions(Eigen::Index(id), a) = pointel_coordinate(q[a] + lo[a], h);
         }
       }
     }
@@ -493,5 +525,34 @@ SurfelMesh extract_surface(const VoxelGrid& grid, PhaseTimings* timings) {
   lap("manifold sheets");
   return mesh;
 }
+
+std::vector<Surfel> extract_surfels(const VoxelGrid& grid) {
+  if (grid.empty_box()) return {};
+  const Eigen::Vector3i lo = grid.lower(), n = grid.size();
+  if ((n.array() * 2 + 4 >= (1 << kBits)).any())
+    throw InputError("surface extraction: the box is too large (more than 1M voxels along an axis)");
+  const SortedKeys sorted = sorted_surfel_keys(
+      grid, [](std::size_t) {}, [](const char*) {});
+  std::vector<Surfel> surfels(sorted.keys.size());
+  for (std::size_t f = 0; f < surfels.size(); ++f) {
+    surfels[f] = surfel_of(decode(sorted.keys[f]), lo);
+  }
+  return surfels;
+}
+
+Eigen::Vector3i surfel_corner_pointel(const Surfel& s, int c) {
+  // corner_pointel is translation-invariant on the (even) Khalimsky coordinates: absolute ones
+  // give absolute pointels.
+  const Eigen::Vector3i kc = s.khalimsky();
+  DecodedFace d;
+  for (int a = 0; a < 3; ++a) d.kc[a] = kc[a];
+  d.axis = s.axis;
+  d.positive = s.positive();
+  int q[3];
+  corner_pointel(d, c, q);
+  return {q[0], q[1], q[2]};
+}
+
+bool pointel_may_split(const VoxelGrid& grid, const Eigen::Vector3i& q) { return pointel_flagged(grid, q); }
 
 }  // namespace corrlap

@@ -9,6 +9,8 @@
 #include <limits>
 #include <sstream>
 
+#include "partial_digitization.hpp"
+
 namespace corrlap {
 
 double ImplicitShape::value(const Eigen::Vector3d& x) const {
@@ -344,15 +346,13 @@ struct DigitizeTile {
   }
 };
 
-}  // namespace
-
-VoxelGrid digitize(const ImplicitShape& shape, const DigitizationParams& params) {
-  Eigen::Vector3i lower, upper;
-  digitization_box(params, lower, upper);
-  VoxelGrid grid(lower, upper, params.h);
+// The voxels of [lower, upper] (a sub-box of the reference's box or the whole of it).
+VoxelGrid digitize_box(const ImplicitShape& shape, double h, const Eigen::Vector3i& lower,
+                       const Eigen::Vector3i& upper) {
+  VoxelGrid grid(lower, upper, h);
   const Eigen::Vector3i n = grid.size();
   const DigitizationKernel kernel(shape.polynomial);
-  const DigitizeTile tile{kernel, grid, params.h, !shape.center.isZero(), shape.center};
+  const DigitizeTile tile{kernel, grid, h, !shape.center.isZero(), shape.center};
   // Tiles of 64^3 voxels (x: one word), culled recursively by interval bounds; only the voxels
   // of leaves the bounds cannot decide are evaluated (docs/math.md §1.2: result identical to voxel by voxel).
   constexpr int T = 64;
@@ -365,6 +365,23 @@ VoxelGrid digitize(const ImplicitShape& shape, const DigitizationParams& params)
     tile(z0, z1);
   });
   return grid;
+}
+
+}  // namespace
+
+VoxelGrid digitize(const ImplicitShape& shape, const DigitizationParams& params) {
+  Eigen::Vector3i lower, upper;
+  digitization_box(params, lower, upper);
+  return digitize_box(shape, params.h, lower, upper);
+}
+
+VoxelGrid digitize_x_range(const ImplicitShape& shape, const DigitizationParams& params, int x_first, int x_last) {
+  Eigen::Vector3i lower, upper;
+  digitization_box(params, lower, upper);
+  lower.x() = std::max(lower.x(), x_first);
+  upper.x() = std::min(upper.x(), x_last);
+  if (lower.x() > upper.x()) throw InputError("digitization: the slab of x is outside the box");
+  return digitize_box(shape, params.h, lower, upper);
 }
 
 }  // namespace corrlap

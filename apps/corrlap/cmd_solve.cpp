@@ -17,6 +17,13 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#if defined(CORRLAP_WITH_PETSC)
+#include <corrlap/distributed/distributed_fem.hpp>
+#include <corrlap/distributed/distributed_poisson.hpp>
+#include <corrlap/distributed/distributed_surface.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#endif
+
 #include "command.hpp"
 #include "deprecated.hpp"
 #include "method_options.hpp"
@@ -41,7 +48,104 @@ struct SolveArgs {
   bool json = false;
 };
 
+#if defined(CORRLAP_WITH_PETSC)
+// Whether the distributed front end (docs/distributed.md) computes exactly this command: the petsc
+// solver with its defaults (MUMPS's Cholesky), the fem method with its defaults and the true normals
+// of an implicit shape, the Poisson problem with a test function. Anything else takes the serial
+// front end (every rank builds the whole surface, the backend distributes the solve).
+bool distributed_front_end_applies(const SolveArgs& a) {
+  const Config config = a.solver.config();
+  for (const std::string& key : config.keys())
+    if (key != "solver") return false;
+  const bool true_normals = (a.normals.source == "auto" || a.normals.source == "true") && a.normals.face_file.empty() &&
+                            a.normals.vertex_file.empty();
+  return config.get_string("solver", kDefaultLinearSolver) == "petsc" && a.method.method == "fem" &&
+         a.method.config().empty() && (!a.source.shape.empty() || !a.source.polynomial.empty()) && true_normals &&
+         a.system == "poisson" && has_test_function(a.rhs);
+}
+
+// False when the distributed front end refused the input (pinched voxels, normals the serial method
+// would clamp): its refusals are collective, so every rank then takes the serial front end.
+bool run_distributed(const SolveArgs& a) {
+  std::optional<StagedFile> out;  // checked before the computation; rank 0 writes
+  if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
+  const Stopwatch watch;
+  const SurfaceInput input = a.source.input();
+  const auto& shape_input = std::get<ImplicitShapeInput>(input);
+  const ImplicitShape shape = make_implicit_shape(shape_input.shape, shape_input.center);
+  std::optional<DistributedSurface> surface_part;
+  std::optional<DistributedFem> fem_part;
+  try {
+    surface_part.emplace(distributed_surface(shape, shape_input.digitization));
+    fem_part.emplace(*surface_part, true_face_normals(shape, surface_part->mesh));
+  } catch (const InputError& e) {
+    if (is_output_rank()) std::cerr << "note: " << e.what() << "; using the serial front end\n";
+    return false;
+  }
+  const DistributedSurface& surface = *surface_part;
+  const DistributedFem& fem = *fem_part;
+  const double assemble_s = watch.elapsed();
+  const TestFunction& function = test_function(a.rhs);
+  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, shape_input.center);
+  const Eigen::VectorXd g = gather_on_rank0(surface, r.g);
+  if (!is_output_rank()) return true;
+  const OutputUnits units = a.output.parse(VoxelFrame(a.source.h, Eigen::Vector3d::Zero()));
+  if (out) {
+    write_scalars(out->path(), g);
+    out->commit();
+  }
+  // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
+  const bool unit_sphere = std::abs(shape.sphere_radius() - 1.0) < 1e-12;
+  if (a.json) {
+    nlohmann::json j;
+    j["solver"] = "petsc";
+    j["system"] = a.system;
+    j["output_units"] = units.name();
+    j["method"] = a.method.method;
+    j["surface"] = a.source.describe();
+    j["normals"] = "true";
+    j["rhs"] = a.rhs;
+    j["boundary"] = BoundaryCondition{}.label();  // voxel surfaces inside the box are closed
+    j["n"] = surface.num_vertices;
+    j["front_end"] = "distributed";
+    j["ranks"] = surface.ranks;
+    j["assemble_s"] = assemble_s;
+    j["analyze_s"] = 0.0;
+    j["factorize_s"] = r.report.factorize_seconds;
+    j["ordering"] = r.report.ordering;
+    j["factor_nonzeros"] = 0;
+    j["factor_flops"] = 0;
+    j["solve_s"] = r.report.solve_seconds;
+    j["iterations"] = 0;
+    j["residual"] = r.residual;
+    j["status"] = to_string(r.report.status);
+    j["error_linf"] = unit_sphere ? nlohmann::json(r.errors.linf) : nlohmann::json(nullptr);
+    j["error_l2"] = unit_sphere ? nlohmann::json(r.errors.l2) : nlohmann::json(nullptr);
+    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+    return true;
+  }
+  std::cout << "surface     " << a.source.describe() << " (" << surface.num_vertices << " vertices)\n"
+            << "front end   distributed over " << surface.ranks << " ranks (docs/distributed.md)\n"
+            << "system      poisson: L g = M b, vertex 0 pinned\n"
+            << "method      fem (normals true)\n"
+            << "solver      petsc\n"
+            << "assemble    " << assemble_s << " s\n"
+            << "factorize   " << r.report.factorize_seconds << " s (mumps)\n"
+            << "solve       " << r.report.solve_seconds << " s\n"
+            << "residual    " << r.residual << "\n";
+  if (unit_sphere)
+    std::cout << "error Linf  " << r.errors.linf << "\nerror L2    " << r.errors.l2
+              << " (M-weighted, docs/math.md §10.4)\n";
+  else
+    std::cout << "error       n/a (analytic solution known for x2/expx/p6 on the unit sphere only)\n";
+  return true;
+}
+#endif
+
 void run(const SolveArgs& a) {
+#if defined(CORRLAP_WITH_PETSC)
+  if (distributed_front_end_applies(a) && run_distributed(a)) return;
+#endif
   // Backend configuration first: a bad key fails before the (possibly long) assembly.
   const Config config = a.solver.config();
   const std::string solver_name = config.get_string("solver", kDefaultLinearSolver);

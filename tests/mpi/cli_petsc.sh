@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The CLI with the PETSc backends under `mpirun -np 2` (ctest petsc_mpi_cli): `solve --solver petsc`
-# equals CHOLMOD's solution and `eigs --solver slepc` the serial eigenvalues; only rank 0 prints
-# and writes; `corrlap backends` lists both.
+# equals CHOLMOD's solution (on the distributed front end, docs/distributed.md, with the default
+# options; on the serial one with CG + GAMG) and `eigs --solver slepc` the serial eigenvalues; only
+# rank 0 prints and writes; `corrlap backends` lists both.
 # Usage: cli_petsc.sh CORRLAP MPIEXEC WORK_DIR
 set -euo pipefail
 cli=$1 mpiexec=$2 work=$3
@@ -19,6 +20,12 @@ grep -q "^  slepc " "$work/backends.txt" || { echo "corrlap backends does not li
   --solver-option pc_type=gamg --solver-option rtol=1e-10 --out "$work/gamg.txt" > /dev/null
 # One JSON object: rank 1 printed nothing.
 [ "$(grep -c '"solver": "petsc"' "$work/petsc.json")" = 1 ] || { echo "expected one JSON object"; cat "$work/petsc.json"; exit 1; }
+grep -q '"front_end": "distributed"' "$work/petsc.json" || { echo "solve did not take the distributed front end"; cat "$work/petsc.json"; exit 1; }
+# A non-convex shape on the distributed front end.
+goursat=(--shape goursat --h 0.3 --method fem --normals true)
+"$cli" solve "${goursat[@]}" --rhs x2 --solver cholmod --out "$work/goursat_cholmod.txt" > /dev/null
+"$mpiexec" -n 2 "$cli" solve "${goursat[@]}" --rhs x2 --solver petsc --out "$work/goursat_petsc.txt" > "$work/goursat.txt"
+grep -q "front end   distributed over 2 ranks" "$work/goursat.txt" || { echo "goursat: not distributed"; cat "$work/goursat.txt"; exit 1; }
 ls -a "$work" | grep -q corrlap-tmp && { echo "a temporary file was left behind"; exit 1; }
 
 "$cli" eigs "${surface[@]}" -k 12 --solver cholmod > "$work/eigs_serial.txt" 2> /dev/null
@@ -38,8 +45,9 @@ def rel(a, b):
 g0 = load("cholmod.txt")
 for name, tol in (("petsc.txt", 1e-10), ("gamg.txt", 1e-6)):
     assert rel(load(name), g0) < tol, (name, rel(load(name), g0))
+assert rel(load("goursat_petsc.txt"), load("goursat_cholmod.txt")) < 1e-10
 e0, e = load("eigs_serial.txt"), load("eigs_slepc.txt")
 assert len(e) == 12, len(e)  # printed by rank 0 only
 assert rel(e, e0) < 1e-8, rel(e, e0)
-print("petsc CLI: solve and eigs under mpirun -np 2 equal the serial results")
+print("petsc CLI: solve (distributed and serial front ends) and eigs under mpirun -np 2 equal the serial results")
 PY

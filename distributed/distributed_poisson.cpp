@@ -1,0 +1,168 @@
+#include "distributed_poisson.hpp"
+
+#include <mpi.h>
+#include <petscksp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <corrlap/core/stopwatch.hpp>
+
+#include "detail/petsc_matrices.hpp"
+
+namespace corrlap {
+
+namespace {
+
+using detail::petsc_check;
+
+// A vector of the rows owned here with the given values (#owned).
+Vec owned_vector(const DistributedSurface& s, const Eigen::VectorXd& values) {
+  Vec v = nullptr;
+  petsc_check(VecCreateMPI(PETSC_COMM_WORLD, s.num_owned, PetscInt(s.num_vertices), &v), "VecCreateMPI");
+  PetscScalar* local = nullptr;
+  petsc_check(VecGetArray(v, &local), "VecGetArray");
+  std::copy(values.data(), values.data() + values.size(), local);
+  petsc_check(VecRestoreArray(v, &local), "VecRestoreArray");
+  return v;
+}
+
+Eigen::VectorXd owned_values(Vec v) {
+  PetscInt n = 0;
+  petsc_check(VecGetLocalSize(v, &n), "VecGetLocalSize");
+  const PetscScalar* local = nullptr;
+  petsc_check(VecGetArrayRead(v, &local), "VecGetArrayRead");
+  Eigen::VectorXd values = Eigen::Map<const Eigen::VectorXd>(local, n);
+  petsc_check(VecRestoreArrayRead(v, &local), "VecRestoreArrayRead");
+  return values;
+}
+
+Eigen::VectorXd product(Mat A, const DistributedSurface& s, const Eigen::VectorXd& x) {
+  Vec in = owned_vector(s, x), out = nullptr;
+  petsc_check(VecDuplicate(in, &out), "VecDuplicate");
+  petsc_check(MatMult(A, in, out), "MatMult");
+  Eigen::VectorXd y = owned_values(out);
+  VecDestroy(&in);
+  VecDestroy(&out);
+  return y;
+}
+
+double global_sum(double x) {
+  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  return x;
+}
+double global_max(double x) {
+  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return x;
+}
+
+}  // namespace
+
+DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& s, const DistributedFem& fem,
+                                                   const TestFunction& function, const Eigen::Vector3d& center) {
+  const DistributedFem::Impl& ops = fem.impl();
+  const Eigen::Index n = s.num_owned;
+  const TestFunctionSamples samples = sample_on_unit_sphere(function, s.mesh.positions.topRows(n), center);
+  const Eigen::VectorXd& f = samples.f;
+  const Eigen::VectorXd& b = samples.laplacian;
+
+  // The pinned vertex is serial vertex 0 (docs/math.md §10.4: g_0 = f(q_0)), on one rank.
+  double pin_row = -1.0, pin_value = 0.0;
+  for (Eigen::Index v = 0; v < n; ++v)
+    if (s.vertex_ids[std::size_t(v)] == 0) pin_row = double(s.row_begin + v), pin_value = f[v];
+  pin_row = global_max(pin_row);
+  pin_value = global_sum(pin_value);
+
+  // Compatibility projection b_c = b - (1^T M b) / (1^T M 1) (M symmetric: 1^T M b = (M 1)^T b).
+  const Eigen::VectorXd m1 = product(ops.M, s, Eigen::VectorXd::Ones(n));
+  const double area = global_sum(m1.sum());
+  const Eigen::VectorXd bc = b.array() - global_sum(m1.dot(b)) / area;
+  const Eigen::VectorXd Mbc = product(ops.M, s, bc);
+
+  // -L g = -M b_c with the pinned row and column eliminated (their column moves to the right-hand
+  // side, the row becomes g_pin = f(q_0)): symmetric positive definite.
+  DistributedPoissonResult result;
+  Stopwatch watch;
+  Mat A = nullptr;
+  petsc_check(MatDuplicate(ops.L, MAT_COPY_VALUES, &A), "MatDuplicate");
+  petsc_check(MatScale(A, -1.0), "MatScale");
+  Vec rhs = owned_vector(s, -Mbc), x = nullptr;
+  petsc_check(VecDuplicate(rhs, &x), "VecDuplicate");
+  // MatZeroRowsColumns reads all of x (0 times garbage can be NaN): zero except the pinned value.
+  petsc_check(VecSet(x, 0.0), "VecSet");
+  const PetscInt pin = PetscInt(pin_row);
+  const bool owner = pin >= s.row_begin && pin < s.row_begin + n;
+  if (owner) petsc_check(VecSetValue(x, pin, pin_value, INSERT_VALUES), "VecSetValue");
+  petsc_check(VecAssemblyBegin(x), "VecAssemblyBegin");
+  petsc_check(VecAssemblyEnd(x), "VecAssemblyEnd");
+  petsc_check(MatZeroRowsColumns(A, owner ? 1 : 0, &pin, 1.0, x, rhs), "MatZeroRowsColumns");
+  // Flagged symmetric like the petsc backend's matrices (MUMPS's symmetric mode).
+  petsc_check(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
+
+  KSP ksp = nullptr;
+  PC pc = nullptr;
+  petsc_check(KSPCreate(PETSC_COMM_WORLD, &ksp), "KSPCreate");
+  petsc_check(KSPSetOperators(ksp, A, A), "KSPSetOperators");
+  petsc_check(KSPSetType(ksp, KSPPREONLY), "KSPSetType");
+  petsc_check(KSPGetPC(ksp, &pc), "KSPGetPC");
+  petsc_check(PCSetType(pc, PCCHOLESKY), "PCSetType");
+  petsc_check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
+  // MUMPS sizes its workspace from the analysis plus ICNTL(14) percent (default 20); on sphere1 at
+  // h = 0.025 over 2 ranks the factorization needed more (INFOG(1) = -9, "out of memory").
+  Mat factor = nullptr;
+  petsc_check(PCFactorSetUpMatSolverType(pc), "PCFactorSetUpMatSolverType");
+  petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
+  petsc_check(MatMumpsSetIcntl(factor, 14, 100), "MatMumpsSetIcntl");
+  petsc_check(KSPSetUp(ksp), "KSPSetUp (MUMPS's Cholesky)");
+  result.report.factorize_seconds = watch.lap();
+  petsc_check(KSPSolve(ksp, rhs, x), "KSPSolve");
+  KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
+  petsc_check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+  if (reason < 0) {
+    PCFailedReason failed = PC_NOERROR;
+    PCGetFailedReason(pc, &failed);
+    KSPDestroy(&ksp);
+    VecDestroy(&rhs);
+    VecDestroy(&x);
+    MatDestroy(&A);
+    throw SolverError(failed == PC_FACTOR_OUTMEMORY ? SolverStatus::OutOfMemory : SolverStatus::NumericalIssue,
+                      std::string("distributed Poisson: MUMPS's Cholesky failed: ") + KSPConvergedReasons[reason] +
+                          " (PC " + PCFailedReasons[failed] + ")");
+  }
+  result.report.solve_seconds = watch.lap();
+  result.report.status = SolverStatus::Success;
+  result.report.ordering = "mumps";
+  result.g = owned_values(x);
+  KSPDestroy(&ksp);
+  VecDestroy(&rhs);
+  VecDestroy(&x);
+  MatDestroy(&A);
+
+  // neumann_residual and poisson_errors of problems.hpp, as sums over the ranks.
+  Eigen::VectorXd r = product(ops.L, s, result.g) - Mbc;
+  if (owner) r[pin - PetscInt(s.row_begin)] = 0.0;
+  result.residual = std::sqrt(global_sum(r.squaredNorm())) / std::max(std::sqrt(global_sum(Mbc.squaredNorm())), 1e-300);
+  const double mean_g = global_sum(m1.dot(result.g)) / area, mean_f = global_sum(m1.dot(f)) / area;
+  const Eigen::VectorXd e = (result.g.array() - mean_g) - (f.array() - mean_f);
+  result.errors.linf = global_max(e.size() > 0 ? e.lpNorm<Eigen::Infinity>() : 0.0);
+  result.errors.l2 = std::sqrt(global_sum(e.dot(product(ops.M, s, e))) / area);
+  return result;
+}
+
+Eigen::VectorXd gather_on_rank0(const DistributedSurface& s, const Eigen::VectorXd& owned) {
+  const int count = s.num_owned;
+  std::vector<int> counts(std::size_t(s.ranks)), offsets(std::size_t(s.ranks), 0);
+  MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  for (int r = 1; r < s.ranks; ++r) offsets[std::size_t(r)] = offsets[std::size_t(r - 1)] + counts[std::size_t(r - 1)];
+  const bool root = s.rank == 0;
+  std::vector<std::int64_t> ids(root ? std::size_t(s.num_vertices) : 0);
+  std::vector<double> values(root ? std::size_t(s.num_vertices) : 0);
+  MPI_Gatherv(s.vertex_ids.data(), count, MPI_INT64_T, ids.data(), counts.data(), offsets.data(), MPI_INT64_T, 0,
+              MPI_COMM_WORLD);
+  MPI_Gatherv(owned.data(), count, MPI_DOUBLE, values.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0,
+              MPI_COMM_WORLD);
+  Eigen::VectorXd whole(root ? s.num_vertices : 0);
+  for (std::size_t k = 0; k < ids.size(); ++k) whole[Eigen::Index(ids[k])] = values[k];
+  return whole;
+}
+
+}  // namespace corrlap
