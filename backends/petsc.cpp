@@ -367,6 +367,8 @@ std::vector<ParameterInfo> PetscLinearSolver::options() const {
   };
 }
 
+void check_petsc_call(int code, const char* call) { check(PetscErrorCode(code), call); }
+
 void PetscLinearSolver::configure(const Config& options) {
   auto& s = *impl_;
   std::vector<ParameterInfo> documented = this->options();

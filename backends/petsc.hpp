@@ -20,6 +20,11 @@ namespace corrlap {
 /// code that calls PETSc itself (distributed/) before any solver exists.
 void ensure_petsc_runtime();
 
+/// For code that calls PETSc itself (distributed/): throws SolverError naming `call` when `code`
+/// (a PetscErrorCode) is not 0, with PETSc's own message, as the backends report their failures
+/// (OutOfMemory for PETSC_ERR_MEM).
+void check_petsc_call(int code, const char* call);
+
 /// "petsc": a KSP with named options (ksp_type, pc_type = cholesky (MUMPS) | gamg | hypre | jacobi |
 /// none, rtol, max_it) and a pass-through of any other ksp_* / pc_* / mat_* key as the PETSc
 /// option -ksp_* / -pc_* / -mat_*. A system whose rows sum to zero (A 1 = 0, e.g. -L) gets the

@@ -40,6 +40,22 @@ std::vector<std::int64_t> all_gather(const std::vector<std::int64_t>& mine, int 
   return all;
 }
 
+// Where this rank's items of each orientation group start, and how many the group has over all
+// ranks: the prefix sums of the ranks' counts per group (ranks in order of x, as the serial ids).
+struct GroupOffsets {
+  std::array<std::int64_t, 2> base{0, 0}, total{0, 0};
+};
+GroupOffsets group_offsets(const std::array<std::int64_t, 2>& mine, int rank, int ranks) {
+  const std::vector<std::int64_t> counts = all_gather({mine[0], mine[1]}, ranks);
+  GroupOffsets o;
+  for (int r = 0; r < ranks; ++r)
+    for (std::size_t g = 0; g < 2; ++g) {
+      o.total[g] += counts[2 * std::size_t(r) + g];
+      if (r < rank) o.base[g] += counts[2 * std::size_t(r) + g];
+    }
+  return o;
+}
+
 // Index of `key` in a list of (key, value...) records of `stride` values sorted by key, or -1.
 std::int64_t find_record(const std::vector<std::int64_t>& records, std::size_t stride, std::int64_t key) {
   std::size_t lo = 0, hi = records.size() / stride;
@@ -81,13 +97,9 @@ DistributedSurface distributed_surface(const ImplicitShape& shape, const Digitiz
       surfels.push_back(s);
       ++group_count[s.positive() ? 1 : 0];
     }
-  const std::vector<std::int64_t> face_counts = all_gather({group_count[0], group_count[1]}, d.ranks);
-  std::array<std::int64_t, 2> face_base{0, 0}, face_total{0, 0};
-  for (int r = 0; r < d.ranks; ++r)
-    for (int g = 0; g < 2; ++g) {
-      face_total[std::size_t(g)] += face_counts[std::size_t(2 * r + g)];
-      if (r < d.rank) face_base[std::size_t(g)] += face_counts[std::size_t(2 * r + g)];
-    }
+  const GroupOffsets face_offsets = group_offsets(group_count, d.rank, d.ranks);
+  const auto& face_base = face_offsets.base;
+  const auto& face_total = face_offsets.total;
   d.num_faces = face_total[0] + face_total[1];
   if (d.num_faces == 0)
     throw InputError(
@@ -160,13 +172,9 @@ DistributedSurface distributed_surface(const ImplicitShape& shape, const Digitiz
   std::array<std::int64_t, 2> owned_count{0, 0};
   for (int v = 0; v < V; ++v)
     if (owned[std::size_t(v)]) ++owned_count[std::size_t(first_group[std::size_t(v)])];
-  const std::vector<std::int64_t> vertex_counts = all_gather({owned_count[0], owned_count[1]}, d.ranks);
-  std::array<std::int64_t, 2> vertex_base{0, 0}, vertex_total{0, 0};
-  for (int r = 0; r < d.ranks; ++r)
-    for (int g = 0; g < 2; ++g) {
-      vertex_total[std::size_t(g)] += vertex_counts[std::size_t(2 * r + g)];
-      if (r < d.rank) vertex_base[std::size_t(g)] += vertex_counts[std::size_t(2 * r + g)];
-    }
+  const GroupOffsets vertex_offsets = group_offsets(owned_count, d.rank, d.ranks);
+  const auto& vertex_base = vertex_offsets.base;
+  const auto& vertex_total = vertex_offsets.total;
   d.num_vertices = vertex_total[0] + vertex_total[1];
   d.row_begin = vertex_base[0] + vertex_base[1];
   std::vector<std::int64_t> serial(static_cast<std::size_t>(V), -1), row(static_cast<std::size_t>(V), -1);

@@ -1,10 +1,9 @@
 #pragma once
 // The PETSc side of DistributedFem (internal: only distributed/ sees PETSc's headers), and the
-// error check of the PETSc calls made here.
+// error check of the PETSc calls made here (the backend's).
 #include <petscmat.h>
 
-#include <corrlap/core/linear_solver.hpp>
-#include <string>
+#include <corrlap/backends/petsc.hpp>
 
 #include "../distributed_fem.hpp"
 
@@ -23,14 +22,8 @@ struct DistributedFem::Impl {
 };
 
 namespace detail {
-/// Throws SolverError naming the PETSc call that failed.
-inline void petsc_check(PetscErrorCode code, const char* call) {
-  if (code == 0) return;
-  const char* text = nullptr;
-  PetscErrorMessage(code, &text, nullptr);
-  throw SolverError(SolverStatus::NumericalIssue,
-                    std::string("distributed: ") + call + ": " + (text != nullptr ? text : "PETSc error"));
-}
+/// PETSc calls of distributed/ fail like the backend's (backends/petsc.hpp).
+inline void petsc_check(PetscErrorCode code, const char* call) { check_petsc_call(code, call); }
 }  // namespace detail
 
 }  // namespace corrlap
