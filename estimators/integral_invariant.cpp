@@ -11,6 +11,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <string>
 
@@ -33,11 +34,13 @@ Eigen::Matrix3d BallMoments::covariance() const {
   return c;
 }
 
-IIParams default_ii_params(bool implicit_shape, std::optional<double> k, std::optional<double> alpha) {
+IIParams default_ii_params(bool implicit_shape, std::optional<double> k, std::optional<double> alpha,
+                           std::optional<bool> shrink_on_thin_parts) {
   IIParams p;
-  if (!implicit_shape) p = IIParams{.k = kVoxelIIRadius, .alpha = 1.0};
+  if (!implicit_shape) p = IIParams{.k = kVoxelIIRadius, .alpha = 1.0, .shrink_on_thin_parts = true};
   if (k) p.k = *k;
   if (alpha) p.alpha = *alpha;
+  if (shrink_on_thin_parts) p.shrink_on_thin_parts = *shrink_on_thin_parts;
   return p;
 }
 
@@ -90,9 +93,15 @@ void check_radius(const VoxelGrid& grid, double digital_radius) {
 // A ball that covers the whole object from every surfel sees the same voxels everywhere: the
 // normals would carry no information about the surface (on a single voxel they lie in the surfels'
 // planes, which the operators then report as flipped).
+// The diagonal of the object's bounding box, in voxels (0 for no vertex).
+double object_across(const SurfelMesh& mesh, double h) {
+  if (mesh.num_vertices() == 0) return 0.0;
+  return (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h;
+}
+
 void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_radius) {
   if (mesh.num_vertices() == 0) return;
-  const double across = (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h;
+  const double across = object_across(mesh, h);
   if (digital_radius >= across) {
     std::ostringstream os;
     os << "II normals: the object is " << across
@@ -505,6 +514,60 @@ ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radi
   return out;
 }
 
+namespace {
+
+// The moments of `balls` at digital radius rd, by `method`.
+ComponentMoments moments_by(IIMethod method, const VoxelGrid& grid, double rd, double h,
+                            const std::vector<IIBall>& balls, const ProgressFn& progress) {
+  if (method == IIMethod::Fast) return ii_component_moments(grid, rd, h, balls, progress);
+  ComponentMoments mom;
+  mom.moments = ii_component_moments_brute_force(grid, rd, h, balls);
+  mom.index.resize(balls.size());
+  for (std::size_t i = 0; i < balls.size(); ++i) mom.index[i] = std::uint32_t(i);
+  return mom;
+}
+
+// docs/math.md §7 steps 4 and 5 for one surfel, and §7.2's test of the result against `around`
+// (the unit sum of the trivial normals of the faces around it; zero: no test of the angle).
+struct FaceEstimate {
+  Eigen::Vector3d normal;
+  bool ambiguous = false;
+};
+FaceEstimate estimate_face(const BallMoments& inner, const BallMoments& outer, const Eigen::Vector3d& trivial,
+                           const Eigen::Vector3d& around) {
+  const Eigen::Matrix3d C = 0.5 * (inner.covariance() + outer.covariance());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  FaceEstimate e;
+  e.normal = es.eigenvectors().col(0);
+  if (e.normal.dot(trivial) < 0.0) e.normal = -e.normal;
+  const Eigen::Vector3d lambda = es.eigenvalues();
+  static const double min_cosine = std::cos(kIIAmbiguousAngleDeg * std::numbers::pi / 180.0);
+  e.ambiguous = !(lambda[0] < kIIAmbiguousEigenRatio * lambda[1]) ||
+                (around.squaredNorm() > 0.0 && e.normal.dot(around) < min_cosine);
+  return e;
+}
+
+// Per face, the unit sum of the trivial normals of the faces that share a vertex with it (itself
+// included): the surface's direction around the face at the scale of one voxel.
+Eigen::MatrixX3d trivial_normals_around(const SurfelMesh& mesh) {
+  const Eigen::Index F = mesh.num_faces();
+  Eigen::MatrixX3d at_vertex = Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);
+  for (Eigen::Index f = 0; f < F; ++f) {
+    const Eigen::RowVector3d t = mesh.surfels[std::size_t(f)].trivial_normal().transpose();
+    for (int k = 0; k < 4; ++k) at_vertex.row(mesh.faces(f, k)) += t;
+  }
+  Eigen::MatrixX3d around(F, 3);
+  for (Eigen::Index f = 0; f < F; ++f) {
+    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 4; ++k) sum += at_vertex.row(mesh.faces(f, k));
+    const double norm = sum.norm();
+    around.row(f) = norm > 0.0 ? Eigen::RowVector3d(sum / norm) : Eigen::RowVector3d::Zero();
+  }
+  return around;
+}
+
+}  // namespace
+
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params, IIMethod method,
                                  const ProgressFn& progress) {
   if (!mesh.has_surfels())
@@ -512,7 +575,11 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
         "II normals need the voxels of the surface (a surface digitized from a shape or a volume, not a mesh file)",
         "normals");
   const double h = grid.h();
-  const double rd = ii_digital_radius(h, params);
+  double rd = ii_digital_radius(h, params);
+  const bool shrink = params.shrink_on_thin_parts;
+  // §7.2: an object smaller than the ball is the thinnest of parts; its balls start below its size.
+  const double across = object_across(mesh, h);
+  if (shrink && rd >= across && across > 1.0) rd = std::max(1.0, kIIShrinkFactor * across);
   check_radius(grid, rd);
   check_radius_fits_object(mesh, h, rd);
   // docs/math.md §7.1: both balls of a surfel keep the 6-component of X of its inner voxel.
@@ -523,24 +590,47 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
     balls[2 * f] = {inner, inner};
     balls[2 * f + 1] = {mesh.surfels[f].outer_voxel(), inner};
   }
-  ComponentMoments mom;
-  if (method == IIMethod::Fast) {
-    mom = ii_component_moments(grid, rd, h, balls, progress);
-  } else {
-    mom.moments = ii_component_moments_brute_force(grid, rd, h, balls);
-    mom.index.resize(balls.size());
-    for (std::size_t i = 0; i < balls.size(); ++i) mom.index[i] = std::uint32_t(i);
-  }
+  const ComponentMoments mom = moments_by(method, grid, rd, h, balls, progress);
+  const Eigen::MatrixX3d around = shrink ? trivial_normals_around(mesh) : Eigen::MatrixX3d();
+  const auto around_of = [&](std::size_t f) -> Eigen::Vector3d {
+    return shrink ? Eigen::Vector3d(around.row(Eigen::Index(f)).transpose()) : Eigen::Vector3d::Zero();
+  };
   Eigen::MatrixX3d normals(Eigen::Index(F), 3);
+  std::vector<std::uint8_t> ambiguous(F, 0);
   tbb::parallel_for(std::size_t(0), F, [&](std::size_t f) {
-    // docs/math.md §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
-    const Eigen::Matrix3d C = 0.5 * (mom[2 * f].covariance() + mom[2 * f + 1].covariance());
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-    Eigen::Vector3d n = es.eigenvectors().col(0);
-    // docs/math.md §7 step 5: orient by the trivial normal (>= 0 keeps it).
-    if (n.dot(mesh.surfels[f].trivial_normal()) < 0.0) n = -n;
-    normals.row(Eigen::Index(f)) = n.transpose();
+    const FaceEstimate e = estimate_face(mom[2 * f], mom[2 * f + 1], mesh.surfels[f].trivial_normal(), around_of(f));
+    normals.row(Eigen::Index(f)) = e.normal.transpose();
+    ambiguous[f] = e.ambiguous ? 1 : 0;
   });
+  if (!shrink) return normals;
+  // docs/math.md §7.2: the ambiguous surfels again, with smaller balls, until their estimate is not
+  // ambiguous or the radius is one voxel (that estimate is kept).
+  for (double r = rd; r > 1.0;) {
+    r = std::max(1.0, r * kIIShrinkFactor);
+    std::vector<std::size_t> again;
+    for (std::size_t f = 0; f < F; ++f)
+      if (ambiguous[f]) again.push_back(f);
+    if (again.empty()) break;
+    std::vector<IIBall> retry(2 * again.size());
+    for (std::size_t i = 0; i < again.size(); ++i) {
+      retry[2 * i] = balls[2 * again[i]];
+      retry[2 * i + 1] = balls[2 * again[i] + 1];
+    }
+    const ComponentMoments m = moments_by(method, grid, r, h, retry, {});
+    tbb::parallel_for(std::size_t(0), again.size(), [&](std::size_t i) {
+      const std::size_t f = again[i];
+      const FaceEstimate e = estimate_face(m[2 * i], m[2 * i + 1], mesh.surfels[f].trivial_normal(), around_of(f));
+      normals.row(Eigen::Index(f)) = e.normal.transpose();
+      ambiguous[f] = e.ambiguous ? 1 : 0;
+    });
+  }
+  // Still ambiguous with a one-voxel ball (a part one or two voxels thin): the trivial normals
+  // around the face are the estimate at that scale.
+  for (std::size_t f = 0; f < F; ++f) {
+    if (!ambiguous[f]) continue;
+    const Eigen::Vector3d t = mesh.surfels[f].trivial_normal(), a = around_of(f);
+    normals.row(Eigen::Index(f)) = (a.dot(t) > 0.0 ? a : t).transpose();
+  }
   return normals;
 }
 

@@ -17,7 +17,23 @@ namespace corrlap {
 struct IIParams {
   double k = 3.0;       ///< "r-radius"
   double alpha = 0.33;  ///< reference Shortcuts default (the paper says 1/3)
+  /// docs/math.md §7.2: where the ball sees more than the surface around its surfel (a rod or a
+  /// wall thinner than the ball), estimate that surfel again with smaller radii. Off keeps §7 as
+  /// the reference computes it.
+  bool shrink_on_thin_parts = false;
 };
+
+/// §7.2's test: the II estimate of a surfel is ambiguous when the two smallest eigenvalues of its
+/// covariance are within this ratio (no direction stands out: a rod thinner than the ball; a
+/// half-ball, the ball on a smooth surface, has 0.30; a quarter-ball, on a right-angled edge, 0.64,
+/// so such edges get small balls too, which keeps them from being rounded off by the ball) ...
+inline constexpr double kIIAmbiguousEigenRatio = 0.6;
+/// ... or when the normal is farther than this angle (degrees) from the sum of the trivial normals
+/// of the faces around its face (the ball saw the far side of a part thinner than itself). A
+/// staircase's surfel normals around a face stay within about 45 degrees of its true normal.
+inline constexpr double kIIAmbiguousAngleDeg = 60.0;
+/// Each retry multiplies the digital radius by this factor, down to one voxel.
+inline constexpr double kIIShrinkFactor = 0.75;
 
 /// The II radius, in voxels, for voxels that come from a file (a volume, a voxelized mesh):
 /// R = 4 h. The paper's 3 h^0.33 assumes a unit-size shape and grows to tens of voxels on fine
@@ -26,8 +42,10 @@ struct IIParams {
 inline constexpr double kVoxelIIRadius = 4.0;
 
 /// The II parameters of an input: for an implicit shape the paper's (IIParams{}), for voxels from a
-/// file k = kVoxelIIRadius voxels with alpha = 1. A given k or alpha replaces its default.
-IIParams default_ii_params(bool implicit_shape, std::optional<double> k = {}, std::optional<double> alpha = {});
+/// file k = kVoxelIIRadius voxels with alpha = 1 and shrink_on_thin_parts (real objects have rods
+/// and walls thinner than any fixed ball). A given k, alpha or shrink_on_thin_parts replaces its default.
+IIParams default_ii_params(bool implicit_shape, std::optional<double> k = {}, std::optional<double> alpha = {},
+                           std::optional<bool> shrink_on_thin_parts = {});
 
 /// Digital radius r_d = k * h^(alpha - 1) computed as the reference does (docs/math.md §7 step 1).
 double ii_digital_radius(double h, const IIParams& params);
@@ -85,7 +103,8 @@ ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radi
 
 enum class IIMethod { Fast, BruteForce };
 
-/// II normal per surfel/face (#F x 3), docs/math.md §7. mesh.surfels must be present (mesh from voxels).
+/// II normal per surfel/face (#F x 3), docs/math.md §7 (and §7.2 with params.shrink_on_thin_parts).
+/// mesh.surfels must be present (mesh from voxels).
 /// Throws InputError when the radius is below one voxel, larger than the box, or the mesh has no surfels.
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params = {},
                                  IIMethod method = IIMethod::Fast, const ProgressFn& progress = {});

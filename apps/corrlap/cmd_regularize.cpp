@@ -322,20 +322,49 @@ void run(const RegularizeArgs& a) {
               << (labels.size() == 1 ? "" : "s") << "\n";
   std::optional<double> h;
   if (a.source.h_option && a.source.h_option->count() > 0) h = a.source.h;
+  // One label that cannot be regularized (a speck of a voxel or two, a part the options do not
+  // suit) does not cost the others: its error is reported and recorded in labels.json, the other
+  // labels are written, and the command still fails at the end so that scripts see it.
   nlohmann::json index = nlohmann::json::array();
+  std::vector<std::string> failures;
+  bool numerical = false;
   for (const double label : labels) {
     const std::string name = "label-" + label_name(label);
     const std::string description = a.source.volume + ", label " + label_name(label);
     const std::string dir = folder(name);
     if (out) std::filesystem::create_directories(dir);
-    const LoadedSurface surface =
-        in_cli_terms([&] { return load_surface(volume_array(data, InsideRule::label(label), h)); }, description);
-    regularize_one(a, o, surface, description, dir, a.out + "/" + name, t);
-    index.push_back({{"label", label}, {"folder", name}});
+    try {
+      const LoadedSurface surface =
+          in_cli_terms([&] { return load_surface(volume_array(data, InsideRule::label(label), h)); }, description);
+      regularize_one(a, o, surface, description, dir, a.out + "/" + name, t);
+      index.push_back({{"label", label}, {"folder", name}});
+    } catch (const Error& e) {
+      numerical = numerical || dynamic_cast<const InputError*>(&e) == nullptr;
+      if (out) {
+        std::filesystem::remove_all(dir);
+        std::cerr << "regularize: label " << label_name(label) << " not written: " << e.what() << "\n";
+      }
+      index.push_back({{"label", label}, {"error", e.what()}});
+      failures.push_back(label_name(label));
+    }
   }
-  if (!out) return;
-  std::ofstream(out->file("labels.json")) << index.dump(2) << "\n";
-  out->commit();
+  std::string failed;
+  for (const std::string& f : failures) failed += (failed.empty() ? "" : ", ") + f;
+  const std::string summary = std::to_string(failures.size()) + " of " + std::to_string(labels.size()) +
+                              " labels could not be regularized (" + failed + "; their errors above and in " + a.out +
+                              "/labels.json)";
+  if (failures.size() == labels.size()) {
+    if (numerical) throw NumericalError("regularize: " + summary);
+    throw InputError("regularize: " + summary);
+  }
+  if (out) {
+    std::ofstream(out->file("labels.json")) << index.dump(2) << "\n";
+    out->commit();
+  }
+  if (failures.empty()) return;
+  const std::string message = "regularize: " + summary + "; the other labels are written";
+  if (numerical) throw NumericalError(message);
+  throw InputError(message);
 }
 
 RegisterCommand reg(42, "regularize", [](CLI::App& app) {

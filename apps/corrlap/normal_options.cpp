@@ -50,6 +50,11 @@ void NormalOptions::add_options(CLI::App& cmd) {
   cmd.add_option("--ii-alpha", ii_alpha,
                  "II: exponent alpha (default " + number_text(voxels.alpha) + " for volumes and mesh files, " +
                      number_text(shapes.alpha) + " for shapes)");
+  cmd.add_option("--ii-thin-parts", ii_thin_parts,
+                 "II: shrink: where the ball reaches across a part thinner than itself (a rod, a thin wall, a "
+                 "speck), estimate those surfels again with smaller balls (docs/math.md §7.2); keep: the radius "
+                 "everywhere, as DGtal (default: shrink for volumes and mesh files, keep for --shape and --polynomial)")
+      ->check(CLI::IsMember({"shrink", "keep"}));
 }
 
 NormalRequest NormalOptions::request(const LoadedSurface& s) const {
@@ -57,7 +62,9 @@ NormalRequest NormalOptions::request(const LoadedSurface& s) const {
   r.source = parse_normal_source(source);
   r.face_normals_file = face_file;
   r.vertex_normals_file = vertex_file;
-  r.ii = default_ii_params(s.shape_ptr() != nullptr, ii_k, ii_alpha);
+  std::optional<bool> shrink;
+  if (!ii_thin_parts.empty()) shrink = ii_thin_parts == "shrink";
+  r.ii = default_ii_params(s.shape_ptr() != nullptr, ii_k, ii_alpha, shrink);
   r.progress = stderr_progress("ii normals");
   return r;
 }

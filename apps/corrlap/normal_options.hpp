@@ -20,6 +20,7 @@ struct NormalOptions {
   std::string source = "auto";
   std::string face_file, vertex_file;
   std::optional<double> ii_k, ii_alpha;  ///< --ii-radius, --ii-alpha; unset: default_ii_params
+  std::string ii_thin_parts;             ///< --ii-thin-parts: shrink | keep; empty: default_ii_params
   CLI::Option* source_option = nullptr;  ///< to know whether --normals was given explicitly
 
   void add_options(CLI::App& cmd);

@@ -241,4 +241,31 @@ TEST_CASE("volume flags: --label, --labels all writes one folder per label, --th
   CHECK(err.find("--label applies to --volume only") != std::string::npos);
 }
 
+TEST_CASE("--labels all: a label that cannot be regularized is reported, the others are written") {
+  const std::string dir = tmp_path("cli_volume_labels_failure");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // A box labelled 3 and a single voxel labelled 5: a speck whose mean curvature exceeds 1/h.
+  corrlap::Volume v = make_volume(
+      {24, 14, 14}, [](int x, int y, int z) { return x >= 2 && x < 10 && y >= 3 && y < 11 && z >= 3 && z < 11; }, 3);
+  v.values[std::size_t((7 * 14 + 7) * 24 + 17)] = 5;
+  const std::string file = dir + "/seg.vol";
+  corrlap::write_volume(file, v);
+  std::string err;
+  CHECK(run_cli("regularize --volume " + file + " --labels all --no-render --out " + dir + "/all", nullptr, &err) == 1);
+  CHECK(err.find("label 5 not written") != std::string::npos);
+  CHECK(err.find("1 of 2 labels could not be regularized (5;") != std::string::npos);
+  CHECK(fs::exists(dir + "/all/label-3/regularized.obj"));
+  CHECK(!fs::exists(dir + "/all/label-5"));
+  const auto index = nlohmann::json::parse(corrlap::test::read_text(dir + "/all/labels.json"));
+  REQUIRE(index.size() == 2);
+  CHECK(index[0]["folder"] == "label-3");
+  CHECK(index[1]["label"] == 5.0);
+  CHECK(index[1]["error"].get<std::string>().find("mean curvature exceeds 1/h") != std::string::npos);
+  // Every label failing writes nothing.
+  CHECK(run_cli("regularize --volume " + file + " --labels all --alpha0 1e300 --no-render --out " + dir + "/none",
+                nullptr, &err) == 1);
+  CHECK(!fs::exists(dir + "/none"));
+}
+
 #endif

@@ -94,7 +94,8 @@ TEST_CASE("cli normals on a volume file gives the reference II normals, empty vo
   const std::string out = test::tmp_path("est_ii_vol.txt");
   std::string err;
   REQUIRE(run_cli("normals --volume " + vol +
-                      " --h 0.2 --normals ii --ii-radius 3 --ii-alpha 0.3333333333333333 --out " + out,
+                      " --h 0.2 --normals ii --ii-radius 3 --ii-alpha 0.3333333333333333 --ii-thin-parts keep --out " +
+                      out,
                   nullptr, &err) == 0);
   const Eigen::MatrixX3d n = read_normals(out);
   const Eigen::MatrixX3d ref = read_normals(test::reference_dir() + "/sphere1_h0.2/face_normals_ii.txt");

@@ -145,9 +145,19 @@ TEST_CASE("regularize: a volume whose features are thinner than the II radius is
   corrlap::write_volume(vol, v);
   const std::string dir = corrlap::test::tmp_path("regularize_thin_torus");
   std::string err;
-  CHECK(run_cli("regularize --volume " + vol + " --ii-radius 3 --ii-alpha 0.33 --out " + dir, nullptr, &err) == 1);
+  CHECK(run_cli("regularize --volume " + vol + " --ii-radius 3 --ii-alpha 0.33 --ii-thin-parts keep --out " + dir,
+                nullptr, &err) == 1);
   CHECK(err.find("exceeds 1/h") != std::string::npos);
   CHECK(err.find("ii_radius") != std::string::npos);  // the library's name (the CLI may add its flag)
+  // With the default --ii-thin-parts shrink the surfels whose ball reaches across the tube get
+  // smaller balls (docs/math.md §7.2): the same radius runs, and moves the surface by about a voxel.
+  std::filesystem::remove_all(dir);
+  REQUIRE(run_cli("regularize --volume " + vol + " --ii-radius 3 --ii-alpha 0.33 --no-render --out " + dir, nullptr,
+                  &err) == 0);
+  {
+    const auto m = nlohmann::json::parse(corrlap::test::read_text(dir + "/metrics.json"));
+    CHECK(m["displacement_max"].get<double>() < 1.5);
+  }
   // The default radius for volumes, 4 voxels, is below the tube's: the surface moves by less than a voxel.
   std::filesystem::remove_all(dir);
   REQUIRE(run_cli("regularize --volume " + vol + " --no-render --out " + dir, nullptr, &err) == 0);
@@ -213,14 +223,19 @@ TEST_CASE("regularize: small balls in a volume work with the default II radius, 
   // The paper's radius at this h (3 h^0.33 with the longest side spanning 2, h = 0.05) is 22.3
   // voxels, wider than a ball: the faces' II normals around some vertices cancel out. The error
   // names both sizes.
-  CHECK(
-      run_cli("regularize --volume " + vol + " --threshold 127 --ii-radius 3 --ii-alpha 0.33 --no-render --out " + dir,
-              nullptr, &err) == 1);
+  CHECK(run_cli("regularize --volume " + vol +
+                    " --threshold 127 --ii-radius 3 --ii-alpha 0.33 --ii-thin-parts keep --no-render --out " + dir,
+                nullptr, &err) == 1);
   INFO(err);
   CHECK(err.find("is the zero vector") != std::string::npos);
   CHECK(err.find("the II radius, 22.") != std::string::npos);
   CHECK(err.find("voxels, exceeds the part it lies on (14 x 14 x 14 voxels") != std::string::npos);
   CHECK(err.find("--ii-radius") != std::string::npos);
+  // Shrinking the balls where they reach across a ball (the default) runs with that radius too.
+  std::filesystem::remove_all(dir);
+  CHECK(
+      run_cli("regularize --volume " + vol + " --threshold 127 --ii-radius 3 --ii-alpha 0.33 --no-render --out " + dir,
+              nullptr, &err) == 0);
 }
 
 TEST_CASE("regularize: a mesh file gives the same surface in any unit (scaled by 0.1, 1 and 10)") {
