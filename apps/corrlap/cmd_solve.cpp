@@ -18,6 +18,7 @@
 #include <optional>
 
 #if defined(CORRLAP_WITH_PETSC)
+#include <corrlap/backends/petsc.hpp>
 #include <corrlap/distributed/distributed_fem.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
@@ -67,6 +68,9 @@ bool distributed_front_end_applies(const SolveArgs& a) {
 // False when the distributed front end refused the input (pinched voxels, normals the serial method
 // would clamp): its refusals are collective, so every rank then takes the serial front end.
 bool run_distributed(const SolveArgs& a) {
+  // The backend's options first: a bad key fails before the assembly, on every rank.
+  PetscLinearSolver solver;
+  solver.configure(a.solver.config());
   std::optional<StagedFile> out;  // checked before the computation; rank 0 writes
   if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const Stopwatch watch;
@@ -86,7 +90,7 @@ bool run_distributed(const SolveArgs& a) {
   const DistributedFem& fem = *fem_part;
   const double assemble_s = watch.elapsed();
   const TestFunction& function = test_function(a.rhs);
-  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, shape_input.center);
+  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, solver, shape_input.center);
   const Eigen::VectorXd g = gather_on_rank0(surface, r.g);
   if (!is_output_rank()) return true;
   const OutputUnits units = a.output.parse(VoxelFrame(a.source.h, Eigen::Vector3d::Zero()));
@@ -116,7 +120,7 @@ bool run_distributed(const SolveArgs& a) {
     j["factor_nonzeros"] = 0;
     j["factor_flops"] = 0;
     j["solve_s"] = r.report.solve_seconds;
-    j["iterations"] = 0;
+    j["iterations"] = r.report.iterations;
     j["residual"] = r.residual;
     j["status"] = to_string(r.report.status);
     j["error_linf"] = unit_sphere ? nlohmann::json(r.errors.linf) : nlohmann::json(nullptr);
@@ -130,9 +134,11 @@ bool run_distributed(const SolveArgs& a) {
             << "method      fem (normals true)\n"
             << "solver      petsc\n"
             << "assemble    " << assemble_s << " s\n"
-            << "factorize   " << r.report.factorize_seconds << " s (mumps)\n"
-            << "solve       " << r.report.solve_seconds << " s\n"
-            << "residual    " << r.residual << "\n";
+            << "factorize   " << r.report.factorize_seconds << " s"
+            << (r.report.ordering.empty() ? std::string() : " (" + r.report.ordering + ")") << "\n"
+            << "solve       " << r.report.solve_seconds << " s";
+  if (r.report.iterations > 0) std::cout << " (" << r.report.iterations << " iterations)";
+  std::cout << "\nresidual    " << r.residual << "\n";
   if (unit_sphere)
     std::cout << "error Linf  " << r.errors.linf << "\nerror L2    " << r.errors.l2
               << " (M-weighted, docs/math.md §10.4)\n";

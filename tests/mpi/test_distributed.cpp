@@ -6,6 +6,8 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <cmath>
+#include <corrlap/backends/petsc.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/discretizations/methods.hpp>
 #include <corrlap/distributed/distributed_fem.hpp>
@@ -163,7 +165,11 @@ TEST_CASE("distributed Poisson solve equals CHOLMOD's serial solve_poisson to 1e
     const DistributedSurface d = distributed_surface(shape, params_of(c));
     const DistributedFem fem(d, true_face_normals(shape, d.mesh));
     const TestFunction& expx = test_function("expx");
-    const DistributedPoissonResult r = distributed_solve_poisson(d, fem, expx);
+    PetscLinearSolver solver;
+    solver.configure(Config());  // the default: MUMPS's Cholesky
+    const DistributedPoissonResult r = distributed_solve_poisson(d, fem, expx, solver);
+    CHECK(r.report.ordering == "mumps");
+    CHECK(r.report.message == "KSP CONVERGED_ITS");
     const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
     const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
     auto cholmod = make_linear_solver("cholmod");
