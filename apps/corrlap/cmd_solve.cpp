@@ -51,13 +51,11 @@ struct SolveArgs {
 
 #if defined(CORRLAP_WITH_PETSC)
 // Whether the distributed front end (docs/distributed.md) computes exactly this command: the petsc
-// solver with its defaults (MUMPS's Cholesky), the fem method with its defaults and the true normals
-// of an implicit shape, the Poisson problem with a test function. Anything else takes the serial
-// front end (every rank builds the whole surface, the backend distributes the solve).
+// solver with any of its options, the fem method with its defaults and the true normals of an
+// implicit shape, the Poisson problem with a test function. Anything else takes the serial front
+// end (every rank builds the whole surface, the backend distributes the solve).
 bool distributed_front_end_applies(const SolveArgs& a) {
   const Config config = a.solver.config();
-  for (const std::string& key : config.keys())
-    if (key != "solver") return false;
   const bool true_normals = (a.normals.source == "auto" || a.normals.source == "true") && a.normals.face_file.empty() &&
                             a.normals.vertex_file.empty();
   return config.get_string("solver", kDefaultLinearSolver) == "petsc" && a.method.method == "fem" &&
