@@ -14,6 +14,7 @@
 #include <corrlap/distributed/distributed_poisson.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/pipeline/front_end.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <string>
@@ -311,4 +312,35 @@ TEST_CASE("distributed Poisson: divergence and bad options fail on every rank wi
   PetscLinearSolver solver;
   solver.configure(Config::from_key_values({"ksp_type=cg", "pc_type=gamg", "rtol=1e-8"}));
   CHECK(distributed_solve_poisson(d, fem, expx, solver).report.residual <= 1e-7);
+}
+
+TEST_CASE("choose_front_end: the distributed front end exactly for the inputs it computes") {
+  FrontEndRequest solve;
+  solve.implicit_shape = true;
+  solve.solver = "petsc";
+  CHECK(choose_front_end(solve) == FrontEnd::Distributed);
+  FrontEndRequest eigs = solve;
+  eigs.task = FrontEndRequest::Task::Eigen;
+  eigs.solver = "slepc";
+  CHECK(choose_front_end(eigs) == FrontEnd::Distributed);
+  CHECK(to_string(choose_front_end(eigs)) == "distributed");
+  // Each departure from that scope takes the serial front end.
+  auto with = [](FrontEndRequest r, auto change) {
+    change(r);
+    return choose_front_end(r);
+  };
+  for (const FrontEndRequest& r : {solve, eigs}) {
+    CHECK(with(r, [](FrontEndRequest& q) { q.implicit_shape = false; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "ii"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "true"; }) == FrontEnd::Distributed);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals_from_file = true; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.method = "interpolated"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.method_parameters = Config::from_key_values({"mass=lumped"}); }) ==
+          FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.solver = "cholmod"; }) == FrontEnd::Serial);
+  }
+  CHECK(with(solve, [](FrontEndRequest& q) { q.task = FrontEndRequest::Task::Heat; }) == FrontEnd::Serial);
+  CHECK(with(solve, [](FrontEndRequest& q) { q.rhs_from_test_function = false; }) == FrontEnd::Serial);
+  // eigs --solver petsc: the linear solver of the serial Spectra shift-invert, not slepc.
+  CHECK(with(eigs, [](FrontEndRequest& q) { q.solver = "petsc"; }) == FrontEnd::Serial);
 }
