@@ -17,12 +17,12 @@ std::string to_string(FrontEnd front_end);
 struct FrontEndRequest {
   enum class Task { Poisson, Heat, Eigen };
   Task task = Task::Poisson;
-  bool implicit_shape = false;    ///< the surface digitizes a shape (--shape, --polynomial), not a file
-  std::string normals = "auto";   ///< the normals' source: auto, true, ii, trivial, convolved
-  bool normals_from_file = false; ///< face or vertex normals read from a file
+  bool implicit_shape = false;     ///< the surface digitizes a shape (--shape, --polynomial), not a file
+  std::string normals = "auto";    ///< the normals' source: auto, true, ii, trivial, convolved
+  bool normals_from_file = false;  ///< face or vertex normals read from a file
   std::string method = "fem";
-  Config method_parameters;        ///< the method's parameters that were given (any takes the serial one)
-  std::string solver;              ///< the solver's name: the linear solver, or eigs's eigen solver
+  Config method_parameters;            ///< the method's parameters that were given (any takes the serial one)
+  std::string solver;                  ///< the solver's name: the linear solver, or eigs's eigen solver
   bool rhs_from_test_function = true;  ///< Poisson: b from a test function, not from a file
 };
 

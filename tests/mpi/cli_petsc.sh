@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The CLI with the PETSc backends under `mpirun -np 2` (ctest petsc_mpi_cli): `solve --solver petsc`
 # equals CHOLMOD's solution (on the distributed front end, docs/distributed.md, with the default
-# options and with CG + GAMG) and `eigs --solver slepc` the serial eigenvalues; only rank 0 prints
-# and writes; `corrlap backends` lists both.
+# options and with CG + GAMG) and `eigs --solver slepc` (distributed too) the serial eigenvalues;
+# only rank 0 prints and writes; `corrlap backends` lists both.
 # Usage: cli_petsc.sh CORRLAP MPIEXEC WORK_DIR
 set -euo pipefail
 cli=$1 mpiexec=$2 work=$3
@@ -39,6 +39,7 @@ ls -a "$work" | grep -q corrlap-tmp && { echo "a temporary file was left behind"
 "$cli" eigs "${surface[@]}" -k 12 --solver cholmod > "$work/eigs_serial.txt" 2> /dev/null
 "$mpiexec" -n 2 "$cli" eigs "${surface[@]}" -k 12 --solver slepc > "$work/eigs_slepc.txt" 2> "$work/eigs_slepc.err"
 grep -q "slepc" "$work/eigs_slepc.err" || { echo "eigs did not report the slepc solver"; cat "$work/eigs_slepc.err"; exit 1; }
+grep -q "on the distributed front end over 2 ranks" "$work/eigs_slepc.err" || { echo "eigs did not take the distributed front end"; cat "$work/eigs_slepc.err"; exit 1; }
 
 # Plain Python (no numpy: whatever python3 is first on PATH).
 python3 - "$work" <<'PY'

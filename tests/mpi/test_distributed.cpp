@@ -10,6 +10,7 @@
 #include <corrlap/backends/petsc.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/discretizations/methods.hpp>
+#include <corrlap/distributed/distributed_eigs.hpp>
 #include <corrlap/distributed/distributed_fem.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
@@ -238,7 +239,7 @@ TEST_CASE("distributed Poisson with CG + GAMG and CG + hypre equals CHOLMOD with
     const PoissonResult s = solve_poisson(ops, mesh.positions, expx, *cholmod);
     const double kappa = condition_number(pinned_system(ops.L));
     if (d.rank == 0) MESSAGE(c.shape << " h = " << c.h << ": cond_2 of the pinned system " << kappa);
-    for (const char* pc : {"pc_type=gamg", "pc_type=hypre"}) {
+    for (const std::string pc : {"pc_type=gamg", "pc_type=hypre"}) {
       CAPTURE(pc);
       PetscLinearSolver solver;
       solver.configure(Config::from_key_values({"ksp_type=cg", pc, "rtol=1e-10"}));
@@ -343,4 +344,57 @@ TEST_CASE("choose_front_end: the distributed front end exactly for the inputs it
   CHECK(with(solve, [](FrontEndRequest& q) { q.rhs_from_test_function = false; }) == FrontEnd::Serial);
   // eigs --solver petsc: the linear solver of the serial Spectra shift-invert, not slepc.
   CHECK(with(eigs, [](FrontEndRequest& q) { q.solver = "petsc"; }) == FrontEnd::Serial);
+}
+
+TEST_CASE("distributed eigs (slepc on the distributed L and M) equal the serial eigenvalues to 1e-8") {
+  const int k = 12;
+  for (const Case& c : {kCases[1], kCases[4]}) {
+    CAPTURE(c.shape);
+    CAPTURE(c.h);
+    const ImplicitShape shape = make_implicit_shape(c.shape);
+    const DistributedSurface d = distributed_surface(shape, params_of(c));
+    const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+    const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
+    const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
+    // The serial reference: Spectra's shift-invert with CHOLMOD (`corrlap eigs --solver cholmod`).
+    auto spectra = make_eigen_solver(kDefaultEigenSolver, Config::from_key_values({"solver=cholmod"}));
+    const EigenResult serial = spectra->solve(ops.L, ops.M, k);
+    SlepcEigenSolver solver;
+    solver.configure(Config());  // shift-invert with MUMPS's Cholesky
+    const EigenResult r = distributed_eigs(fem, k, solver);
+    REQUIRE(r.values.size() == k);
+    REQUIRE(r.vectors.rows() == d.num_owned);
+    REQUIRE(r.vectors.cols() == k);
+    // Relative to the largest value, as tests/mpi/cli_petsc.sh compares the CLI's.
+    const double difference = (r.values - serial.values).cwiseAbs().maxCoeff() / serial.values.cwiseAbs().maxCoeff();
+    if (d.rank == 0) MESSAGE("largest eigenvalue difference " << difference);
+    CHECK(difference < 1e-8);
+    // Each gathered vector is an eigenvector of the serial pencil, M-normalized: |L u + mu M u|
+    // small against |L| |u| (slepc's tolerance 1e-10 is on the relative residual of the pair).
+    for (int i = 0; i < k; ++i) {
+      const Eigen::VectorXd u = gather_on_rank0(d, r.vectors.col(i));
+      if (d.rank != 0) continue;
+      const double residual = (ops.L * u + r.values[i] * (ops.M * u)).norm() / (ops.L.cwiseAbs() * u.cwiseAbs()).norm();
+      CHECK(residual < 1e-6);
+      CHECK(std::abs(u.dot(ops.M * u) - 1.0) < 1e-10);
+    }
+  }
+}
+
+TEST_CASE("distributed eigs with slepc's LOBPCG (GAMG) finds the serial eigenvalues") {
+  // As the serial front end's LOBPCG test (test_petsc.cpp): the sphere's closed clusters 1 + 3 + 5,
+  // tolerance 1e-9, values to 1e-6 of the largest.
+  const int k = 9;
+  const Case c = kCases[1];
+  const ImplicitShape shape = make_implicit_shape(c.shape);
+  const DistributedSurface d = distributed_surface(shape, params_of(c));
+  const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+  const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
+  const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
+  const EigenResult serial = make_eigen_solver(kDefaultEigenSolver)->solve(ops.L, ops.M, k);
+  SlepcEigenSolver solver;
+  solver.configure(Config::from_key_values({"method=lobpcg", "pc_type=gamg", "tolerance=1e-9"}));
+  const EigenResult r = distributed_eigs(fem, k, solver);
+  REQUIRE(r.values.size() == k);
+  CHECK((r.values - serial.values).cwiseAbs().maxCoeff() < 1e-6 * serial.values.maxCoeff());
 }
