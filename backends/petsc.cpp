@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <corrlap/backends/detail/petsc_objects.hpp>
 #include <corrlap/backends/detail/solver_support.hpp>
 #include <cstdio>
 #include <iostream>
@@ -16,6 +17,13 @@
 namespace corrlap {
 
 using SpMat = Eigen::SparseMatrix<double>;
+
+bool detail::petsc_alive() {
+  PetscBool initialized = PETSC_FALSE, finalized = PETSC_FALSE;
+  PetscInitialized(&initialized);
+  PetscFinalized(&finalized);
+  return initialized == PETSC_TRUE && finalized == PETSC_FALSE;
+}
 
 namespace {
 
@@ -58,14 +66,6 @@ class Runtime {
   bool owner_ = false;
 };
 
-/// False after PETSc is finalized: objects destroyed later (static solvers) must not call it.
-bool petsc_alive() {
-  PetscBool initialized = PETSC_FALSE, finalized = PETSC_FALSE;
-  PetscInitialized(&initialized);
-  PetscFinalized(&finalized);
-  return initialized == PETSC_TRUE && finalized == PETSC_FALSE;
-}
-
 /// Throws when a PETSc/SLEPc call failed, with PETSc's own message. `input`: the call applies a
 /// user's option, so a failure is the user's to fix (InputError).
 void check(PetscErrorCode code, const char* call, bool input = false) {
@@ -82,35 +82,13 @@ void check(PetscErrorCode code, const char* call, bool input = false) {
   throw SolverError(code == PETSC_ERR_MEM ? SolverStatus::OutOfMemory : SolverStatus::NumericalIssue, what);
 }
 
-/// A PETSc object destroyed with its owner (and never after PETSc is finalized).
-template <class T, PetscErrorCode (*destroy)(T*)>
-class Owned {
- public:
-  Owned() = default;
-  Owned(const Owned&) = delete;
-  Owned& operator=(const Owned&) = delete;
-  ~Owned() { reset(); }
-  void reset() {
-    if (handle_ != nullptr && petsc_alive()) destroy(&handle_);
-    handle_ = nullptr;
-  }
-  /// For the Create calls: the old object is destroyed first.
-  T* out() {
-    reset();
-    return &handle_;
-  }
-  operator T() const { return handle_; }
-  explicit operator bool() const { return handle_ != nullptr; }
-
- private:
-  T handle_ = nullptr;
-};
-using OwnedMat = Owned<Mat, MatDestroy>;
-using OwnedVec = Owned<Vec, VecDestroy>;
-using OwnedKsp = Owned<KSP, KSPDestroy>;
-using OwnedEps = Owned<EPS, EPSDestroy>;
-using OwnedScatter = Owned<VecScatter, VecScatterDestroy>;
-using OwnedNullSpace = Owned<MatNullSpace, MatNullSpaceDestroy>;
+using detail::petsc_alive;
+using OwnedMat = detail::PetscMatOwner;
+using OwnedVec = detail::PetscVecOwner;
+using OwnedKsp = detail::PetscOwned<KSP, KSPDestroy>;
+using OwnedEps = detail::PetscOwned<EPS, EPSDestroy>;
+using OwnedScatter = detail::PetscOwned<VecScatter, VecScatterDestroy>;
+using OwnedNullSpace = detail::PetscOwned<MatNullSpace, MatNullSpaceDestroy>;
 
 int world_rank() {
   int rank = 0;
@@ -150,6 +128,9 @@ class PrefixedOptions {
   void assign(std::vector<std::pair<std::string, std::string>> options) {
     clear();
     options_ = std::move(options);
+  }
+  bool has(const std::string& key) const {
+    return std::any_of(options_.begin(), options_.end(), [&](const auto& option) { return option.first == key; });
   }
   void add(const std::string& key, const std::string& value) {
     for (const auto& option : options_)
@@ -331,13 +312,20 @@ struct PetscLinearSolver::Impl {
   double rtol = 1e-10;
   int max_it = 10000;
   PrefixedOptions passed;
+  // MUMPS's workspace margin ICNTL(14), in percent of the analysis's estimate. Some factorizations
+  // need more than the default 20 (sphere1 at h = 0.025 over 2 ranks: INFOG(1) = -9), and a large
+  // margin up front costs memory on every run (2.83 against 2.75 GB at h = 0.004 on one rank with
+  // 100 %). So it is doubled only when a factorization reports too little, and kept for the
+  // refactorizations.
+  int mumps_margin = 20;
 
-  RowBlock rows;
+  RowBlock rows;  // the serial front end's block of the whole matrix
   detail::Pattern pattern;
-  OwnedMat A;
+  OwnedMat A;  // built from the serial matrix, or shared with the distributed front end
   OwnedKsp ksp;
+  bool ksp_set_up = false;  // a set-up KSP refactorizes with its factor's settings
   OwnedNullSpace null_space;
-  bool factored = false, singular = false, warned = false;
+  bool factored = false, singular = false, warned = false, distributed = false;
   SolverReport report;
 
   std::string effective_ksp_type() const {
@@ -349,7 +337,153 @@ struct PetscLinearSolver::Impl {
     report.message = message;
     throw SolverError(status, message);
   }
+  /// A KSP of the configured types (a type PETSc does not know fails here).
+  void new_ksp() {
+    check(KSPCreate(PETSC_COMM_WORLD, ksp.out()), "KSPCreate");
+    setup_ksp(ksp, effective_ksp_type(), pc_type, factor_solver);
+    ksp_set_up = false;
+  }
+  void set_up();
+  template <class Fill, class Take>
+  void solve_columns(Eigen::Index columns, Fill fill, Take take);
 };
+
+/// The KSP on A, which holds its values: the null space when A 1 = 0, the options, and the set-up
+/// (the factorization with cholesky/lu), whose outcome every rank agrees on.
+void PetscLinearSolver::Impl::set_up() {
+  factored = false;
+  // A 1 = 0 (within rounding): the constant null space, as of -L on a closed surface.
+  // max |A 1| <= 1e-12 max_i sum_j |a_ij|, both over every rank (MatMult and MatNorm are collective).
+  OwnedVec ones, product;
+  check(MatCreateVecs(A, ones.out(), product.out()), "MatCreateVecs");
+  check(VecSet(ones, 1.0), "VecSet");
+  check(MatMult(A, ones, product), "MatMult");
+  PetscReal row_sum = 0.0, row_norm = 0.0;
+  check(VecNorm(product, NORM_INFINITY, &row_sum), "VecNorm");
+  check(MatNorm(A, NORM_INFINITY, &row_norm), "MatNorm");
+  singular = row_sum <= 1e-12 * row_norm;
+  null_space.reset();
+  if (singular) {
+    check(MatNullSpaceCreate(PETSC_COMM_WORLD, PETSC_TRUE, 0, nullptr, null_space.out()), "MatNullSpaceCreate");
+    // MUMPS stops at a zero pivot unless told to detect it (ICNTL(24)); the solution is then one
+    // of the singular system's, made mean-free in solve().
+    if (is_factorization(pc_type) && factor_solver == "mumps") passed.add("mat_mumps_icntl_24", "1");
+  }
+  check(MatSetNullSpace(A, null_space), "MatSetNullSpace");
+  check(MatSetTransposeNullSpace(A, null_space), "MatSetTransposeNullSpace");
+  passed.apply();
+  // A margin the user set (mat_mumps_icntl_14) is theirs: no retry.
+  const bool mumps = is_factorization(pc_type) && factor_solver == "mumps" && !passed.has("mat_mumps_icntl_14");
+  for (;;) {
+    check(KSPSetOperators(ksp, A, A), "KSPSetOperators");
+    check(KSPSetTolerances(ksp, rtol, 0.0, PETSC_DEFAULT, max_it), "KSPSetTolerances");
+    // cg's rtol then means what it means for the "cg" backend: the true residual.
+    if (effective_ksp_type() == "cg") check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType", true);
+    check(KSPSetOptionsPrefix(ksp, passed.prefix().c_str()), "KSPSetOptionsPrefix");
+    // The factor (MUMPS) reads its -mat_ options under the matrix's prefix.
+    check(MatSetOptionsPrefix(A, passed.prefix().c_str()), "MatSetOptionsPrefix");
+    check(KSPSetFromOptions(ksp), "KSPSetFromOptions", true);
+    PC pc = nullptr;
+    check(KSPGetPC(ksp, &pc), "KSPGetPC");
+    if (mumps && !ksp_set_up) {
+      Mat factor = nullptr;
+      check(PCFactorSetUpMatSolverType(pc), "PCFactorSetUpMatSolverType");
+      check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
+      check(MatMumpsSetIcntl(factor, 14, mumps_margin), "MatMumpsSetIcntl");
+    }
+    const PetscErrorCode code = KSPSetUp(ksp);
+    std::string message;
+    if (code != 0) std::swap(message, first_petsc_message);
+    PCFailedReason reason = PC_NOERROR;
+    if (code == 0) check(PCGetFailedReason(pc, &reason), "PCGetFailedReason");
+    // Both are this rank's; the factorization is collective, so every rank takes the same decision
+    // (retry, fail or go on) from the worst outcome of all.
+    int local[2] = {code != 0 ? 1 : 0, reason > 0 ? int(reason) : 0}, agreed[2] = {0, 0};
+    MPI_Allreduce(local, agreed, 2, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
+    const auto failed = PCFailedReason(agreed[1]);
+    if (agreed[0] == 0 && failed == PC_FACTOR_OUTMEMORY && mumps && mumps_margin < 1000) {
+      mumps_margin *= 2;
+      new_ksp();  // a new factor: MUMPS takes ICNTL(14) before its analysis
+      continue;
+    }
+    if (agreed[0] == 0 && failed == PC_NOERROR) break;
+    new_ksp();  // the next factorize starts afresh
+    std::ostringstream os;
+    os << "petsc: setting up " << effective_ksp_type() << " + " << pc_type << " failed: ";
+    if (!message.empty())
+      os << message;
+    else if (failed != PC_NOERROR)
+      os << "PC " << PCFailedReasons[failed];
+    else
+      os << "on another rank (its message is on that rank's stderr)";
+    if (failed == PC_FACTOR_OUTMEMORY) os << " (MUMPS's workspace margin ICNTL(14) = " << mumps_margin << " %)";
+    fail(failed == PC_FACTOR_OUTMEMORY ? SolverStatus::OutOfMemory
+         : failed == PC_FACTOR_STRUCT_ZEROPIVOT || failed == PC_FACTOR_NUMERIC_ZEROPIVOT
+             ? SolverStatus::NotPositiveDefinite
+             : SolverStatus::NumericalIssue,
+         os.str());
+  }
+  ksp_set_up = true;
+}
+
+/// Solves column after column: fill(c, b) writes this rank's rows of column c into b, take(c, x)
+/// reads this rank's rows of its solution from x.
+template <class Fill, class Take>
+void PetscLinearSolver::Impl::solve_columns(Eigen::Index columns, Fill fill, Take take) {
+  Stopwatch watch;
+  OwnedVec b, x, r;
+  check(MatCreateVecs(A, x.out(), b.out()), "MatCreateVecs");
+  check(VecDuplicate(b, r.out()), "VecDuplicate");
+  int iterations = 0;
+  double worst = 0.0;
+  for (Eigen::Index c = 0; c < columns; ++c) {
+    fill(c, Vec(b));
+    // The compatible part of b (what the null space leaves solvable); the residual is measured on it.
+    if (singular) check(MatNullSpaceRemove(null_space, b), "MatNullSpaceRemove");
+    check(KSPSolve(ksp, b, x), "KSPSolve");
+    KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
+    PetscInt its = 0;
+    check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
+    check(KSPGetIterationNumber(ksp, &its), "KSPGetIterationNumber");
+    iterations = std::max(iterations, int(its));
+    report.iterations = iterations;
+    // The reason and the norms below are the same on every rank (reductions), so every rank fails alike.
+    if (reason < 0) {
+      std::ostringstream os;
+      os << "petsc: " << effective_ksp_type() << " + " << pc_type << " diverged: " << KSPConvergedReasons[reason]
+         << " after " << its << " iterations (column " << c << ", rtol " << rtol << ", max_it " << max_it << ")";
+      report.solve_seconds = watch.elapsed();
+      fail(status_of(reason), os.str());
+    }
+    if (singular) check(MatNullSpaceRemove(null_space, x), "MatNullSpaceRemove");
+    PetscReal nb = 0.0, nr = 0.0;
+    check(MatMult(A, x, r), "MatMult");
+    check(VecAYPX(r, -1.0, b), "VecAYPX");
+    check(VecNorm(r, NORM_2, &nr), "VecNorm");
+    check(VecNorm(b, NORM_2, &nb), "VecNorm");
+    const double relative_residual = nb > 0.0 ? double(nr / nb) : double(nr);
+    // KSP stops on its recurrence residual; as in the "cg" backend the true one decides, with the
+    // same slack. A factorization's rounding is not held to rtol (it was never asked to meet it).
+    if (!is_factorization(pc_type) && !(relative_residual <= 10.0 * rtol)) {
+      std::ostringstream os;
+      os << "petsc: " << effective_ksp_type() << " + " << pc_type << ": no convergence: true relative residual "
+         << relative_residual << " > 10 rtol = " << 10.0 * rtol << " after " << its << " iterations (column " << c
+         << "; KSP said " << KSPConvergedReasons[reason] << ")";
+      report.solve_seconds = watch.elapsed();
+      fail(SolverStatus::NoConvergence, os.str());
+    }
+    worst = std::max(worst, relative_residual);
+    report.message = std::string("KSP ") + KSPConvergedReasons[reason];
+    take(c, Vec(x));
+  }
+  if (!warned) {
+    warn_unused(passed, "linear solver 'petsc'");
+    warned = true;
+  }
+  report.residual = worst;
+  report.status = SolverStatus::Success;
+  report.solve_seconds = watch.elapsed();
+}
 
 PetscLinearSolver::PetscLinearSolver() : impl_(std::make_unique<Impl>()) {}
 PetscLinearSolver::~PetscLinearSolver() = default;
@@ -391,9 +525,9 @@ void PetscLinearSolver::configure(const Config& options) {
   s.rtol = rtol;
   s.max_it = max_it;
   s.passed.assign(std::move(passed));
+  s.mumps_margin = 20;
   // A KSP now, so that a type PETSc does not know fails here, before the caller's long assembly.
-  check(KSPCreate(PETSC_COMM_WORLD, s.ksp.out()), "KSPCreate");
-  setup_ksp(s.ksp, s.effective_ksp_type(), s.pc_type, s.factor_solver);
+  s.new_ksp();
   s.factored = false;
   s.warned = false;
 }
@@ -410,7 +544,9 @@ void PetscLinearSolver::analyze(const SpMat& A) {
   s.pattern.assign(A);
   s.rows = row_block(A.rows());
   s.factored = false;
+  s.distributed = false;
   create_matrix(A, s.rows, s.A);
+  s.new_ksp();  // a new matrix: a new factor (with the current workspace margin)
   s.report.status = SolverStatus::Success;
   s.report.ordering = is_factorization(s.pc_type) ? s.factor_solver : "";
   s.report.analyze_seconds = watch.elapsed();
@@ -418,59 +554,40 @@ void PetscLinearSolver::analyze(const SpMat& A) {
 
 void PetscLinearSolver::factorize(const SpMat& A) {
   auto& s = *impl_;
-  if (s.pattern.empty()) throw SolverError(SolverStatus::NotAnalyzed, "petsc: factorize() called before analyze()");
+  if (s.pattern.empty() || s.distributed)
+    throw SolverError(SolverStatus::NotAnalyzed, "petsc: factorize() called before analyze()");
   detail::check_same_pattern(s.pattern, A, "petsc");
   detail::check_matrix(A, "petsc", true);
   if (!A.isCompressed()) throw SolverError(SolverStatus::InvalidInput, "petsc: the matrix must be compressed");
   Stopwatch watch;
   s.factored = false;
   set_values(A, s.rows, s.A);
-  // A 1 = 0 (within rounding): the constant null space, as of -L on a closed surface. The row sums
-  // of this rank's rows (= its columns' sums, A symmetric), the largest over every rank.
-  double row_sum = 0.0, row_norm = 0.0;
-  for (PetscInt c = s.rows.begin; c < s.rows.end; ++c) {
-    double sum = 0.0, norm = 0.0;
-    for (SpMat::InnerIterator it(A, c); it; ++it) {
-      sum += it.value();
-      norm += std::abs(it.value());
-    }
-    row_sum = std::max(row_sum, std::abs(sum));
-    row_norm = std::max(row_norm, norm);
+  s.set_up();
+  s.report.factorize_seconds = watch.elapsed();
+  s.report.status = SolverStatus::Success;
+  s.report.message.clear();
+  s.factored = true;
+}
+
+void PetscLinearSolver::factorize_distributed(const detail::PetscDistributedMatrix& A) {
+  auto& s = *impl_;
+  Runtime::ensure();
+  if (!s.ksp) configure(Config());
+  PetscInt rows = 0, columns = 0;
+  check(MatGetSize(A.mat, &rows, &columns), "MatGetSize");
+  if (rows != columns || rows == 0)
+    throw SolverError(SolverStatus::InvalidInput, "petsc: the distributed matrix must be square and non-empty");
+  Stopwatch watch;
+  s.report = SolverReport{};
+  s.report.ordering = is_factorization(s.pc_type) ? s.factor_solver : "";
+  s.factored = false;
+  s.pattern = detail::Pattern{};
+  if (!s.distributed || Mat(s.A) != A.mat) {
+    s.A.share(A.mat);
+    s.new_ksp();
   }
-  double local[2] = {row_sum, row_norm}, global[2] = {0.0, 0.0};
-  MPI_Allreduce(local, global, 2, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
-  s.singular = global[0] <= 1e-12 * global[1];
-  s.null_space.reset();
-  if (s.singular) {
-    check(MatNullSpaceCreate(PETSC_COMM_WORLD, PETSC_TRUE, 0, nullptr, s.null_space.out()), "MatNullSpaceCreate");
-    // MUMPS stops at a zero pivot unless told to detect it (ICNTL(24)); the solution is then one
-    // of the singular system's, made mean-free below.
-    if (is_factorization(s.pc_type) && s.factor_solver == "mumps") s.passed.add("mat_mumps_icntl_24", "1");
-  }
-  check(MatSetNullSpace(s.A, s.null_space), "MatSetNullSpace");
-  check(MatSetTransposeNullSpace(s.A, s.null_space), "MatSetTransposeNullSpace");
-  s.passed.apply();
-  check(KSPSetOperators(s.ksp, s.A, s.A), "KSPSetOperators");
-  check(KSPSetTolerances(s.ksp, s.rtol, 0.0, PETSC_DEFAULT, s.max_it), "KSPSetTolerances");
-  // cg's rtol then means what it means for the "cg" backend: the true residual.
-  if (s.effective_ksp_type() == "cg") check(KSPSetNormType(s.ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType", true);
-  check(KSPSetOptionsPrefix(s.ksp, s.passed.prefix().c_str()), "KSPSetOptionsPrefix");
-  // The factor (MUMPS) reads its -mat_ options under the matrix's prefix.
-  check(MatSetOptionsPrefix(s.A, s.passed.prefix().c_str()), "MatSetOptionsPrefix");
-  check(KSPSetFromOptions(s.ksp), "KSPSetFromOptions", true);
-  const PetscErrorCode setup = KSPSetUp(s.ksp);
-  if (setup != 0) {
-    std::string message = first_petsc_message;
-    first_petsc_message.clear();
-    PC pc = nullptr;
-    KSPGetPC(s.ksp, &pc);
-    PCFailedReason reason = PC_NOERROR;
-    if (pc != nullptr) PCGetFailedReason(pc, &reason);
-    s.fail(reason == PC_FACTOR_STRUCT_ZEROPIVOT || reason == PC_FACTOR_NUMERIC_ZEROPIVOT
-               ? SolverStatus::NotPositiveDefinite
-               : SolverStatus::NumericalIssue,
-           "petsc: setting up " + s.effective_ksp_type() + " + " + s.pc_type + " failed: " + message);
-  }
+  s.distributed = true;
+  s.set_up();
   s.report.factorize_seconds = watch.elapsed();
   s.report.status = SolverStatus::Success;
   s.report.message.clear();
@@ -479,63 +596,52 @@ void PetscLinearSolver::factorize(const SpMat& A) {
 
 Eigen::MatrixXd PetscLinearSolver::solve(const Eigen::MatrixXd& B) {
   auto& s = *impl_;
-  if (!s.factored)
+  if (!s.factored || s.distributed)
     throw SolverError(SolverStatus::NotAnalyzed, "petsc: solve() called before a successful factorize()");
   detail::check_rhs(B, s.pattern.rows, "petsc");
-  Stopwatch watch;
-  OwnedVec b, x, r;
-  check(MatCreateVecs(s.A, x.out(), b.out()), "MatCreateVecs");
-  check(VecDuplicate(b, r.out()), "VecDuplicate");
   Eigen::MatrixXd X(B.rows(), B.cols());
-  int iterations = 0;
-  double worst = 0.0;
-  for (Eigen::Index c = 0; c < B.cols(); ++c) {
-    const Eigen::VectorXd column = B.col(c);
-    set_local(b, s.rows, column.data());
-    // The compatible part of b (what the null space leaves solvable); the residual is measured on it.
-    if (s.singular) check(MatNullSpaceRemove(s.null_space, b), "MatNullSpaceRemove");
-    check(KSPSolve(s.ksp, b, x), "KSPSolve");
-    KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
-    PetscInt its = 0;
-    check(KSPGetConvergedReason(s.ksp, &reason), "KSPGetConvergedReason");
-    check(KSPGetIterationNumber(s.ksp, &its), "KSPGetIterationNumber");
-    iterations = std::max(iterations, int(its));
-    s.report.iterations = iterations;
-    if (reason < 0) {
-      std::ostringstream os;
-      os << "petsc: " << s.effective_ksp_type() << " + " << s.pc_type << " diverged: " << KSPConvergedReasons[reason]
-         << " after " << its << " iterations (column " << c << ", rtol " << s.rtol << ", max_it " << s.max_it << ")";
-      s.report.solve_seconds = watch.elapsed();
-      s.fail(status_of(reason), os.str());
-    }
-    if (s.singular) check(MatNullSpaceRemove(s.null_space, x), "MatNullSpaceRemove");
-    PetscReal nb = 0.0, nr = 0.0;
-    check(MatMult(s.A, x, r), "MatMult");
-    check(VecAYPX(r, -1.0, b), "VecAYPX");
-    check(VecNorm(r, NORM_2, &nr), "VecNorm");
-    check(VecNorm(b, NORM_2, &nb), "VecNorm");
-    const double relative_residual = nb > 0.0 ? double(nr / nb) : double(nr);
-    // KSP stops on its recurrence residual; as in the "cg" backend the true one decides, with the
-    // same slack. A factorization's rounding is not held to rtol (it was never asked to meet it).
-    if (!is_factorization(s.pc_type) && !(relative_residual <= 10.0 * s.rtol)) {
-      std::ostringstream os;
-      os << "petsc: " << s.effective_ksp_type() << " + " << s.pc_type << ": no convergence: true relative residual "
-         << relative_residual << " > 10 rtol = " << 10.0 * s.rtol << " after " << its << " iterations (column " << c
-         << "; KSP said " << KSPConvergedReasons[reason] << ")";
-      s.report.solve_seconds = watch.elapsed();
-      s.fail(SolverStatus::NoConvergence, os.str());
-    }
-    worst = std::max(worst, relative_residual);
-    s.report.message = std::string("KSP ") + KSPConvergedReasons[reason];
-    gather(x, X.col(c).data());
-  }
-  if (!s.warned) {
-    warn_unused(s.passed, "linear solver 'petsc'");
-    s.warned = true;
-  }
-  s.report.residual = worst;
-  s.report.status = SolverStatus::Success;
-  s.report.solve_seconds = watch.elapsed();
+  s.solve_columns(
+      B.cols(),
+      [&](Eigen::Index c, Vec b) {
+        const Eigen::VectorXd column = B.col(c);
+        set_local(b, s.rows, column.data());
+      },
+      [&](Eigen::Index c, Vec x) { gather(x, X.col(c).data()); });
+  return X;
+}
+
+Eigen::MatrixXd PetscLinearSolver::solve_distributed(const Eigen::MatrixXd& B) {
+  auto& s = *impl_;
+  if (!s.factored || !s.distributed)
+    throw SolverError(SolverStatus::NotAnalyzed,
+                      "petsc: solve_distributed() called before a successful factorize_distributed()");
+  PetscInt begin = 0, end = 0;
+  check(MatGetOwnershipRange(s.A, &begin, &end), "MatGetOwnershipRange");
+  // A wrong size on one rank must stop every rank, not leave the others waiting in KSPSolve.
+  long long local[2] = {B.rows() == Eigen::Index(end - begin) && B.allFinite() ? 0 : 1, B.cols()}, worst[2] = {0, 0};
+  long long least_columns = B.cols();
+  MPI_Allreduce(local, worst, 2, MPI_LONG_LONG, MPI_MAX, PETSC_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &least_columns, 1, MPI_LONG_LONG, MPI_MIN, PETSC_COMM_WORLD);
+  if (worst[0] != 0 || worst[1] != least_columns)
+    throw SolverError(SolverStatus::InvalidInput,
+                      "petsc: solve_distributed() needs each rank's own rows of the right-hand sides (" +
+                          std::to_string(end - begin) + " here, " + std::to_string(B.rows()) +
+                          " given), finite, and the same number of columns on every rank");
+  Eigen::MatrixXd X(B.rows(), B.cols());
+  s.solve_columns(
+      B.cols(),
+      [&](Eigen::Index c, Vec b) {
+        PetscScalar* values = nullptr;
+        check(VecGetArray(b, &values), "VecGetArray");
+        Eigen::Map<Eigen::VectorXd>(values, B.rows()) = B.col(c);
+        check(VecRestoreArray(b, &values), "VecRestoreArray");
+      },
+      [&](Eigen::Index c, Vec x) {
+        const PetscScalar* values = nullptr;
+        check(VecGetArrayRead(x, &values), "VecGetArrayRead");
+        X.col(c) = Eigen::Map<const Eigen::VectorXd>(values, X.rows());
+        check(VecRestoreArrayRead(x, &values), "VecRestoreArrayRead");
+      });
   return X;
 }
 
@@ -554,6 +660,10 @@ struct SlepcEigenSolver::Impl {
   int guard = -1;
   std::string pc_type = "gamg";  // lobpcg's preconditioner
   PrefixedOptions passed;
+  int iterations = 0;  // of the last solve
+
+  template <class Take>
+  Eigen::VectorXd solve_pencil(Mat K, Mat M, int k, Take take);
 };
 
 SlepcEigenSolver::SlepcEigenSolver() : impl_(std::make_unique<Impl>()) {}
@@ -606,6 +716,91 @@ void SlepcEigenSolver::configure(const Config& options) {
   Runtime::ensure();
 }
 
+/// The k smallest eigenpairs of the pencil (K, M), both spread over the ranks: K = -L, or
+/// K = -L - shift M for lobpcg (its values are shifted back here). Returns the values, ascending,
+/// on every rank, and hands take(i, v) each vector v, M-normalized, in that order. The one EPS
+/// set-up of both front ends.
+template <class Take>
+Eigen::VectorXd SlepcEigenSolver::Impl::solve_pencil(Mat K, Mat M, int k, Take take) {
+  PetscInt n = 0;
+  check(MatGetSize(K, &n, nullptr), "MatGetSize");
+  const bool lobpcg = method == "lobpcg";
+  check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  const int extra = guard >= 0 ? guard : std::max(6, k / 4);
+  const PetscInt nev = std::min<PetscInt>(n, PetscInt(k + extra));
+  OwnedEps eps;
+  check(EPSCreate(PETSC_COMM_WORLD, eps.out()), "EPSCreate");
+  check(EPSSetOperators(eps, K, M), "EPSSetOperators");
+  check(EPSSetProblemType(eps, EPS_GHEP), "EPSSetProblemType");
+  // A wide subspace by default: the sphere's eigenvalues come in near-degenerate clusters (2l + 1
+  // each), and with SLEPc's default (about 2 nev) a run on two ranks now and then skipped a member.
+  const PetscInt subspace = ncv > 0 ? PetscInt(ncv) : std::min<PetscInt>(n, std::max<PetscInt>(3 * nev, nev + 40));
+  check(EPSSetDimensions(eps, nev, subspace, PETSC_DEFAULT), "EPSSetDimensions", true);
+  check(EPSSetTolerances(eps, tolerance, max_iterations), "EPSSetTolerances");
+  ST st = nullptr;
+  KSP ksp = nullptr;
+  check(EPSGetST(eps, &st), "EPSGetST");
+  if (!lobpcg) {
+    // Every mu >= 0 > shift, so the values nearest the target are exactly the smallest ones, and
+    // K - shift M is positive definite although K is singular: a Cholesky factorization exists.
+    check(EPSSetType(eps, EPSKRYLOVSCHUR), "EPSSetType");
+    check(STSetType(st, STSINVERT), "STSetType");
+    check(EPSSetTarget(eps, shift), "EPSSetTarget");
+    check(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE), "EPSSetWhichEigenpairs");
+    check(STGetKSP(st, &ksp), "STGetKSP");
+    setup_ksp(ksp, "preonly", "cholesky", "mumps");
+  } else {
+    // The preconditioner is built from K - shift M itself and never factorized.
+    check(EPSSetType(eps, EPSLOBPCG), "EPSSetType");
+    check(EPSSetWhichEigenpairs(eps, EPS_SMALLEST_REAL), "EPSSetWhichEigenpairs");
+    check(STSetType(st, STPRECOND), "STSetType");
+    check(STGetKSP(st, &ksp), "STGetKSP");
+    setup_ksp(ksp, "preonly", pc_type, "");
+  }
+  passed.apply();
+  check(EPSSetOptionsPrefix(eps, passed.prefix().c_str()), "EPSSetOptionsPrefix");
+  check(EPSSetFromOptions(eps), "EPSSetFromOptions", true);
+  check(EPSSolve(eps), "EPSSolve");
+  warn_unused(passed, "eigen solver 'slepc'");
+
+  PetscInt converged = 0, its = 0;
+  EPSConvergedReason reason = EPS_CONVERGED_ITERATING;
+  check(EPSGetConverged(eps, &converged), "EPSGetConverged");
+  check(EPSGetIterationNumber(eps, &its), "EPSGetIterationNumber");
+  check(EPSGetConvergedReason(eps, &reason), "EPSGetConvergedReason");
+  iterations = int(its);
+  if (converged < k) {
+    std::ostringstream os;
+    os << "slepc: " << method << " found " << converged << " of " << k << " eigenpairs: " << EPSConvergedReasons[reason]
+       << " after " << its << " iterations (tolerance " << tolerance << ", max_iterations " << max_iterations << ")";
+    throw SolverError(SolverStatus::NoConvergence, os.str());
+  }
+  Eigen::VectorXd all(converged);
+  for (PetscInt i = 0; i < converged; ++i) {
+    PetscScalar re = 0.0, im = 0.0;
+    check(EPSGetEigenvalue(eps, i, &re, &im), "EPSGetEigenvalue");
+    all[i] = lobpcg ? re + shift : re;
+  }
+  std::vector<PetscInt> order(static_cast<std::size_t>(converged));
+  std::iota(order.begin(), order.end(), PetscInt(0));
+  std::sort(order.begin(), order.end(), [&](PetscInt a, PetscInt b) { return all[a] < all[b]; });
+  Eigen::VectorXd values(k);
+  OwnedVec v, Mv;
+  check(MatCreateVecs(K, v.out(), Mv.out()), "MatCreateVecs");
+  for (int i = 0; i < k; ++i) {
+    const PetscInt j = order[std::size_t(i)];
+    values[i] = all[j];
+    check(EPSGetEigenvector(eps, j, v, nullptr), "EPSGetEigenvector");
+    // M-normalized, as the other solvers return (u^T M u over every rank).
+    PetscScalar norm2 = 0.0;
+    check(MatMult(M, v, Mv), "MatMult");
+    check(VecDot(v, Mv, &norm2), "VecDot");
+    check(VecScale(v, 1.0 / std::sqrt(double(norm2))), "VecScale");
+    take(i, Vec(v));
+  }
+  return values;
+}
+
 EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   auto& s = *impl_;
   if (L.rows() != L.cols() || M.rows() != M.cols() || L.rows() != M.rows() || L.rows() == 0)
@@ -624,8 +819,7 @@ EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   Mc.makeCompressed();
   // LOBPCG iterates on K - shift M, positive definite: K's exact zero eigenvalue broke the
   // Rayleigh-Ritz step's B-orthogonality (LAPACK sygvd failures). Its values are mu - shift.
-  const bool lobpcg = s.method == "lobpcg";
-  if (lobpcg) {
+  if (s.method == "lobpcg") {
     K -= s.shift * Mc;
     K.makeCompressed();
   }
@@ -635,80 +829,42 @@ EigenResult SlepcEigenSolver::solve(const SpMat& L, const SpMat& M, int k) {
   set_values(K, rows, Kp);
   create_matrix(Mc, rows, Mp);
   set_values(Mc, rows, Mp);
-  check(MatSetOption(Mp, MAT_SPD, PETSC_TRUE), "MatSetOption");
-
-  const int guard = s.guard >= 0 ? s.guard : std::max(6, k / 4);
-  const PetscInt nev = PetscInt(std::min<Eigen::Index>(n, k + guard));
-  OwnedEps eps;
-  check(EPSCreate(PETSC_COMM_WORLD, eps.out()), "EPSCreate");
-  check(EPSSetOperators(eps, Kp, Mp), "EPSSetOperators");
-  check(EPSSetProblemType(eps, EPS_GHEP), "EPSSetProblemType");
-  // A wide subspace by default: the sphere's eigenvalues come in near-degenerate clusters (2l + 1
-  // each), and with SLEPc's default (about 2 nev) a run on two ranks now and then skipped a member.
-  const PetscInt ncv =
-      s.ncv > 0 ? PetscInt(s.ncv) : std::min<PetscInt>(PetscInt(n), std::max<PetscInt>(3 * nev, nev + 40));
-  check(EPSSetDimensions(eps, nev, ncv, PETSC_DEFAULT), "EPSSetDimensions", true);
-  check(EPSSetTolerances(eps, s.tolerance, s.max_iterations), "EPSSetTolerances");
-  ST st = nullptr;
-  KSP ksp = nullptr;
-  check(EPSGetST(eps, &st), "EPSGetST");
-  if (s.method == "shift-invert") {
-    // Every mu >= 0 > shift, so the values nearest the target are exactly the smallest ones, and
-    // K - shift M is positive definite although K is singular: a Cholesky factorization exists.
-    check(EPSSetType(eps, EPSKRYLOVSCHUR), "EPSSetType");
-    check(STSetType(st, STSINVERT), "STSetType");
-    check(EPSSetTarget(eps, s.shift), "EPSSetTarget");
-    check(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE), "EPSSetWhichEigenpairs");
-    check(STGetKSP(st, &ksp), "STGetKSP");
-    setup_ksp(ksp, "preonly", "cholesky", "mumps");
-  } else {
-    // The preconditioner is built from K - shift M itself and never factorized.
-    check(EPSSetType(eps, EPSLOBPCG), "EPSSetType");
-    check(EPSSetWhichEigenpairs(eps, EPS_SMALLEST_REAL), "EPSSetWhichEigenpairs");
-    check(STSetType(st, STPRECOND), "STSetType");
-    check(STGetKSP(st, &ksp), "STGetKSP");
-    setup_ksp(ksp, "preonly", s.pc_type, "");
-  }
-  s.passed.apply();
-  check(EPSSetOptionsPrefix(eps, s.passed.prefix().c_str()), "EPSSetOptionsPrefix");
-  check(EPSSetFromOptions(eps), "EPSSetFromOptions", true);
-  check(EPSSolve(eps), "EPSSolve");
-  warn_unused(s.passed, "eigen solver 'slepc'");
-
-  PetscInt converged = 0, iterations = 0;
-  EPSConvergedReason reason = EPS_CONVERGED_ITERATING;
-  check(EPSGetConverged(eps, &converged), "EPSGetConverged");
-  check(EPSGetIterationNumber(eps, &iterations), "EPSGetIterationNumber");
-  check(EPSGetConvergedReason(eps, &reason), "EPSGetConvergedReason");
-  if (converged < k) {
-    std::ostringstream os;
-    os << "slepc: " << s.method << " found " << converged << " of " << k
-       << " eigenpairs: " << EPSConvergedReasons[reason] << " after " << iterations << " iterations (tolerance "
-       << s.tolerance << ", max_iterations " << s.max_iterations << ")";
-    throw SolverError(SolverStatus::NoConvergence, os.str());
-  }
-  OwnedVec v;
-  check(MatCreateVecs(Kp, v.out(), nullptr), "MatCreateVecs");
-  Eigen::VectorXd values(converged);
-  Eigen::MatrixXd vectors(n, converged);
-  for (PetscInt i = 0; i < converged; ++i) {
-    PetscScalar re = 0.0, im = 0.0;
-    check(EPSGetEigenpair(eps, i, &re, &im, v, nullptr), "EPSGetEigenpair");
-    values[i] = lobpcg ? re + s.shift : re;
-    gather(v, vectors.col(i).data());
-  }
-  std::vector<Eigen::Index> order(static_cast<std::size_t>(converged));
-  std::iota(order.begin(), order.end(), Eigen::Index(0));
-  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return values[a] < values[b]; });
   EigenResult result;
-  result.values.resize(k);
   result.vectors.resize(n, k);
-  for (int i = 0; i < k; ++i) {
-    result.values[i] = values[order[std::size_t(i)]];
-    const Eigen::VectorXd u = vectors.col(order[std::size_t(i)]);
-    result.vectors.col(i) = u / std::sqrt(u.dot(M * u));  // M-normalized, as the other solvers return
-  }
-  result.iterations = int(iterations);
+  result.values = s.solve_pencil(Kp, Mp, k, [&](int i, Vec v) { gather(v, result.vectors.col(i).data()); });
+  result.iterations = s.iterations;
+  result.method = "slepc " + s.method;
+  return result;
+}
+
+EigenResult SlepcEigenSolver::solve_distributed(const detail::PetscDistributedMatrix& L,
+                                                const detail::PetscDistributedMatrix& M, int k) {
+  auto& s = *impl_;
+  Runtime::ensure();
+  PetscInt n = 0, columns = 0, m = 0, begin = 0, end = 0;
+  check(MatGetSize(L.mat, &n, &columns), "MatGetSize");
+  check(MatGetSize(M.mat, &m, nullptr), "MatGetSize");
+  if (n != columns || n != m || n == 0)
+    throw SolverError(SolverStatus::InvalidInput, "slepc: L and M must be square, non-empty and of the same size");
+  if (k < 1 || k > n)
+    throw InputError("slepc: number of eigenpairs k = " + std::to_string(k) + " must be in [1, " + std::to_string(n) +
+                     "]");
+  // K = -L (and - shift M for lobpcg, as in solve()), a copy: L stays the caller's.
+  OwnedMat K;
+  check(MatDuplicate(L.mat, MAT_COPY_VALUES, K.out()), "MatDuplicate");
+  check(MatScale(K, -1.0), "MatScale");
+  if (s.method == "lobpcg") check(MatAXPY(K, -s.shift, M.mat, DIFFERENT_NONZERO_PATTERN), "MatAXPY");
+  check(MatSetOption(K, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
+  check(MatGetOwnershipRange(K, &begin, &end), "MatGetOwnershipRange");
+  EigenResult result;
+  result.vectors.resize(end - begin, k);
+  result.values = s.solve_pencil(K, M.mat, k, [&](int i, Vec v) {
+    const PetscScalar* values = nullptr;
+    check(VecGetArrayRead(v, &values), "VecGetArrayRead");
+    result.vectors.col(i) = Eigen::Map<const Eigen::VectorXd>(values, end - begin);
+    check(VecRestoreArrayRead(v, &values), "VecRestoreArrayRead");
+  });
+  result.iterations = s.iterations;
   result.method = "slepc " + s.method;
   return result;
 }

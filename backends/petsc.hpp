@@ -6,7 +6,9 @@
 // rank hands PETSc the triplets of its contiguous block of rows (COO assembly into an MPIAIJ
 // matrix), PETSc solves in parallel, and every rank gets the whole solution back. The distributed
 // front end (distributed/, docs/distributed.md), where no rank holds the whole surface, builds its
-// own PETSc matrices instead.
+// own PETSc matrices and hands them to the same solvers through their *_distributed entry points
+// (a handle of backends/detail/petsc_objects.hpp), so both front ends share one KSP and one EPS
+// set-up.
 // Run without mpirun, the process is an MPI singleton and everything happens on one rank.
 //
 // PETSc and SLEPc are initialized on first use (SlepcInitialize, which calls MPI_Init) and
@@ -15,6 +17,10 @@
 #include <memory>
 
 namespace corrlap {
+
+namespace detail {
+struct PetscDistributedMatrix;  // backends/detail/petsc_objects.hpp (PETSc's Mat)
+}
 
 /// Starts PETSc and SLEPc (and MPI) if they are not running yet; they are finalized at exit. For
 /// code that calls PETSc itself (distributed/) before any solver exists.
@@ -46,6 +52,14 @@ class PetscLinearSolver : public LinearSolver {
   /// True when the last factorize() found A 1 = 0 and set the constant null space.
   bool singular() const;
 
+  /// factorize() for a matrix already spread over the ranks (the distributed front end): the same
+  /// options, null space, MUMPS workspace retry, reports and failures, without analyze(). The
+  /// solver keeps a reference to A until the next factorize. Collective.
+  void factorize_distributed(const detail::PetscDistributedMatrix& A);
+  /// solve() after factorize_distributed(): B and the result hold this rank's rows only (its row
+  /// block of A, in A's order), no rank gathers the whole solution. Collective.
+  Eigen::MatrixXd solve_distributed(const Eigen::MatrixXd& B);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
@@ -66,6 +80,11 @@ class SlepcEigenSolver : public EigenSolver {
   std::vector<ParameterInfo> options() const override;
   void configure(const Config& options) override;
   EigenResult solve(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, int k) override;
+  /// solve() for L and M already spread over the ranks (the distributed front end), with the same
+  /// EPS set-up. Every rank gets the values; `vectors` holds this rank's rows only (its row block
+  /// of L, M-orthonormal over all ranks). Collective.
+  EigenResult solve_distributed(const detail::PetscDistributedMatrix& L, const detail::PetscDistributedMatrix& M,
+                                int k);
 
  private:
   struct Impl;

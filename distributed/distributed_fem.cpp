@@ -19,10 +19,9 @@ using detail::petsc_check;
 
 // An MPIAIJ matrix with this rank's rows, from the triplets of its faces (COO: PETSc sums repeated
 // (i, j) and sends the entries of other ranks' rows to them).
-Mat coo_matrix(const DistributedSurface& s, const std::vector<PetscInt>& i, const std::vector<PetscInt>& j,
-               const std::vector<PetscScalar>& values) {
-  Mat A = nullptr;
-  petsc_check(MatCreate(PETSC_COMM_WORLD, &A), "MatCreate");
+void coo_matrix(const DistributedSurface& s, const std::vector<PetscInt>& i, const std::vector<PetscInt>& j,
+                const std::vector<PetscScalar>& values, detail::PetscMatOwner& A) {
+  petsc_check(MatCreate(PETSC_COMM_WORLD, A.out()), "MatCreate");
   petsc_check(MatSetSizes(A, s.num_owned, s.num_owned, PetscInt(s.num_vertices), PetscInt(s.num_vertices)),
               "MatSetSizes");
   petsc_check(MatSetType(A, MATAIJ), "MatSetType");
@@ -33,7 +32,6 @@ Mat coo_matrix(const DistributedSurface& s, const std::vector<PetscInt>& i, cons
   petsc_check(MatSetValuesCOO(A, values.data(), INSERT_VALUES), "MatSetValuesCOO");
   petsc_check(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
   petsc_check(MatSetOption(A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE), "MatSetOption");
-  return A;
 }
 
 }  // namespace
@@ -74,8 +72,8 @@ DistributedFem::DistributedFem(const DistributedSurface& s, const Eigen::MatrixX
         m[e] = Mf(a, b);
       }
   }
-  impl_->L = coo_matrix(s, i, j, l);
-  impl_->M = coo_matrix(s, i, j, m);
+  coo_matrix(s, i, j, l, impl_->L);
+  coo_matrix(s, i, j, m, impl_->M);
 }
 
 DistributedFem::~DistributedFem() = default;

@@ -1,11 +1,10 @@
 #include "distributed_poisson.hpp"
 
 #include <mpi.h>
-#include <petscksp.h>
+#include <petscmat.h>
 
 #include <algorithm>
 #include <cmath>
-#include <corrlap/core/stopwatch.hpp>
 
 #include "detail/petsc_matrices.hpp"
 
@@ -14,16 +13,16 @@ namespace corrlap {
 namespace {
 
 using detail::petsc_check;
+using detail::PetscMatOwner;
+using detail::PetscVecOwner;
 
 // A vector of the rows owned here with the given values (#owned).
-Vec owned_vector(const DistributedSurface& s, const Eigen::VectorXd& values) {
-  Vec v = nullptr;
-  petsc_check(VecCreateMPI(PETSC_COMM_WORLD, s.num_owned, PetscInt(s.num_vertices), &v), "VecCreateMPI");
+void owned_vector(const DistributedSurface& s, const Eigen::VectorXd& values, PetscVecOwner& v) {
+  petsc_check(VecCreateMPI(PETSC_COMM_WORLD, s.num_owned, PetscInt(s.num_vertices), v.out()), "VecCreateMPI");
   PetscScalar* local = nullptr;
   petsc_check(VecGetArray(v, &local), "VecGetArray");
   std::copy(values.data(), values.data() + values.size(), local);
   petsc_check(VecRestoreArray(v, &local), "VecRestoreArray");
-  return v;
 }
 
 Eigen::VectorXd owned_values(Vec v) {
@@ -37,13 +36,11 @@ Eigen::VectorXd owned_values(Vec v) {
 }
 
 Eigen::VectorXd product(Mat A, const DistributedSurface& s, const Eigen::VectorXd& x) {
-  Vec in = owned_vector(s, x), out = nullptr;
-  petsc_check(VecDuplicate(in, &out), "VecDuplicate");
+  PetscVecOwner in, out;
+  owned_vector(s, x, in);
+  petsc_check(VecDuplicate(in, out.out()), "VecDuplicate");
   petsc_check(MatMult(A, in, out), "MatMult");
-  Eigen::VectorXd y = owned_values(out);
-  VecDestroy(&in);
-  VecDestroy(&out);
-  return y;
+  return owned_values(out);
 }
 
 double global_sum(double x) {
@@ -58,7 +55,8 @@ double global_max(double x) {
 }  // namespace
 
 DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& s, const DistributedFem& fem,
-                                                   const TestFunction& function, const Eigen::Vector3d& center) {
+                                                   const TestFunction& function, PetscLinearSolver& solver,
+                                                   const Eigen::Vector3d& center) {
   const DistributedFem::Impl& ops = fem.impl();
   const Eigen::Index n = s.num_owned;
   const TestFunctionSamples samples = sample_on_unit_sphere(function, s.mesh.positions.topRows(n), center);
@@ -80,13 +78,12 @@ DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& s, 
 
   // -L g = -M b_c with the pinned row and column eliminated (their column moves to the right-hand
   // side, the row becomes g_pin = f(q_0)): symmetric positive definite.
-  DistributedPoissonResult result;
-  Stopwatch watch;
-  Mat A = nullptr;
-  petsc_check(MatDuplicate(ops.L, MAT_COPY_VALUES, &A), "MatDuplicate");
+  PetscMatOwner A;
+  petsc_check(MatDuplicate(ops.L, MAT_COPY_VALUES, A.out()), "MatDuplicate");
   petsc_check(MatScale(A, -1.0), "MatScale");
-  Vec rhs = owned_vector(s, -Mbc), x = nullptr;
-  petsc_check(VecDuplicate(rhs, &x), "VecDuplicate");
+  PetscVecOwner rhs, x;
+  owned_vector(s, -Mbc, rhs);
+  petsc_check(VecDuplicate(rhs, x.out()), "VecDuplicate");
   // MatZeroRowsColumns reads all of x (0 times garbage can be NaN): zero except the pinned value.
   petsc_check(VecSet(x, 0.0), "VecSet");
   const PetscInt pin = PetscInt(pin_row);
@@ -95,57 +92,14 @@ DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& s, 
   petsc_check(VecAssemblyBegin(x), "VecAssemblyBegin");
   petsc_check(VecAssemblyEnd(x), "VecAssemblyEnd");
   petsc_check(MatZeroRowsColumns(A, owner ? 1 : 0, &pin, 1.0, x, rhs), "MatZeroRowsColumns");
-  // Flagged symmetric like the petsc backend's matrices (MUMPS's symmetric mode).
+  // Flagged symmetric like the petsc backend's matrices (MUMPS's symmetric mode, CG).
   petsc_check(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
 
-  // MUMPS sizes its workspace from the analysis plus ICNTL(14) percent (default 20). Some
-  // factorizations need more (sphere1 at h = 0.025 over 2 ranks: INFOG(1) = -9, "out of memory"), and
-  // a large margin up front costs memory on every run (2.83 against 2.40 GB at h = 0.004 on one
-  // rank with 100 %). So the margin is doubled only when a factorization reports too little.
-  KSP ksp = nullptr;
-  PC pc = nullptr;
-  PCFailedReason failed = PC_NOERROR;
-  for (int margin = 20;; margin *= 2) {
-    petsc_check(KSPCreate(PETSC_COMM_WORLD, &ksp), "KSPCreate");
-    petsc_check(KSPSetOperators(ksp, A, A), "KSPSetOperators");
-    petsc_check(KSPSetType(ksp, KSPPREONLY), "KSPSetType");
-    petsc_check(KSPGetPC(ksp, &pc), "KSPGetPC");
-    petsc_check(PCSetType(pc, PCCHOLESKY), "PCSetType");
-    petsc_check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "PCFactorSetMatSolverType");
-    Mat factor = nullptr;
-    petsc_check(PCFactorSetUpMatSolverType(pc), "PCFactorSetUpMatSolverType");
-    petsc_check(PCFactorGetMatrix(pc, &factor), "PCFactorGetMatrix");
-    petsc_check(MatMumpsSetIcntl(factor, 14, margin), "MatMumpsSetIcntl");
-    petsc_check(KSPSetUp(ksp), "KSPSetUp (MUMPS's Cholesky)");
-    petsc_check(PCGetFailedReason(pc, &failed), "PCGetFailedReason");
-    // The reason is rank-local: every rank must agree on retrying (the factorization is collective).
-    int retry = failed == PC_FACTOR_OUTMEMORY && margin < 1000 ? 1 : 0, any = 0;
-    MPI_Allreduce(&retry, &any, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
-    if (!any) break;
-    KSPDestroy(&ksp);
-  }
-  result.report.factorize_seconds = watch.lap();
-  petsc_check(KSPSolve(ksp, rhs, x), "KSPSolve");
-  KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
-  petsc_check(KSPGetConvergedReason(ksp, &reason), "KSPGetConvergedReason");
-  if (reason < 0) {
-    PCGetFailedReason(pc, &failed);
-    KSPDestroy(&ksp);
-    VecDestroy(&rhs);
-    VecDestroy(&x);
-    MatDestroy(&A);
-    throw SolverError(failed == PC_FACTOR_OUTMEMORY ? SolverStatus::OutOfMemory : SolverStatus::NumericalIssue,
-                      std::string("distributed Poisson: MUMPS's Cholesky failed: ") + KSPConvergedReasons[reason] +
-                          " (PC " + PCFailedReasons[failed] + ")");
-  }
-  result.report.solve_seconds = watch.lap();
-  result.report.status = SolverStatus::Success;
-  result.report.ordering = "mumps";
-  result.g = owned_values(x);
-  KSPDestroy(&ksp);
-  VecDestroy(&rhs);
-  VecDestroy(&x);
-  MatDestroy(&A);
+  // The backend's one KSP set-up: every option, its reports and failures.
+  DistributedPoissonResult result;
+  solver.factorize_distributed(detail::PetscDistributedMatrix{A});
+  result.g = solver.solve_distributed(owned_values(rhs));
+  result.report = solver.info();
 
   // neumann_residual and poisson_errors of problems.hpp, as sums over the ranks.
   Eigen::VectorXd r = product(ops.L, s, result.g) - Mbc;

@@ -8,9 +8,17 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/pipeline/front_end.hpp>
 #include <cstdio>
 #include <iostream>
 #include <optional>
+
+#if defined(CORRLAP_WITH_PETSC)
+#include <corrlap/core/stopwatch.hpp>
+#include <corrlap/distributed/distributed_eigs.hpp>
+#include <corrlap/distributed/distributed_surface.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#endif
 
 #include "command.hpp"
 #include "operator_options.hpp"
@@ -27,8 +35,72 @@ struct EigsArgs {
   OutputOptions output;
 };
 
+// The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
+FrontEndRequest front_end_request(const EigsArgs& a) {
+  FrontEndRequest r;
+  r.task = FrontEndRequest::Task::Eigen;
+  r.implicit_shape = !a.options.source.shape.empty() || !a.options.source.polynomial.empty();
+  r.normals = a.options.normals.source;
+  r.normals_from_file = !a.options.normals.face_file.empty() || !a.options.normals.vertex_file.empty();
+  r.method = a.options.method.method;
+  r.method_parameters = a.options.method.config();
+  r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
+  return r;
+}
+
+void print_values(const Eigen::VectorXd& values, std::optional<StagedFile>& out, const OutputUnits& units) {
+  if (!out) {
+    for (Eigen::Index i = 0; i < values.size(); ++i) std::printf("%.17g\n", values[i]);
+    return;
+  }
+  write_scalars(out->path(), values, units.scalar_comments("eigenvalues mu of -L u = mu M u, ascending", 2));
+  out->commit();
+}
+
+#if defined(CORRLAP_WITH_PETSC)
+// False when the distributed front end refused the input (pinched voxels, normals the serial method
+// would clamp): its refusals are collective, so every rank then takes the serial front end. The
+// eigenvectors stay distributed: the command writes only the values.
+bool run_distributed(const EigsArgs& a) {
+  // The solver's options first: a bad key fails before the assembly, on every rank.
+  SlepcEigenSolver solver;
+  solver.configure(a.solver.config());
+  std::optional<StagedFile> out;  // checked before the computation; rank 0 writes
+  if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
+  const SurfaceInput input = a.options.source.input();
+  const auto& shape_input = std::get<ImplicitShapeInput>(input);
+  const ImplicitShape shape = make_implicit_shape(shape_input.shape, shape_input.center);
+  std::optional<DistributedSurface> surface_part;
+  std::optional<DistributedFem> fem_part;
+  try {
+    surface_part.emplace(distributed_surface(shape, shape_input.digitization));
+    fem_part.emplace(*surface_part, true_face_normals(shape, surface_part->mesh));
+  } catch (const InputError& e) {
+    if (is_output_rank()) std::cerr << "note: " << e.what() << "; using the serial front end\n";
+    return false;
+  }
+  const Stopwatch watch;
+  const EigenResult r =
+      distributed_eigs(*fem_part, int(std::min<std::int64_t>(a.k, surface_part->num_vertices)), solver);
+  const double seconds = watch.elapsed();
+  if (!r.values.allFinite()) throw NumericalError("eigs: the eigen solver returned a value that is not finite");
+  if (!is_output_rank()) return true;
+  const OutputUnits units = a.output.parse(VoxelFrame(a.options.source.h, Eigen::Vector3d::Zero()));
+  print_values(units.inverse_areas(r.values), out, units);
+  if (r.values.size() < a.k) std::cerr << "eigs: only " << r.values.size() << " eigenvalues exist\n";
+  std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << surface_part->num_vertices << " x "
+            << surface_part->num_vertices << " problem with " << r.method << " (" << r.iterations
+            << " iterations) on the distributed front end over " << surface_part->ranks << " ranks in " << seconds
+            << " s; values in 1/length^2 of " << units.name() << " units\n";
+  return true;
+}
+#endif
+
 void run(const EigsArgs& a) {
   if (a.k <= 0) throw InputError("-k must be positive");
+#if defined(CORRLAP_WITH_PETSC)
+  if (choose_front_end(front_end_request(a)) == FrontEnd::Distributed && run_distributed(a)) return;
+#endif
   std::optional<StagedFile> out;  // checked before the computation; under mpirun rank 0 writes
   if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const OperatorOptions::Input in = a.options.prepare();
@@ -53,14 +125,7 @@ void run(const EigsArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!r.values.allFinite()) throw NumericalError("eigs: the eigen solver returned a value that is not finite");
   const Eigen::VectorXd values = units.inverse_areas(r.values);
-  if (!is_output_rank()) {
-    // rank 0 prints or writes the values
-  } else if (a.out.empty()) {
-    for (Eigen::Index i = 0; i < values.size(); ++i) std::printf("%.17g\n", values[i]);
-  } else {
-    write_scalars(out->path(), values, units.scalar_comments("eigenvalues mu of -L u = mu M u, ascending", 2));
-    out->commit();
-  }
+  if (is_output_rank()) print_values(values, out, units);  // rank 0 prints or writes the values
   // A value -lambda < 0 means L u = lambda M u with lambda > 0: L is not negative semi-definite
   // (tolerance: rounding of the dense or shift-invert solve, relative to the largest value).
   const double scale = std::max(1.0, r.values.size() ? r.values.cwiseAbs().maxCoeff() : 0.0);  // world units

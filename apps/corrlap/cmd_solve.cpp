@@ -10,6 +10,7 @@
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/text_io.hpp>
+#include <corrlap/pipeline/front_end.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/problems/test_functions.hpp>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include <optional>
 
 #if defined(CORRLAP_WITH_PETSC)
+#include <corrlap/backends/petsc.hpp>
 #include <corrlap/distributed/distributed_fem.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
@@ -48,25 +50,27 @@ struct SolveArgs {
   bool json = false;
 };
 
-#if defined(CORRLAP_WITH_PETSC)
-// Whether the distributed front end (docs/distributed.md) computes exactly this command: the petsc
-// solver with its defaults (MUMPS's Cholesky), the fem method with its defaults and the true normals
-// of an implicit shape, the Poisson problem with a test function. Anything else takes the serial
-// front end (every rank builds the whole surface, the backend distributes the solve).
-bool distributed_front_end_applies(const SolveArgs& a) {
-  const Config config = a.solver.config();
-  for (const std::string& key : config.keys())
-    if (key != "solver") return false;
-  const bool true_normals = (a.normals.source == "auto" || a.normals.source == "true") && a.normals.face_file.empty() &&
-                            a.normals.vertex_file.empty();
-  return config.get_string("solver", kDefaultLinearSolver) == "petsc" && a.method.method == "fem" &&
-         a.method.config().empty() && (!a.source.shape.empty() || !a.source.polynomial.empty()) && true_normals &&
-         a.system == "poisson" && has_test_function(a.rhs);
+// The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
+FrontEndRequest front_end_request(const SolveArgs& a) {
+  FrontEndRequest r;
+  r.task = a.system == "heat" ? FrontEndRequest::Task::Heat : FrontEndRequest::Task::Poisson;
+  r.implicit_shape = !a.source.shape.empty() || !a.source.polynomial.empty();
+  r.normals = a.normals.source;
+  r.normals_from_file = !a.normals.face_file.empty() || !a.normals.vertex_file.empty();
+  r.method = a.method.method;
+  r.method_parameters = a.method.config();
+  r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
+  r.rhs_from_test_function = has_test_function(a.rhs);
+  return r;
 }
 
+#if defined(CORRLAP_WITH_PETSC)
 // False when the distributed front end refused the input (pinched voxels, normals the serial method
 // would clamp): its refusals are collective, so every rank then takes the serial front end.
 bool run_distributed(const SolveArgs& a) {
+  // The backend's options first: a bad key fails before the assembly, on every rank.
+  PetscLinearSolver solver;
+  solver.configure(a.solver.config());
   std::optional<StagedFile> out;  // checked before the computation; rank 0 writes
   if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const Stopwatch watch;
@@ -86,7 +90,7 @@ bool run_distributed(const SolveArgs& a) {
   const DistributedFem& fem = *fem_part;
   const double assemble_s = watch.elapsed();
   const TestFunction& function = test_function(a.rhs);
-  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, shape_input.center);
+  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, solver, shape_input.center);
   const Eigen::VectorXd g = gather_on_rank0(surface, r.g);
   if (!is_output_rank()) return true;
   const OutputUnits units = a.output.parse(VoxelFrame(a.source.h, Eigen::Vector3d::Zero()));
@@ -107,7 +111,7 @@ bool run_distributed(const SolveArgs& a) {
     j["rhs"] = a.rhs;
     j["boundary"] = BoundaryCondition{}.label();  // voxel surfaces inside the box are closed
     j["n"] = surface.num_vertices;
-    j["front_end"] = "distributed";
+    j["front_end"] = to_string(FrontEnd::Distributed);
     j["ranks"] = surface.ranks;
     j["assemble_s"] = assemble_s;
     j["analyze_s"] = 0.0;
@@ -116,7 +120,7 @@ bool run_distributed(const SolveArgs& a) {
     j["factor_nonzeros"] = 0;
     j["factor_flops"] = 0;
     j["solve_s"] = r.report.solve_seconds;
-    j["iterations"] = 0;
+    j["iterations"] = r.report.iterations;
     j["residual"] = r.residual;
     j["status"] = to_string(r.report.status);
     j["error_linf"] = unit_sphere ? nlohmann::json(r.errors.linf) : nlohmann::json(nullptr);
@@ -130,9 +134,11 @@ bool run_distributed(const SolveArgs& a) {
             << "method      fem (normals true)\n"
             << "solver      petsc\n"
             << "assemble    " << assemble_s << " s\n"
-            << "factorize   " << r.report.factorize_seconds << " s (mumps)\n"
-            << "solve       " << r.report.solve_seconds << " s\n"
-            << "residual    " << r.residual << "\n";
+            << "factorize   " << r.report.factorize_seconds << " s"
+            << (r.report.ordering.empty() ? std::string() : " (" + r.report.ordering + ")") << "\n"
+            << "solve       " << r.report.solve_seconds << " s";
+  if (r.report.iterations > 0) std::cout << " (" << r.report.iterations << " iterations)";
+  std::cout << "\nresidual    " << r.residual << "\n";
   if (unit_sphere)
     std::cout << "error Linf  " << r.errors.linf << "\nerror L2    " << r.errors.l2
               << " (M-weighted, docs/math.md §10.4)\n";
@@ -144,7 +150,7 @@ bool run_distributed(const SolveArgs& a) {
 
 void run(const SolveArgs& a) {
 #if defined(CORRLAP_WITH_PETSC)
-  if (distributed_front_end_applies(a) && run_distributed(a)) return;
+  if (choose_front_end(front_end_request(a)) == FrontEnd::Distributed && run_distributed(a)) return;
 #endif
   // Backend configuration first: a bad key fails before the (possibly long) assembly.
   const Config config = a.solver.config();
@@ -243,6 +249,7 @@ void run(const SolveArgs& a) {
     j["rhs"] = a.rhs;
     j["boundary"] = boundary.label();
     j["n"] = n;
+    j["front_end"] = to_string(FrontEnd::Serial);
     j["assemble_s"] = assemble_s;
     j["analyze_s"] = report.analyze_seconds;
     j["factorize_s"] = report.factorize_seconds;

@@ -3,6 +3,7 @@
 // error check of the PETSc calls made here (the backend's).
 #include <petscmat.h>
 
+#include <corrlap/backends/detail/petsc_objects.hpp>
 #include <corrlap/backends/petsc.hpp>
 
 #include "../distributed_fem.hpp"
@@ -10,15 +11,7 @@
 namespace corrlap {
 
 struct DistributedFem::Impl {
-  Mat L = nullptr, M = nullptr;
-  ~Impl() {
-    PetscBool finalized = PETSC_FALSE;
-    PetscFinalized(&finalized);
-    if (finalized == PETSC_FALSE) {
-      MatDestroy(&L);
-      MatDestroy(&M);
-    }
-  }
+  detail::PetscMatOwner L, M;
 };
 
 namespace detail {

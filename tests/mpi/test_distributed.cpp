@@ -6,12 +6,16 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <cmath>
+#include <corrlap/backends/petsc.hpp>
 #include <corrlap/backends/registry.hpp>
 #include <corrlap/discretizations/methods.hpp>
+#include <corrlap/distributed/distributed_eigs.hpp>
 #include <corrlap/distributed/distributed_fem.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/pipeline/front_end.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <string>
@@ -163,7 +167,11 @@ TEST_CASE("distributed Poisson solve equals CHOLMOD's serial solve_poisson to 1e
     const DistributedSurface d = distributed_surface(shape, params_of(c));
     const DistributedFem fem(d, true_face_normals(shape, d.mesh));
     const TestFunction& expx = test_function("expx");
-    const DistributedPoissonResult r = distributed_solve_poisson(d, fem, expx);
+    PetscLinearSolver solver;
+    solver.configure(Config());  // the default: MUMPS's Cholesky
+    const DistributedPoissonResult r = distributed_solve_poisson(d, fem, expx, solver);
+    CHECK(r.report.ordering == "mumps");
+    CHECK(r.report.message == "KSP CONVERGED_ITS");
     const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
     const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
     auto cholmod = make_linear_solver("cholmod");
@@ -177,4 +185,216 @@ TEST_CASE("distributed Poisson solve equals CHOLMOD's serial solve_poisson to 1e
     const Eigen::VectorXd whole = gather_on_rank0(d, r.g);
     if (d.rank == 0) CHECK((whole - s.g).cwiseAbs().maxCoeff() / s.g.cwiseAbs().maxCoeff() < 1e-10);
   }
+}
+
+namespace {
+
+// The 2-norm condition number of the distributed pinned system (docs/math.md §10.4): up to a
+// permutation, the serial pinned system (without the pinned row and column) plus the pinned row's
+// 1 on the diagonal, so its eigenvalues are the serial ones and 1. The serial extreme eigenvalues
+// are Rayleigh quotients of power iterations: on A for the largest, on A^{-1} (CHOLMOD) for the
+// smallest. Both quotients lie inside [lambda_min, lambda_max], so the estimate is at most the true
+// condition number; 300 steps leave it within a few percent on these sizes (the estimate moves less
+// than that over the last 100 steps).
+double condition_number(const Eigen::SparseMatrix<double>& A) {
+  auto cholmod = make_linear_solver("cholmod");
+  cholmod->compute(A);
+  Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(A.rows(), 1.0, 2.0), w = u;
+  double largest = 0.0, smallest = 0.0;
+  for (int step = 0; step < 300; ++step) {
+    u = (A * u).normalized();
+    w = cholmod->solve(w).col(0).normalized();
+  }
+  largest = std::max(u.dot(A * u), 1.0);
+  smallest = std::min(w.dot(A * w), 1.0);
+  return largest / smallest;
+}
+
+double global_norm2(const Eigen::VectorXd& owned) {
+  double squares = owned.squaredNorm();
+  MPI_Allreduce(MPI_IN_PLACE, &squares, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  return std::sqrt(squares);
+}
+
+int ranks_that(bool yes) {
+  int count = yes ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &count, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  return count;
+}
+
+}  // namespace
+
+TEST_CASE("distributed Poisson with CG + GAMG and CG + hypre equals CHOLMOD within cond(A) times the true residual") {
+  const double rtol = 1e-10;
+  for (const Case& c : {kCases[1], kCases[4]}) {
+    CAPTURE(c.shape);
+    CAPTURE(c.h);
+    const ImplicitShape shape = make_implicit_shape(c.shape);
+    const DistributedSurface d = distributed_surface(shape, params_of(c));
+    const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+    const TestFunction& expx = test_function("expx");
+    const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
+    const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
+    auto cholmod = make_linear_solver("cholmod");
+    const PoissonResult s = solve_poisson(ops, mesh.positions, expx, *cholmod);
+    const double kappa = condition_number(pinned_system(ops.L));
+    if (d.rank == 0) MESSAGE(c.shape << " h = " << c.h << ": cond_2 of the pinned system " << kappa);
+    for (const std::string pc : {"pc_type=gamg", "pc_type=hypre"}) {
+      CAPTURE(pc);
+      PetscLinearSolver solver;
+      solver.configure(Config::from_key_values({"ksp_type=cg", pc, "rtol=1e-10"}));
+      const DistributedPoissonResult r = distributed_solve_poisson(d, fem, expx, solver);
+      Eigen::VectorXd serial(d.num_owned);
+      for (int v = 0; v < d.num_owned; ++v) serial[v] = s.g[d.vertex_ids[std::size_t(v)]];
+      // |g - g*| / |g*| <= cond_2(A) |A g - b| / |b| for the pinned system A g = b, and the backend
+      // accepts cg's solution only with a true relative residual <= 10 rtol. CHOLMOD's own error
+      // (cond_2 times a few roundings) is far below; the factor 2 covers the condition number
+      // estimate being a few percent low.
+      const double error = global_norm2(r.g - serial) / global_norm2(serial);
+      if (d.rank == 0)
+        MESSAGE(pc << ": relative error " << error << ", true residual " << r.report.residual << ", "
+                   << r.report.iterations << " iterations, bound " << 2.0 * kappa * r.report.residual);
+      CHECK(r.report.residual <= 10.0 * rtol);
+      CHECK(error <= 2.0 * kappa * std::max(r.report.residual, 1e-15));
+      CHECK(error <= 2.0 * kappa * 10.0 * rtol);
+      CHECK(r.report.iterations > 1);
+      CHECK(r.report.message == "KSP CONVERGED_RTOL");
+    }
+  }
+}
+
+TEST_CASE("distributed Poisson: divergence and bad options fail on every rank with the cause") {
+  const Case c = kCases[1];
+  const ImplicitShape shape = make_implicit_shape(c.shape);
+  const DistributedSurface d = distributed_surface(shape, params_of(c));
+  const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+  const TestFunction& expx = test_function("expx");
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  // Unpreconditioned CG needs far more than 5 iterations: PETSc's reason, on every rank (the
+  // Allreduce below is reached by all of them, so none hangs in the solve).
+  {
+    PetscLinearSolver solver;
+    solver.configure(Config::from_key_values({"ksp_type=cg", "pc_type=none", "max_it=5"}));
+    std::string message;
+    try {
+      distributed_solve_poisson(d, fem, expx, solver);
+    } catch (const SolverError& e) {
+      message = e.what();
+    }
+    CHECK(message.find("DIVERGED_ITS after 5 iterations") != std::string::npos);
+    CHECK(ranks_that(message.find("DIVERGED_ITS") != std::string::npos) == size);
+    CHECK(solver.info().status == SolverStatus::NoConvergence);
+  }
+  // A pass-through value PETSc refuses, when the KSP is set up on the distributed matrix.
+  {
+    PetscLinearSolver solver;
+    solver.configure(Config::from_key_values({"ksp_type=cg", "pc_type=gamg", "pc_gamg_type=nonsense"}));
+    std::string message;
+    try {
+      distributed_solve_poisson(d, fem, expx, solver);
+    } catch (const InputError& e) {
+      message = e.what();
+    }
+    CHECK(ranks_that(message.find("nonsense") != std::string::npos) == size);
+  }
+  // A preconditioner the backend does not offer, before anything is solved.
+  {
+    PetscLinearSolver solver;
+    std::string message;
+    try {
+      solver.configure(Config::from_key_values({"pc_type=ilu0"}));
+    } catch (const InputError& e) {
+      message = e.what();
+    }
+    CHECK(ranks_that(message.find("cholesky, gamg, hypre") != std::string::npos) == size);
+  }
+  // The same solver object still solves after a failure.
+  PetscLinearSolver solver;
+  solver.configure(Config::from_key_values({"ksp_type=cg", "pc_type=gamg", "rtol=1e-8"}));
+  CHECK(distributed_solve_poisson(d, fem, expx, solver).report.residual <= 1e-7);
+}
+
+TEST_CASE("choose_front_end: the distributed front end exactly for the inputs it computes") {
+  FrontEndRequest solve;
+  solve.implicit_shape = true;
+  solve.solver = "petsc";
+  CHECK(choose_front_end(solve) == FrontEnd::Distributed);
+  FrontEndRequest eigs = solve;
+  eigs.task = FrontEndRequest::Task::Eigen;
+  eigs.solver = "slepc";
+  CHECK(choose_front_end(eigs) == FrontEnd::Distributed);
+  CHECK(to_string(choose_front_end(eigs)) == "distributed");
+  // Each departure from that scope takes the serial front end.
+  auto with = [](FrontEndRequest r, auto change) {
+    change(r);
+    return choose_front_end(r);
+  };
+  for (const FrontEndRequest& r : {solve, eigs}) {
+    CHECK(with(r, [](FrontEndRequest& q) { q.implicit_shape = false; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "ii"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "true"; }) == FrontEnd::Distributed);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals_from_file = true; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.method = "interpolated"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.method_parameters = Config::from_key_values({"mass=lumped"}); }) ==
+          FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.solver = "cholmod"; }) == FrontEnd::Serial);
+  }
+  CHECK(with(solve, [](FrontEndRequest& q) { q.task = FrontEndRequest::Task::Heat; }) == FrontEnd::Serial);
+  CHECK(with(solve, [](FrontEndRequest& q) { q.rhs_from_test_function = false; }) == FrontEnd::Serial);
+  // eigs --solver petsc: the linear solver of the serial Spectra shift-invert, not slepc.
+  CHECK(with(eigs, [](FrontEndRequest& q) { q.solver = "petsc"; }) == FrontEnd::Serial);
+}
+
+TEST_CASE("distributed eigs (slepc on the distributed L and M) equal the serial eigenvalues to 1e-8") {
+  const int k = 12;
+  for (const Case& c : {kCases[1], kCases[4]}) {
+    CAPTURE(c.shape);
+    CAPTURE(c.h);
+    const ImplicitShape shape = make_implicit_shape(c.shape);
+    const DistributedSurface d = distributed_surface(shape, params_of(c));
+    const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+    const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
+    const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
+    // The serial reference: Spectra's shift-invert with CHOLMOD (`corrlap eigs --solver cholmod`).
+    auto spectra = make_eigen_solver(kDefaultEigenSolver, Config::from_key_values({"solver=cholmod"}));
+    const EigenResult serial = spectra->solve(ops.L, ops.M, k);
+    SlepcEigenSolver solver;
+    solver.configure(Config());  // shift-invert with MUMPS's Cholesky
+    const EigenResult r = distributed_eigs(fem, k, solver);
+    REQUIRE(r.values.size() == k);
+    REQUIRE(r.vectors.rows() == d.num_owned);
+    REQUIRE(r.vectors.cols() == k);
+    // Relative to the largest value, as tests/mpi/cli_petsc.sh compares the CLI's.
+    const double difference = (r.values - serial.values).cwiseAbs().maxCoeff() / serial.values.cwiseAbs().maxCoeff();
+    if (d.rank == 0) MESSAGE("largest eigenvalue difference " << difference);
+    CHECK(difference < 1e-8);
+    // Each gathered vector is an eigenvector of the serial pencil, M-normalized: |L u + mu M u|
+    // small against |L| |u| (slepc's tolerance 1e-10 is on the relative residual of the pair).
+    for (int i = 0; i < k; ++i) {
+      const Eigen::VectorXd u = gather_on_rank0(d, r.vectors.col(i));
+      if (d.rank != 0) continue;
+      const double residual = (ops.L * u + r.values[i] * (ops.M * u)).norm() / (ops.L.cwiseAbs() * u.cwiseAbs()).norm();
+      CHECK(residual < 1e-6);
+      CHECK(std::abs(u.dot(ops.M * u) - 1.0) < 1e-10);
+    }
+  }
+}
+
+TEST_CASE("distributed eigs with slepc's LOBPCG (GAMG) finds the serial eigenvalues") {
+  // As the serial front end's LOBPCG test (test_petsc.cpp): the sphere's closed clusters 1 + 3 + 5,
+  // tolerance 1e-9, values to 1e-6 of the largest.
+  const int k = 9;
+  const Case c = kCases[1];
+  const ImplicitShape shape = make_implicit_shape(c.shape);
+  const DistributedSurface d = distributed_surface(shape, params_of(c));
+  const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+  const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
+  const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
+  const EigenResult serial = make_eigen_solver(kDefaultEigenSolver)->solve(ops.L, ops.M, k);
+  SlepcEigenSolver solver;
+  solver.configure(Config::from_key_values({"method=lobpcg", "pc_type=gamg", "tolerance=1e-9"}));
+  const EigenResult r = distributed_eigs(fem, k, solver);
+  REQUIRE(r.values.size() == k);
+  CHECK((r.values - serial.values).cwiseAbs().maxCoeff() < 1e-6 * serial.values.maxCoeff());
 }

@@ -1,0 +1,40 @@
+#pragma once
+// Which front end computes a command (docs/distributed.md): the serial one, where every rank builds
+// the whole grid, surface and operators and only the solve is shared, or the distributed one, where
+// each rank builds its slab's share. One decision for every caller: the CLI and the Python module
+// describe their command in a FrontEndRequest and run what this returns.
+#include <corrlap/core/config.hpp>
+#include <string>
+
+namespace corrlap {
+
+enum class FrontEnd { Serial, Distributed };
+
+/// "serial" or "distributed", as the CLI reports it.
+std::string to_string(FrontEnd front_end);
+
+/// What a command asks for, in the terms the choice depends on.
+struct FrontEndRequest {
+  enum class Task { Poisson, Heat, Eigen };
+  Task task = Task::Poisson;
+  bool implicit_shape = false;     ///< the surface digitizes a shape (--shape, --polynomial), not a file
+  std::string normals = "auto";    ///< the normals' source: auto, true, ii, trivial, convolved
+  bool normals_from_file = false;  ///< face or vertex normals read from a file
+  std::string method = "fem";
+  Config method_parameters;            ///< the method's parameters that were given (any takes the serial one)
+  std::string solver;                  ///< the solver's name: the linear solver, or eigs's eigen solver
+  bool rhs_from_test_function = true;  ///< Poisson: b from a test function, not from a file
+};
+
+/// The distributed front end exactly when it computes the command's own result, in a build with
+/// PETSc (-DCORRLAP_WITH_PETSC=ON): the digitization of an implicit shape, its true normals
+/// (`auto` means true there), the fem method with its default parameters (consistent mass), and
+///  - Poisson: a test function for b and the `petsc` solver, with any of its options;
+///  - Eigen: the `slepc` eigen solver, with any of its options.
+/// The heat system, volumes and meshes, other normals and methods, and every other solver take the
+/// serial front end. A surface the distributed one can only refuse once it is built (pinched
+/// voxels, normals the serial method would clamp) is refused on every rank with an InputError, and
+/// the caller then runs the serial one.
+FrontEnd choose_front_end(const FrontEndRequest& request);
+
+}  // namespace corrlap
