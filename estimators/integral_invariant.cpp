@@ -73,13 +73,13 @@ std::vector<KernelRow> kernel_rows(double digital_radius, double h) {
   return rows;
 }
 
-void check_radius(const VoxelGrid& grid, double digital_radius) {
-  if (grid.empty_box()) throw InputError("II normals: the voxel grid is empty");
+}  // namespace
+
+void ii_check_radius(int extent, double digital_radius) {
   if (!(digital_radius >= 1.0))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
                          " is smaller than one voxel (increase ii_radius, the II radius factor k, or use a finer h)",
                      "ii_radius");
-  const int extent = grid.size().maxCoeff();
   if (digital_radius > double(extent))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
                          " is larger than the volume (" + std::to_string(extent) +
@@ -87,12 +87,7 @@ void check_radius(const VoxelGrid& grid, double digital_radius) {
                      "ii_radius");
 }
 
-// A ball that covers the whole object from every surfel sees the same voxels everywhere: the
-// normals would carry no information about the surface (on a single voxel they lie in the surfels'
-// planes, which the operators then report as flipped).
-void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_radius) {
-  if (mesh.num_vertices() == 0) return;
-  const double across = (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h;
+void ii_check_radius_fits_object(double across, double digital_radius) {
   if (digital_radius >= across) {
     std::ostringstream os;
     os << "II normals: the object is " << across
@@ -101,6 +96,33 @@ void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_r
        << "a smaller ii_radius (while r/h stays at least 1) or a finer resolution";
     throw InputError(os.str(), "ii_radius");
   }
+}
+
+Eigen::Vector3d ii_normal_from_moments(const BallMoments& inner, const BallMoments& outer,
+                                       const Eigen::Vector3d& trivial_normal) {
+  // docs/math.md §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
+  const Eigen::Matrix3d C = 0.5 * (inner.covariance() + outer.covariance());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  // docs/math.md §7 step 5: orient by the trivial normal (>= 0 keeps it).
+  if (n.dot(trivial_normal) < 0.0) n = -n;
+  return n;
+}
+
+namespace {
+
+void check_radius(const VoxelGrid& grid, double digital_radius) {
+  if (grid.empty_box()) throw InputError("II normals: the voxel grid is empty");
+  ii_check_radius(grid.size().maxCoeff(), digital_radius);
+}
+
+// A ball that covers the whole object from every surfel sees the same voxels everywhere: the
+// normals would carry no information about the surface (on a single voxel they lie in the surfels'
+// planes, which the operators then report as flipped).
+void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_radius) {
+  if (mesh.num_vertices() == 0) return;
+  ii_check_radius_fits_object((mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h,
+                              digital_radius);
 }
 
 /// sum_{u=0}^{m} u^2 extended to negative m so that sum_{u=p}^{q} u^2 = G(q) - G(p-1).
@@ -533,13 +555,8 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
   }
   Eigen::MatrixX3d normals(Eigen::Index(F), 3);
   tbb::parallel_for(std::size_t(0), F, [&](std::size_t f) {
-    // docs/math.md §7 step 4: average of the two covariance matrices, smallest eigenvalue's eigenvector.
-    const Eigen::Matrix3d C = 0.5 * (mom[2 * f].covariance() + mom[2 * f + 1].covariance());
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-    Eigen::Vector3d n = es.eigenvectors().col(0);
-    // docs/math.md §7 step 5: orient by the trivial normal (>= 0 keeps it).
-    if (n.dot(mesh.surfels[f].trivial_normal()) < 0.0) n = -n;
-    normals.row(Eigen::Index(f)) = n.transpose();
+    normals.row(Eigen::Index(f)) =
+        ii_normal_from_moments(mom[2 * f], mom[2 * f + 1], mesh.surfels[f].trivial_normal()).transpose();
   });
   return normals;
 }
