@@ -72,19 +72,23 @@ std::int64_t find_record(const std::vector<std::int64_t>& records, std::size_t s
 }  // namespace
 
 DistributedSurface distributed_surface(const ImplicitShape& shape, const DigitizationParams& params) {
+  return distributed_surface(implicit_slab_source(shape, params));
+}
+
+DistributedSurface distributed_surface(const SlabSource& source) {
   ensure_petsc_runtime();  // MPI
   DistributedSurface d;
   MPI_Comm_rank(MPI_COMM_WORLD, &d.rank);
   MPI_Comm_size(MPI_COMM_WORLD, &d.ranks);
   const int below = d.rank > 0 ? d.rank - 1 : MPI_PROC_NULL;
   const int above = d.rank + 1 < d.ranks ? d.rank + 1 : MPI_PROC_NULL;
-  Eigen::Vector3i lower, upper;
-  digitization_box(params, lower, upper);
-  d.slab = slab_of(lower, upper, d.rank, d.ranks);
+  const Eigen::Vector3i lower = source.lower;
+  d.slab = slab_of(source.lower, source.upper, d.rank, d.ranks);
 
   // 1. The slab's voxels and one column each side: the +x one decides the x-surfels between this
-  //    slab and the next, the -x one the split test of the pointels on the lower plane.
-  const VoxelGrid grid = digitize_x_range(shape, params, d.slab.first - 1, d.slab.last + 1);
+  //    slab and the next, the -x one the split test of the pointels on the lower plane. A source
+  //    that fails (a bad file) fails on every rank alike: each reads the same header and values.
+  const VoxelGrid grid = collective_slab_voxels(source, d.slab.first - 1, d.slab.last + 1);
   d.grid_lower = grid.lower();
   d.grid_upper = grid.upper();
 
@@ -218,7 +222,7 @@ DistributedSurface distributed_surface(const ImplicitShape& shape, const Digitiz
       if (bool(owned[std::size_t(v)]) == (pass == 0)) order.push_back(v);
   std::vector<int> new_index(static_cast<std::size_t>(V));
   for (int i = 0; i < V; ++i) new_index[std::size_t(order[std::size_t(i)])] = i;
-  d.mesh.h = params.h;
+  d.mesh.h = source.h;
   d.mesh.surfels = std::move(surfels);
   d.mesh.faces.resize(F, 4);
   for (int f = 0; f < F; ++f)
@@ -228,7 +232,7 @@ DistributedSurface distributed_surface(const ImplicitShape& shape, const Digitiz
   d.rows.resize(std::size_t(V));
   for (int i = 0; i < V; ++i) {
     const int v = order[std::size_t(i)];
-    for (int a = 0; a < 3; ++a) d.mesh.positions(i, a) = pointel_coordinate(pointels[std::size_t(v)][a], params.h);
+    for (int a = 0; a < 3; ++a) d.mesh.positions(i, a) = pointel_coordinate(pointels[std::size_t(v)][a], source.h);
     d.vertex_ids[std::size_t(i)] = serial[std::size_t(v)];
     d.rows[std::size_t(i)] = row[std::size_t(v)];
   }

@@ -1,5 +1,5 @@
 #pragma once
-// Digitization and surface extraction of an implicit shape spread over the MPI ranks of
+// Digitization (or reading) and surface extraction of an implicit shape (or a volume) spread over the MPI ranks of
 // MPI_COMM_WORLD: rank r digitizes only its slab of x (slab.hpp) and extracts and numbers only the
 // surfels it owns. No rank ever holds the whole grid or the whole surface (docs/distributed.md).
 //
@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "slab.hpp"
+#include "slab_source.hpp"
 
 namespace corrlap {
 
@@ -49,5 +50,8 @@ struct DistributedSurface {
 /// collective call of every rank of MPI_COMM_WORLD (MPI is started when needed). Throws InputError
 /// (on every rank) when the surface is empty or has pointels extract_surface would split.
 DistributedSurface distributed_surface(const ImplicitShape& shape, const DigitizationParams& params);
+/// The same from any source of slab voxels (slab_source.hpp): a volume file read per slab gives
+/// the faces, ids and positions of extract_surface(read_volume_as_voxels(path, options)).
+DistributedSurface distributed_surface(const SlabSource& source);
 
 }  // namespace corrlap

@@ -76,13 +76,13 @@ std::vector<KernelRow> kernel_rows(double digital_radius, double h) {
   return rows;
 }
 
-void check_radius(const VoxelGrid& grid, double digital_radius) {
-  if (grid.empty_box()) throw InputError("II normals: the voxel grid is empty");
+}  // namespace
+
+void ii_check_radius(int extent, double digital_radius) {
   if (!(digital_radius >= 1.0))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
                          " is smaller than one voxel (increase ii_radius, the II radius factor k, or use a finer h)",
                      "ii_radius");
-  const int extent = grid.size().maxCoeff();
   if (digital_radius > double(extent))
     throw InputError("II normals: digital radius r/h = " + std::to_string(digital_radius) +
                          " is larger than the volume (" + std::to_string(extent) +
@@ -90,18 +90,7 @@ void check_radius(const VoxelGrid& grid, double digital_radius) {
                      "ii_radius");
 }
 
-// A ball that covers the whole object from every surfel sees the same voxels everywhere: the
-// normals would carry no information about the surface (on a single voxel they lie in the surfels'
-// planes, which the operators then report as flipped).
-// The diagonal of the object's bounding box, in voxels (0 for no vertex).
-double object_across(const SurfelMesh& mesh, double h) {
-  if (mesh.num_vertices() == 0) return 0.0;
-  return (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h;
-}
-
-void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_radius) {
-  if (mesh.num_vertices() == 0) return;
-  const double across = object_across(mesh, h);
+void ii_check_radius_fits_object(double across, double digital_radius) {
   if (digital_radius >= across) {
     std::ostringstream os;
     os << "II normals: the object is " << across
@@ -111,6 +100,28 @@ void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_r
     throw InputError(os.str(), "ii_radius");
   }
 }
+
+namespace {
+
+void check_radius(const VoxelGrid& grid, double digital_radius) {
+  if (grid.empty_box()) throw InputError("II normals: the voxel grid is empty");
+  ii_check_radius(grid.size().maxCoeff(), digital_radius);
+}
+
+// The diagonal of the object's bounding box, in voxels (0 for no vertex).
+double object_across(const SurfelMesh& mesh, double h) {
+  if (mesh.num_vertices() == 0) return 0.0;
+  return (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h;
+}
+
+// A ball that covers the whole object from every surfel sees the same voxels everywhere: the
+// normals would carry no information about the surface (on a single voxel they lie in the surfels'
+// planes, which the operators then report as flipped).
+void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_radius) {
+  if (mesh.num_vertices() == 0) return;
+  ii_check_radius_fits_object(object_across(mesh, h), digital_radius);
+}
+
 
 /// sum_{u=0}^{m} u^2 extended to negative m so that sum_{u=p}^{q} u^2 = G(q) - G(p-1).
 inline std::int64_t G(std::int64_t m) { return m * (m + 1) * (2 * m + 1) / 6; }
@@ -567,6 +578,11 @@ Eigen::MatrixX3d trivial_normals_around(const SurfelMesh& mesh) {
 }
 
 }  // namespace
+
+Eigen::Vector3d ii_normal_from_moments(const BallMoments& inner, const BallMoments& outer,
+                                       const Eigen::Vector3d& trivial_normal) {
+  return estimate_face(inner, outer, trivial_normal, Eigen::Vector3d::Zero()).normal;
+}
 
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params, IIMethod method,
                                  const ProgressFn& progress) {

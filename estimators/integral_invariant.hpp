@@ -101,6 +101,19 @@ struct ComponentMoments {
 ComponentMoments ii_component_moments(const VoxelGrid& grid, double digital_radius, double h,
                                       const std::vector<IIBall>& balls, const ProgressFn& progress = {});
 
+/// The checks of ii_face_normals on the radius, for callers that hold only part of the grid (the
+/// distributed normals): InputError when r_d < 1 or r_d > `extent` (the whole box's largest side,
+/// in voxels), and when r_d >= `across` (the whole surface's bounding-box diagonal, in voxels: the
+/// ball would cover the object from every surfel).
+void ii_check_radius(int extent, double digital_radius);
+void ii_check_radius_fits_object(double across, double digital_radius);
+
+/// One face's II normal from the moments of its two balls (docs/math.md §7 steps 4-5): the
+/// eigenvector of the smallest eigenvalue of the averaged covariance, oriented by the trivial
+/// normal. ii_face_normals applies it to every face.
+Eigen::Vector3d ii_normal_from_moments(const BallMoments& inner, const BallMoments& outer,
+                                       const Eigen::Vector3d& trivial_normal);
+
 enum class IIMethod { Fast, BruteForce };
 
 /// II normal per surfel/face (#F x 3), docs/math.md §7 (and §7.2 with params.shrink_on_thin_parts).

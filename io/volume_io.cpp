@@ -345,30 +345,68 @@ class VolumeDataSink final : public WholeValueSink {
   }
 };
 
+// The box of read_volume_as_voxels's grid for a volume of `size` voxels: [0, size - 1] - shift
+// padded by one empty voxel on every side, shift = volume_centering_shift(size) when centred.
+void padded_box(const Eigen::Vector3i& size, bool centered, Eigen::Vector3i& lower, Eigen::Vector3i& upper) {
+  const Eigen::Vector3i shift = centered ? volume_centering_shift(size) : Eigen::Vector3i::Zero();
+  lower = Eigen::Vector3i::Constant(-1) - shift;
+  upper = size - shift;
+}
+
+// The x range [x_first, x_last] of that box clipped to it; InputError naming the range when the
+// clipped range is empty.
+void clip_x_range(const std::string& path, Eigen::Vector3i& lower, Eigen::Vector3i& upper, int x_first, int x_last) {
+  if (x_first > upper.x() || x_last < lower.x() || x_first > x_last)
+    throw InputError("volume '" + path + "': the slab of x [" + std::to_string(x_first) + ", " +
+                     std::to_string(x_last) + "] is outside the voxel box's x range [" + std::to_string(lower.x()) +
+                     ", " + std::to_string(upper.x()) + "]");
+  lower.x() = std::max(lower.x(), x_first);
+  upper.x() = std::min(upper.x(), x_last);
+}
+
 // The values made inside or outside by the rule into a voxel grid as they arrive, one (y, z) row of
 // 64-bit words at a time (read_volume_as_voxels, threshold_volume): the values are never held. The
-// box is [0, size - 1] - shift padded by one empty voxel on every side; h (0: unit_size_grid_step)
-// and the shift (volume_centering_shift when centred) follow from the sizes, known at begin().
+// box is padded_box(size); h (0: unit_size_grid_step) and the shift (volume_centering_shift when
+// centred) follow from the sizes, known at begin(). With an x range (a slab: the distributed front
+// end reads one per MPI rank), the grid's box is that range of x clipped to the box, with all of y
+// and z: every value is still read and checked (a NaN anywhere fails on every rank alike), but only
+// the slab's bits are kept.
 class ThresholdSink final : public WholeValueSink {
  public:
   ThresholdSink(const InsideRule& rule, double h, bool centered) : rule_(rule), h_(h), centered_(centered) {}
+  ThresholdSink(const InsideRule& rule, double h, bool centered, int x_first, int x_last)
+      : rule_(rule), h_(h), centered_(centered), x_range_{{x_first, x_last}} {}
   void check(const std::string& path, const VolumeHeader& header) const override {
-    // The grid's rows of 64-bit words over the padded box (core/voxel_grid.hpp).
-    const Eigen::Vector3i size = header.size;
-    const double words = std::ceil(double(size.x() + 2) / 64.0) * double(size.y() + 2) * double(size.z() + 2);
-    io_detail::check_budget("volume file '" + path + "'", 8.0 * words, describe_sizes(size) + " as a bit grid");
+    // The grid's rows of 64-bit words over the (clipped) padded box (core/voxel_grid.hpp).
+    Eigen::Vector3i lower, upper;
+    box_of(path, header.size, lower, upper);
+    const Eigen::Vector3i size = upper - lower + Eigen::Vector3i::Ones();
+    const double words = std::ceil(double(size.x()) / 64.0) * double(size.y()) * double(size.z());
+    io_detail::check_budget("volume file '" + path + "'", 8.0 * words,
+                            describe_sizes(header.size) + (x_range_ ? " as the bit grid of a slab" : " as a bit grid"));
   }
   VoxelGrid grid;
   VolumeGeometry geometry;
   std::uint64_t inside = 0;
 
  private:
+  void box_of(const std::string& path, const Eigen::Vector3i& size, Eigen::Vector3i& lower,
+              Eigen::Vector3i& upper) const {
+    padded_box(size, centered_, lower, upper);
+    if (x_range_) clip_x_range(path, lower, upper, (*x_range_)[0], (*x_range_)[1]);
+  }
   void start(const VolumeHeader& header) override {
     size_ = header.size;
     geometry = header.geometry;
     shift_ = centered_ ? volume_centering_shift(size_) : Eigen::Vector3i::Zero();
     const double h = h_ == 0.0 ? unit_size_grid_step(size_) : h_;
-    grid = VoxelGrid(Eigen::Vector3i::Constant(-1) - shift_, size_ - shift_, h);  // checks the budget
+    Eigen::Vector3i lower, upper;
+    box_of(path(), size_, lower, upper);
+    grid = VoxelGrid(lower, upper, h);  // checks the budget
+    // File voxel x is bit x - shift.x - lower.x of a grid row when it lies in the grid's x range.
+    bit_offset_ = -shift_.x() - lower.x();
+    x_lo_ = lower.x() + shift_.x();
+    x_hi_ = upper.x() + shift_.x();
     if (header.type == VoxelValueType::UInt8) {
       const io_detail::InsideTest<std::uint8_t> test(rule_);
       for (int v = 0; v < 256; ++v) byte_inside_[std::size_t(v)] = !test.none && test.inside(std::uint8_t(v));
@@ -397,8 +435,8 @@ class ThresholdSink final : public WholeValueSink {
       for (std::size_t i = 0; i < count; ++i) {
         const Eigen::Vector3i v = voxel_of(first() + i);
         x_ = v.x(), y_ = v.y(), z_ = v.z();  // for messages
-        if (!is_inside(i, v.x())) continue;
-        const int b = v.x() + 1;
+        if (!is_inside(i, v.x()) || v.x() < x_lo_ || v.x() > x_hi_) continue;
+        const int b = v.x() + bit_offset_;
         grid.row(v.y() - shift_.y(), v.z() - shift_.z())[b >> 6] |= std::uint64_t{1} << (b & 63);
         ++inside;
       }
@@ -406,12 +444,16 @@ class ThresholdSink final : public WholeValueSink {
     }
     std::size_t i = 0;
     while (i < count) {
-      // Voxel x_ of row (y_, z_) is bit x_ + 1 of the grid row (the box starts one voxel before).
+      // Voxel x_ of row (y_, z_) is bit x_ + bit_offset_ of the grid row; every value is decided
+      // (NaN is refused anywhere), the bits outside the grid's x range are dropped.
       const std::size_t k = std::min(count - i, std::size_t(size_.x() - x_));
       std::uint64_t* words = grid.row(y_ - shift_.y(), z_ - shift_.z());
       for (std::size_t j = 0; j < k; ++j) {
-        const std::uint64_t bit = is_inside(i + j, x_ + int(j)) ? 1 : 0;
-        const std::size_t b = std::size_t(x_) + j + 1;
+        const int x = x_ + int(j);
+        const bool in = is_inside(i + j, x);
+        if (x < x_lo_ || x > x_hi_) continue;
+        const std::uint64_t bit = in ? 1 : 0;
+        const std::size_t b = std::size_t(x + bit_offset_);
         words[b >> 6] |= bit << (b & 63);
         inside += bit;
       }
@@ -429,6 +471,8 @@ class ThresholdSink final : public WholeValueSink {
   InsideRule rule_;
   double h_;
   bool centered_;
+  std::optional<std::array<int, 2>> x_range_;  // digital x, as given
+  int bit_offset_ = 1, x_lo_ = 0, x_hi_ = -1;  // file x range kept in the grid
   Eigen::Vector3i shift_ = Eigen::Vector3i::Zero(), size_ = Eigen::Vector3i::Zero();
   int x_ = 0, y_ = 0, z_ = 0;
   std::array<bool, 256> byte_inside_{};
@@ -521,6 +565,51 @@ VoxelGrid threshold_volume(const Volume& volume, double threshold, double h) {
 double unit_size_grid_step(const Eigen::Vector3i& size) { return size.maxCoeff() > 0 ? 2.0 / size.maxCoeff() : 1.0; }
 
 Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size) { return (size - Eigen::Vector3i::Ones()) / 2; }
+
+namespace {
+
+// Stops the read at begin(): the header is known and checked (sizes, type, and for uncompressed
+// data that the file holds the values), no value has been read.
+class HeaderSink final : public VoxelSink {
+ public:
+  struct Stop {};
+  void check(const std::string&, const VolumeHeader&) const override {}
+  void begin(const std::string&, const VolumeHeader& h) override {
+    header = h;
+    throw Stop{};
+  }
+  void consume(const std::uint8_t*, std::size_t) override {}
+  VolumeHeader header;
+};
+
+}  // namespace
+
+VolumeVoxelBox read_volume_voxel_box(const std::string& path, const VolumeReadOptions& options) {
+  if (options.h < 0.0 || !std::isfinite(options.h))
+    throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
+  HeaderSink sink;
+  try {
+    read_into(path, options, sink);
+  } catch (const HeaderSink::Stop&) {
+    VolumeVoxelBox box;
+    box.size = sink.header.size;
+    padded_box(box.size, options.centered, box.lower, box.upper);
+    box.h = options.h == 0.0 ? unit_size_grid_step(box.size) : options.h;
+    box.geometry = sink.header.geometry;
+    return box;
+  }
+  fail(path, "the reader ended without reading any value");
+}
+
+VoxelGrid read_volume_slab_as_voxels(const std::string& path, const VolumeReadOptions& options, int x_first, int x_last,
+                                     VolumeGeometry* geometry) {
+  if (options.h < 0.0 || !std::isfinite(options.h))
+    throw InputError("volume '" + path + "': h must be positive (or 0: unit size)");
+  ThresholdSink sink(options.inside, options.h, options.centered, x_first, x_last);
+  read_into(path, options, sink);
+  if (geometry) *geometry = sink.geometry;
+  return std::move(sink.grid);
+}
 
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options, VolumeGeometry* geometry) {
   if (options.h < 0.0 || !std::isfinite(options.h))

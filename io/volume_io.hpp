@@ -82,6 +82,27 @@ Eigen::Vector3i volume_centering_shift(const Eigen::Vector3i& size);
 /// Throws as read_volume (and IoError for a NaN value), and InputError when no voxel is inside.
 VoxelGrid read_volume_as_voxels(const std::string& path, const VolumeReadOptions& options,
                                 VolumeGeometry* geometry = nullptr);
+/// The box and step of read_volume_as_voxels(path, options)'s grid, from the file's header only (the
+/// reader stops before the first value): the volume's `size`, its box [lower, upper] (the volume
+/// shifted as options.centered says and padded by one empty voxel on every side), the step h and the
+/// file's geometry. Throws as read_volume for a bad header.
+struct VolumeVoxelBox {
+  Eigen::Vector3i size = Eigen::Vector3i::Zero(), lower = Eigen::Vector3i::Zero(), upper = -Eigen::Vector3i::Ones();
+  double h = 1.0;
+  VolumeGeometry geometry;
+};
+VolumeVoxelBox read_volume_voxel_box(const std::string& path, const VolumeReadOptions& options);
+/// The voxels of read_volume_as_voxels(path, options) whose x lies in [x_first, x_last] (digital
+/// coordinates, after the centering shift), in a grid whose box is that range clipped to the
+/// volume's box, with all of its y and z: the same bits, h and geometry. One slab per MPI rank
+/// (distributed/slab_source.hpp). Every value of the file is still read and decided (a bad or NaN
+/// value anywhere fails on every slab alike), but memory is the slab's bit grid (limits checked
+/// before it is allocated) plus, for a compressed file, its compressed bytes. MagicaVoxel files
+/// (at most 256^3 voxels) hold their dense values while read, as read_volume_as_voxels does. A slab
+/// with no voxel inside is no error (the volume may be empty only there); InputError when the range
+/// misses the box.
+VoxelGrid read_volume_slab_as_voxels(const std::string& path, const VolumeReadOptions& options, int x_first, int x_last,
+                                     VolumeGeometry* geometry = nullptr);
 /// 255 inside, 0 outside, over the grid's box.
 Volume voxels_to_volume(const VoxelGrid& grid);
 
