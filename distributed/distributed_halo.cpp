@@ -9,15 +9,13 @@
 #include <string>
 #include <unordered_map>
 
+#include "detail/neighbours.hpp"
+
 namespace corrlap {
 
 namespace {
 
-// A pointel relative to the box's lower corner, 21 bits per axis (distributed_surface.cpp).
-std::uint64_t pointel_key(const Eigen::Vector3i& q, const Eigen::Vector3i& lower) {
-  const Eigen::Vector3i r = q - lower;
-  return (std::uint64_t(r.x()) << 42) | (std::uint64_t(r.y()) << 21) | std::uint64_t(r.z());
-}
+using distributed_detail::pointel_key;
 
 }  // namespace
 

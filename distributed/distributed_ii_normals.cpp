@@ -12,6 +12,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "detail/neighbours.hpp"
 #include "detail/run_components.hpp"
 #include "distributed_halo.hpp"
 
@@ -19,19 +20,10 @@ namespace corrlap {
 
 namespace {
 
+using distributed_detail::exchange;
+
 using distributed_detail::label_run_components;
 using distributed_detail::RunComponents;
-
-// Sends `out` to rank `to` and returns what rank `from` sent (MPI_PROC_NULL: nothing).
-std::vector<std::int64_t> exchange(const std::vector<std::int64_t>& out, int to, int from) {
-  std::int64_t count_out = std::int64_t(out.size()), count_in = 0;
-  MPI_Sendrecv(&count_out, 1, MPI_INT64_T, to, 0, &count_in, 1, MPI_INT64_T, from, 0, MPI_COMM_WORLD,
-               MPI_STATUS_IGNORE);
-  std::vector<std::int64_t> in(static_cast<std::size_t>(count_in));
-  MPI_Sendrecv(out.data(), int(count_out), MPI_INT64_T, to, 1, in.data(), int(count_in), MPI_INT64_T, from, 1,
-               MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  return in;
-}
 
 std::int64_t find_root(std::vector<std::int64_t>& parent, std::int64_t a) {
   while (parent[std::size_t(a)] != a) {

@@ -122,7 +122,6 @@ void check_radius_fits_object(const SurfelMesh& mesh, double h, double digital_r
   ii_check_radius_fits_object(object_across(mesh, h), digital_radius);
 }
 
-
 /// sum_{u=0}^{m} u^2 extended to negative m so that sum_{u=p}^{q} u^2 = G(q) - G(p-1).
 inline std::int64_t G(std::int64_t m) { return m * (m + 1) * (2 * m + 1) / 6; }
 

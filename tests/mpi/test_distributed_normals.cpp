@@ -239,8 +239,8 @@ TEST_CASE("distributed II normals of a volume read per slab (default voxel II pa
   const IIParams params = default_ii_params(false, {}, {}, /*shrink_on_thin_parts=*/false);
   const DistributedNormals n = distributed_ii_normals(source, d, params);
   CHECK(n.halo_width == 6);  // r_d = 4 voxels
-  CHECK_THROWS_WITH_AS(distributed_ii_normals(source, d, default_ii_params(false)), doctest::Contains("not distributed yet"),
-                       InputError);
+  CHECK_THROWS_WITH_AS(distributed_ii_normals(source, d, default_ii_params(false)),
+                       doctest::Contains("not distributed yet"), InputError);
   const VoxelGrid grid = read_volume_as_voxels(path, options);
   const SurfelMesh serial = extract_surface(grid);
   check_same_normals(d, n, ii_face_normals(grid, serial, params), ii_vertex_normals(grid, serial, params));
