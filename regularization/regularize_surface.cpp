@@ -17,6 +17,12 @@
 
 namespace corrlap {
 
+namespace {
+// Below this bounding-box diagonal, in voxels, an object is a speck: two or three voxels, whose
+// curvature exceeds 1/h for real.
+constexpr double kSpeckVoxels = 4.0;
+}  // namespace
+
 double default_curvature_radius(double size, double voxel, bool voxels_from_file, double fraction) {
   const double radius = fraction * size;
   return voxels_from_file ? std::max(radius, kVoxelMinCurvatureRadius * voxel) : radius;
@@ -178,6 +184,18 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
         ++absurd;
         worst = std::max(worst, std::abs(c.H[v]));
       }
+    // An object a few voxels across (a speck of a segmentation) really curves by more than 1/h: say
+    // so rather than blame the normals.
+    const double across = mesh.num_vertices() > 0
+                              ? (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h
+                              : 0.0;
+    if (absurd > 0 && across < kSpeckVoxels)
+      throw InputError("regularization: the object is " + std::to_string(across) +
+                           " voxels across (its bounding box's diagonal), too small for a surface to be regularized: "
+                           "its mean curvature exceeds 1/h at " +
+                           std::to_string(absurd) + " of " + std::to_string(c.H.size()) +
+                           " vertices; leave it out (a speck of a segmentation), or give h_clamp to clamp H",
+                       "h_clamp");
     if (absurd > 0)
       throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / h) + " at " +
                            std::to_string(absurd) + " of " + std::to_string(c.H.size()) + " vertices (up to " +

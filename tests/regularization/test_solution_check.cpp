@@ -228,7 +228,9 @@ TEST_CASE("a one-voxel volume: the II ball covers the object, named as such, not
   // By default the II balls shrink below the object's size (docs/math.md §7.2), and what stops the
   // run is the speck's own curvature: a voxel is a ball of about half a voxel.
   CHECK(test::run_cli("regularize --volume " + vol + " --threshold 0 --no-render --out " + dir, nullptr, &err) == 1);
-  CHECK(err.find("mean curvature exceeds 1/h") != std::string::npos);
+  CHECK(err.find("voxels across (its bounding box's diagonal), too small for a surface to be regularized") !=
+        std::string::npos);
+  CHECK(err.find("(--h-clamp)") != std::string::npos);
   // With the radius kept, 4 voxels is wider than the whole box (the voxel and its padding).
   CHECK(test::run_cli("regularize --volume " + vol + " --threshold 0 --ii-thin-parts keep --no-render --out " + dir,
                       nullptr, &err) == 1);
