@@ -594,7 +594,8 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
   const bool shrink = params.shrink_on_thin_parts;
   // §7.2: an object smaller than the ball is the thinnest of parts; its balls start below its size.
   const double across = object_across(mesh, h);
-  if (shrink && rd >= across && across > 1.0) rd = std::max(1.0, kIIShrinkFactor * across);
+  const bool smaller_than_ball = shrink && rd >= across && across > 1.0;
+  if (smaller_than_ball) rd = std::max(1.0, kIIShrinkFactor * across);
   check_radius(grid, rd);
   check_radius_fits_object(mesh, h, rd);
   // docs/math.md §7.1: both balls of a surfel keep the 6-component of X of its inner voxel.
@@ -635,12 +636,16 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
     tbb::parallel_for(std::size_t(0), again.size(), [&](std::size_t i) {
       const std::size_t f = again[i];
       const FaceEstimate e = estimate_face(m[2 * i], m[2 * i + 1], mesh.surfels[f].trivial_normal(), around_of(f));
+      if (e.ambiguous) return;
       normals.row(Eigen::Index(f)) = e.normal.transpose();
-      ambiguous[f] = e.ambiguous ? 1 : 0;
+      ambiguous[f] = 0;
     });
   }
-  // Still ambiguous with a one-voxel ball (a part one or two voxels thin): the trivial normals
-  // around the face are the estimate at that scale.
+  // Still ambiguous with a one-voxel ball: no ball sees a surface there. Near a cavity of a few
+  // voxels or voxels meeting at a corner the first estimate is kept, as without shrinking. On an
+  // object smaller than the ball (a speck) every ball sees all of it, and the trivial normals
+  // around the face are the only direction there is.
+  if (!smaller_than_ball) return normals;
   for (std::size_t f = 0; f < F; ++f) {
     if (!ambiguous[f]) continue;
     const Eigen::Vector3d t = mesh.surfels[f].trivial_normal(), a = around_of(f);
