@@ -35,6 +35,7 @@ struct EigsArgs {
   OutputOptions output;
 };
 
+#if defined(CORRLAP_WITH_PETSC)
 // The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
 FrontEndRequest front_end_request(const EigsArgs& a) {
   FrontEndRequest r;
@@ -47,6 +48,7 @@ FrontEndRequest front_end_request(const EigsArgs& a) {
   r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
   return r;
 }
+#endif
 
 void print_values(const Eigen::VectorXd& values, std::optional<StagedFile>& out, const OutputUnits& units) {
   if (!out) {

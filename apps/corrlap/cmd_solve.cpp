@@ -50,6 +50,7 @@ struct SolveArgs {
   bool json = false;
 };
 
+#if defined(CORRLAP_WITH_PETSC)
 // The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
 FrontEndRequest front_end_request(const SolveArgs& a) {
   FrontEndRequest r;
@@ -63,6 +64,7 @@ FrontEndRequest front_end_request(const SolveArgs& a) {
   r.rhs_from_test_function = has_test_function(a.rhs);
   return r;
 }
+#endif
 
 #if defined(CORRLAP_WITH_PETSC)
 // False when the distributed front end refused the input (pinched voxels, normals the serial method
