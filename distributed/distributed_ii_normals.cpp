@@ -161,17 +161,8 @@ int ii_halo_width(double digital_radius) { return int(std::ceil(digital_radius))
 
 DistributedNormals distributed_ii_normals(const SlabSource& source, const DistributedSurface& surface,
                                           const IIParams& params) {
-  // §7.2's retries need each ambiguous surfel's neighbours and balls again at smaller radii; they
-  // are not distributed yet. The parameters are the same on every rank, so every rank refuses.
-  if (params.shrink_on_thin_parts)
-    throw InputError(
-        "distributed II normals: the smaller balls on thin parts (docs/math.md §7.2) are not distributed yet; "
-        "keep the radius everywhere (ii_thin_parts keep)",
-        "ii_thin_parts");
   // The checks of ii_face_normals, on the whole box and the whole surface (same on every rank).
   const double h = source.h;
-  const double rd = ii_digital_radius(h, params);
-  ii_check_radius((source.upper - source.lower + Eigen::Vector3i::Ones()).maxCoeff(), rd);
   Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::RowVector3d hi = -lo;
   for (Eigen::Index v = 0; v < surface.mesh.positions.rows(); ++v) {
@@ -180,9 +171,15 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
   }
   MPI_Allreduce(MPI_IN_PLACE, lo.data(), 3, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
   MPI_Allreduce(MPI_IN_PLACE, hi.data(), 3, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  ii_check_radius_fits_object((hi - lo).norm() / h, rd);
+  const double across = (hi - lo).norm() / h;  // the serial object_across, from exact extremes
+  const bool shrink = params.shrink_on_thin_parts;
+  const IIStartRadius start = ii_start_radius(ii_digital_radius(h, params), across, shrink);
+  const double rd = start.radius;
+  ii_check_radius((source.upper - source.lower + Eigen::Vector3i::Ones()).maxCoeff(), rd);
+  ii_check_radius_fits_object(across, rd);
 
   DistributedNormals out;
+  // §7.2's retries use smaller balls than the first: the first's halo serves them all.
   out.halo_width = ii_halo_width(rd);
   const DistributedHalo halo = distributed_halo(source, surface, out.halo_width);
 
@@ -209,45 +206,68 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
   }
 
   // Two balls per face (docs/math.md §7.1: inner and outer voxel, seed = inner voxel), each the sum
-  // over the pieces of the seed's component that reach its kernel cube.
-  const int reach = int(std::ceil(rd)) + 1;
-  std::vector<IIBall> balls;
-  std::vector<std::size_t> ball_begin;  // balls of (face row i, side s): ball_begin[2 i + s] .. [2 i + s + 1]
-  for (int f : needed) {
-    const Surfel& s = halo.mesh.surfels[std::size_t(f)];
-    const Eigen::Vector3i inner = s.inner_voxel();
-    const int piece = pieces.label_at(inner);
-    if (piece < 0) throw std::logic_error("distributed II normals: a surfel's inner voxel is not inside");
-    for (const Eigen::Vector3i& centre : {inner, s.outer_voxel()}) {
-      ball_begin.push_back(balls.size());
-      balls.push_back({centre, inner});
-      const Eigen::Vector3i cube_lower = centre - Eigen::Vector3i::Constant(reach);
-      const Eigen::Vector3i cube_upper = centre + Eigen::Vector3i::Constant(reach);
-      bool joined = false;
-      for (int other : pieces_of[piece_roots[std::size_t(piece)]]) {
-        if (other == piece) continue;
-        const bool meets = (pieces.box_lower[std::size_t(other)].array() <= cube_upper.array()).all() &&
-                           (pieces.box_upper[std::size_t(other)].array() >= cube_lower.array()).all();
-        if (!meets) continue;
-        balls.push_back({centre, pieces.representative[std::size_t(other)]});
-        joined = true;
+  // over the pieces of the seed's component that reach its kernel cube: the moments of the listed
+  // rows of `needed` at digital radius r, inner and outer per row.
+  const auto side_moments = [&](double r, const std::vector<std::size_t>& rows) {
+    const int reach = int(std::ceil(r)) + 1;
+    std::vector<IIBall> balls;
+    std::vector<std::size_t> ball_begin;  // balls of (row i, side s): ball_begin[2 i + s] .. [2 i + s + 1]
+    std::int64_t joined_balls = 0;
+    for (std::size_t row : rows) {
+      const Surfel& s = halo.mesh.surfels[std::size_t(needed[row])];
+      const Eigen::Vector3i inner = s.inner_voxel();
+      const int piece = pieces.label_at(inner);
+      if (piece < 0) throw std::logic_error("distributed II normals: a surfel's inner voxel is not inside");
+      for (const Eigen::Vector3i& centre : {inner, s.outer_voxel()}) {
+        ball_begin.push_back(balls.size());
+        balls.push_back({centre, inner});
+        const Eigen::Vector3i cube_lower = centre - Eigen::Vector3i::Constant(reach);
+        const Eigen::Vector3i cube_upper = centre + Eigen::Vector3i::Constant(reach);
+        bool joined = false;
+        for (int other : pieces_of[piece_roots[std::size_t(piece)]]) {
+          if (other == piece) continue;
+          const bool meets = (pieces.box_lower[std::size_t(other)].array() <= cube_upper.array()).all() &&
+                             (pieces.box_upper[std::size_t(other)].array() >= cube_lower.array()).all();
+          if (!meets) continue;
+          balls.push_back({centre, pieces.representative[std::size_t(other)]});
+          joined = true;
+        }
+        joined_balls += joined ? 1 : 0;
       }
-      out.joined_balls += joined ? 1 : 0;
     }
-  }
-  ball_begin.push_back(balls.size());
-  const ComponentMoments moments = ii_component_moments(halo.grid, rd, h, balls);
+    ball_begin.push_back(balls.size());
+    if (r == rd) out.joined_balls = joined_balls;  // the count of the first estimate's balls
+    const ComponentMoments moments = ii_component_moments(halo.grid, r, h, balls);
+    std::vector<BallMoments> sides(2 * rows.size());
+    for (std::size_t i = 0; i < sides.size(); ++i)
+      for (std::size_t b = ball_begin[i]; b < ball_begin[i + 1]; ++b) add(sides[i], moments[b]);
+    return sides;
+  };
 
-  Eigen::MatrixX3d normals(Eigen::Index(needed.size()), 3);
-  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces(Eigen::Index(needed.size()), 4);
-  for (std::size_t i = 0; i < needed.size(); ++i) {
-    BallMoments side[2];
-    for (std::size_t s = 0; s < 2; ++s)
-      for (std::size_t b = ball_begin[2 * i + s]; b < ball_begin[2 * i + s + 1]; ++b) add(side[s], moments[b]);
-    const Surfel& surfel = halo.mesh.surfels[std::size_t(needed[i])];
-    normals.row(Eigen::Index(i)) = ii_normal_from_moments(side[0], side[1], surfel.trivial_normal()).transpose();
-    faces.row(Eigen::Index(i)) = halo.mesh.faces.row(needed[i]);
+  // The trivial normals around a needed face come from faces within one column of it, which the
+  // halo holds (it is at least 3 columns wide), and they are sums of integer vectors: the serial bits.
+  const auto rows = Eigen::Index(needed.size());
+  Eigen::MatrixX3d trivial(rows, 3), around = Eigen::MatrixX3d::Zero(rows, 3);
+  const Eigen::MatrixX3d around_halo = shrink ? ii_trivial_normals_around(halo.mesh) : Eigen::MatrixX3d();
+  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces(rows, 4);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    trivial.row(i) = halo.mesh.surfels[std::size_t(needed[std::size_t(i)])].trivial_normal().transpose();
+    if (shrink) around.row(i) = around_halo.row(needed[std::size_t(i)]);
+    faces.row(i) = halo.mesh.faces.row(needed[std::size_t(i)]);
   }
+  std::vector<std::size_t> all(needed.size());
+  std::iota(all.begin(), all.end(), std::size_t{0});
+  const std::vector<BallMoments> first = side_moments(rd, all);
+  Eigen::MatrixX3d normals(rows, 3);
+  std::vector<std::uint8_t> ambiguous(needed.size(), 0);
+  for (std::size_t i = 0; i < needed.size(); ++i) {
+    const IIFaceEstimate e =
+        ii_estimate_from_moments(first[2 * i], first[2 * i + 1], trivial.row(Eigen::Index(i)).transpose(),
+                                 around.row(Eigen::Index(i)).transpose());
+    normals.row(Eigen::Index(i)) = e.normal.transpose();
+    ambiguous[i] = e.ambiguous ? 1 : 0;
+  }
+  if (shrink) ii_retry_thin_parts(start, trivial, around, ambiguous, normals, side_moments);
 
   // Owned faces, and owned vertices: the serial normalized sum, whose terms (the faces of a vertex)
   // come in serial face order here too.

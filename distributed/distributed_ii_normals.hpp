@@ -36,9 +36,10 @@ int ii_halo_width(double digital_radius);
 /// halo can split one component into pieces that are connected only through voxels outside it, so
 /// the ranks label the components of their slabs, join the labels across the slabs' boundaries
 /// (gathered on rank 0: two numbers per component touching a boundary), and each ball sums the
-/// moments of every piece of its seed's component. Throws InputError (on every rank) for the radii
-/// ii_face_normals refuses, and for params.shrink_on_thin_parts (docs/math.md §7.2, not distributed
-/// yet).
+/// moments of every piece of its seed's component. With params.shrink_on_thin_parts, docs/math.md
+/// §7.2's smaller balls run on the same halo (ii_retry_thin_parts), with the serial's start radius
+/// from the whole surface's extent. Throws InputError (on every rank) for the radii ii_face_normals
+/// refuses.
 DistributedNormals distributed_ii_normals(const SlabSource& source, const DistributedSurface& surface,
                                           const IIParams& params);
 

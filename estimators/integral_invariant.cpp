@@ -537,19 +537,23 @@ ComponentMoments moments_by(IIMethod method, const VoxelGrid& grid, double rd, d
   return mom;
 }
 
-// docs/math.md §7 steps 4 and 5 for one surfel, and §7.2's test of the result against `around`
-// (the unit sum of the trivial normals of the faces around it; zero: no test of the angle).
-struct FaceEstimate {
-  Eigen::Vector3d normal;
-  bool ambiguous = false;
-};
-FaceEstimate estimate_face(const BallMoments& inner, const BallMoments& outer, const Eigen::Vector3d& trivial,
-                           const Eigen::Vector3d& around) {
+}  // namespace
+
+IIStartRadius ii_start_radius(double digital_radius, double across, bool shrink_on_thin_parts) {
+  // §7.2: an object smaller than the ball is the thinnest of parts; its balls start below its size.
+  IIStartRadius start{digital_radius, shrink_on_thin_parts && digital_radius >= across && across > 1.0};
+  if (start.smaller_than_ball) start.radius = std::max(1.0, kIIShrinkFactor * across);
+  return start;
+}
+
+// docs/math.md §7 steps 4 and 5 for one surfel, and §7.2's test of the result.
+IIFaceEstimate ii_estimate_from_moments(const BallMoments& inner, const BallMoments& outer,
+                                        const Eigen::Vector3d& trivial_normal, const Eigen::Vector3d& around) {
   const Eigen::Matrix3d C = 0.5 * (inner.covariance() + outer.covariance());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-  FaceEstimate e;
+  IIFaceEstimate e;
   e.normal = es.eigenvectors().col(0);
-  if (e.normal.dot(trivial) < 0.0) e.normal = -e.normal;
+  if (e.normal.dot(trivial_normal) < 0.0) e.normal = -e.normal;
   const Eigen::Vector3d lambda = es.eigenvalues();
   static const double min_cosine = std::cos(kIIAmbiguousAngleDeg * std::numbers::pi / 180.0);
   e.ambiguous = !(lambda[0] < kIIAmbiguousEigenRatio * lambda[1]) ||
@@ -557,9 +561,7 @@ FaceEstimate estimate_face(const BallMoments& inner, const BallMoments& outer, c
   return e;
 }
 
-// Per face, the unit sum of the trivial normals of the faces that share a vertex with it (itself
-// included): the surface's direction around the face at the scale of one voxel.
-Eigen::MatrixX3d trivial_normals_around(const SurfelMesh& mesh) {
+Eigen::MatrixX3d ii_trivial_normals_around(const SurfelMesh& mesh) {
   const Eigen::Index F = mesh.num_faces();
   Eigen::MatrixX3d at_vertex = Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);
   for (Eigen::Index f = 0; f < F; ++f) {
@@ -576,11 +578,43 @@ Eigen::MatrixX3d trivial_normals_around(const SurfelMesh& mesh) {
   return around;
 }
 
-}  // namespace
+void ii_retry_thin_parts(const IIStartRadius& start, const Eigen::MatrixX3d& trivial, const Eigen::MatrixX3d& around,
+                         std::vector<std::uint8_t>& ambiguous, Eigen::MatrixX3d& normals,
+                         const IIFaceMoments& moments) {
+  const std::size_t F = ambiguous.size();
+  const auto row = [](const Eigen::MatrixX3d& m, std::size_t f) -> Eigen::Vector3d {
+    return m.row(Eigen::Index(f)).transpose();
+  };
+  for (double r = start.radius; r > 1.0;) {
+    r = std::max(1.0, r * kIIShrinkFactor);
+    std::vector<std::size_t> again;
+    for (std::size_t f = 0; f < F; ++f)
+      if (ambiguous[f]) again.push_back(f);
+    if (again.empty()) break;
+    const std::vector<BallMoments> m = moments(r, again);
+    tbb::parallel_for(std::size_t(0), again.size(), [&](std::size_t i) {
+      const std::size_t f = again[i];
+      const IIFaceEstimate e = ii_estimate_from_moments(m[2 * i], m[2 * i + 1], row(trivial, f), row(around, f));
+      if (e.ambiguous) return;
+      normals.row(Eigen::Index(f)) = e.normal.transpose();
+      ambiguous[f] = 0;
+    });
+  }
+  // Still ambiguous with a one-voxel ball: no ball sees a surface there. Near a cavity of a few
+  // voxels or voxels meeting at a corner the first estimate is kept, as without shrinking. On an
+  // object smaller than the ball (a speck) every ball sees all of it, and the trivial normals
+  // around the face are the only direction there is.
+  if (!start.smaller_than_ball) return;
+  for (std::size_t f = 0; f < F; ++f) {
+    if (!ambiguous[f]) continue;
+    const Eigen::Vector3d t = row(trivial, f), a = row(around, f);
+    normals.row(Eigen::Index(f)) = (a.dot(t) > 0.0 ? a : t).transpose();
+  }
+}
 
 Eigen::Vector3d ii_normal_from_moments(const BallMoments& inner, const BallMoments& outer,
                                        const Eigen::Vector3d& trivial_normal) {
-  return estimate_face(inner, outer, trivial_normal, Eigen::Vector3d::Zero()).normal;
+  return ii_estimate_from_moments(inner, outer, trivial_normal, Eigen::Vector3d::Zero()).normal;
 }
 
 Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, const IIParams& params, IIMethod method,
@@ -590,12 +624,9 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
         "II normals need the voxels of the surface (a surface digitized from a shape or a volume, not a mesh file)",
         "normals");
   const double h = grid.h();
-  double rd = ii_digital_radius(h, params);
   const bool shrink = params.shrink_on_thin_parts;
-  // §7.2: an object smaller than the ball is the thinnest of parts; its balls start below its size.
-  const double across = object_across(mesh, h);
-  const bool smaller_than_ball = shrink && rd >= across && across > 1.0;
-  if (smaller_than_ball) rd = std::max(1.0, kIIShrinkFactor * across);
+  const IIStartRadius start = ii_start_radius(ii_digital_radius(h, params), object_across(mesh, h), shrink);
+  const double rd = start.radius;
   check_radius(grid, rd);
   check_radius_fits_object(mesh, h, rd);
   // docs/math.md §7.1: both balls of a surfel keep the 6-component of X of its inner voxel.
@@ -607,50 +638,32 @@ Eigen::MatrixX3d ii_face_normals(const VoxelGrid& grid, const SurfelMesh& mesh, 
     balls[2 * f + 1] = {mesh.surfels[f].outer_voxel(), inner};
   }
   const ComponentMoments mom = moments_by(method, grid, rd, h, balls, progress);
-  const Eigen::MatrixX3d around = shrink ? trivial_normals_around(mesh) : Eigen::MatrixX3d();
+  const Eigen::MatrixX3d around = shrink ? ii_trivial_normals_around(mesh) : Eigen::MatrixX3d();
   const auto around_of = [&](std::size_t f) -> Eigen::Vector3d {
     return shrink ? Eigen::Vector3d(around.row(Eigen::Index(f)).transpose()) : Eigen::Vector3d::Zero();
   };
   Eigen::MatrixX3d normals(Eigen::Index(F), 3);
   std::vector<std::uint8_t> ambiguous(F, 0);
   tbb::parallel_for(std::size_t(0), F, [&](std::size_t f) {
-    const FaceEstimate e = estimate_face(mom[2 * f], mom[2 * f + 1], mesh.surfels[f].trivial_normal(), around_of(f));
+    const IIFaceEstimate e =
+        ii_estimate_from_moments(mom[2 * f], mom[2 * f + 1], mesh.surfels[f].trivial_normal(), around_of(f));
     normals.row(Eigen::Index(f)) = e.normal.transpose();
     ambiguous[f] = e.ambiguous ? 1 : 0;
   });
   if (!shrink) return normals;
-  // docs/math.md §7.2: the ambiguous surfels again, with smaller balls, until their estimate is not
-  // ambiguous or the radius is one voxel (that estimate is kept).
-  for (double r = rd; r > 1.0;) {
-    r = std::max(1.0, r * kIIShrinkFactor);
-    std::vector<std::size_t> again;
-    for (std::size_t f = 0; f < F; ++f)
-      if (ambiguous[f]) again.push_back(f);
-    if (again.empty()) break;
-    std::vector<IIBall> retry(2 * again.size());
-    for (std::size_t i = 0; i < again.size(); ++i) {
-      retry[2 * i] = balls[2 * again[i]];
-      retry[2 * i + 1] = balls[2 * again[i] + 1];
+  Eigen::MatrixX3d trivial(Eigen::Index(F), 3);
+  for (std::size_t f = 0; f < F; ++f) trivial.row(Eigen::Index(f)) = mesh.surfels[f].trivial_normal().transpose();
+  ii_retry_thin_parts(start, trivial, around, ambiguous, normals, [&](double r, const std::vector<std::size_t>& faces) {
+    std::vector<IIBall> retry(2 * faces.size());
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      retry[2 * i] = balls[2 * faces[i]];
+      retry[2 * i + 1] = balls[2 * faces[i] + 1];
     }
     const ComponentMoments m = moments_by(method, grid, r, h, retry, {});
-    tbb::parallel_for(std::size_t(0), again.size(), [&](std::size_t i) {
-      const std::size_t f = again[i];
-      const FaceEstimate e = estimate_face(m[2 * i], m[2 * i + 1], mesh.surfels[f].trivial_normal(), around_of(f));
-      if (e.ambiguous) return;
-      normals.row(Eigen::Index(f)) = e.normal.transpose();
-      ambiguous[f] = 0;
-    });
-  }
-  // Still ambiguous with a one-voxel ball: no ball sees a surface there. Near a cavity of a few
-  // voxels or voxels meeting at a corner the first estimate is kept, as without shrinking. On an
-  // object smaller than the ball (a speck) every ball sees all of it, and the trivial normals
-  // around the face are the only direction there is.
-  if (!smaller_than_ball) return normals;
-  for (std::size_t f = 0; f < F; ++f) {
-    if (!ambiguous[f]) continue;
-    const Eigen::Vector3d t = mesh.surfels[f].trivial_normal(), a = around_of(f);
-    normals.row(Eigen::Index(f)) = (a.dot(t) > 0.0 ? a : t).transpose();
-  }
+    std::vector<BallMoments> out(retry.size());
+    for (std::size_t i = 0; i < retry.size(); ++i) out[i] = m[i];
+    return out;
+  });
   return normals;
 }
 

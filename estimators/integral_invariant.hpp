@@ -114,6 +114,43 @@ void ii_check_radius_fits_object(double across, double digital_radius);
 Eigen::Vector3d ii_normal_from_moments(const BallMoments& inner, const BallMoments& outer,
                                        const Eigen::Vector3d& trivial_normal);
 
+/// docs/math.md §7.2's pieces, shared by ii_face_normals and the distributed normals (one policy).
+///
+/// The digital radius the balls start with, given the whole surface's bounding-box diagonal `across`
+/// (voxels): with shrink_on_thin_parts, an object smaller than the ball (r_d >= across > 1) starts
+/// below its own size, at max(1, kIIShrinkFactor across); otherwise at r_d.
+struct IIStartRadius {
+  double radius = 0.0;
+  bool smaller_than_ball = false;
+};
+IIStartRadius ii_start_radius(double digital_radius, double across, bool shrink_on_thin_parts);
+
+/// One face's estimate (ii_normal_from_moments) and §7.2's test of it against `around`, the unit sum
+/// of the trivial normals around the face (zero: no test of the angle).
+struct IIFaceEstimate {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  bool ambiguous = false;
+};
+IIFaceEstimate ii_estimate_from_moments(const BallMoments& inner, const BallMoments& outer,
+                                        const Eigen::Vector3d& trivial_normal, const Eigen::Vector3d& around);
+
+/// Per face (#F x 3), the unit sum of the trivial normals of the faces sharing a vertex with it
+/// (itself included): the surface's direction around the face at the scale of one voxel. The sums
+/// are of integer vectors, so any order of the faces gives the same bits.
+Eigen::MatrixX3d ii_trivial_normals_around(const SurfelMesh& mesh);
+
+/// The moments of the inner and outer balls (2 per face, in order) of the listed faces at a digital
+/// radius, for ii_retry_thin_parts.
+using IIFaceMoments = std::function<std::vector<BallMoments>(double radius, const std::vector<std::size_t>& faces)>;
+
+/// docs/math.md §7.2 after the first estimate at `start`: the faces marked `ambiguous` are estimated
+/// again with the radius times kIIShrinkFactor, down to one voxel, and take the first estimate that
+/// is not ambiguous. A face that no radius resolves keeps its first estimate, except on an object
+/// smaller than the ball, where it takes its trivial normals around (or its own trivial normal
+/// when they point away). trivial, around, normals: #F x 3 in the caller's face order; ambiguous: #F.
+void ii_retry_thin_parts(const IIStartRadius& start, const Eigen::MatrixX3d& trivial, const Eigen::MatrixX3d& around,
+                         std::vector<std::uint8_t>& ambiguous, Eigen::MatrixX3d& normals, const IIFaceMoments& moments);
+
 enum class IIMethod { Fast, BruteForce };
 
 /// II normal per surfel/face (#F x 3), docs/math.md §7 (and §7.2 with params.shrink_on_thin_parts).

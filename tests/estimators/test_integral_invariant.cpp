@@ -383,3 +383,19 @@ TEST_CASE("ii normals of an object smaller than the ball: refused at a fixed rad
     CHECK(n.row(f).dot(mesh.surfels[std::size_t(f)].trivial_normal()) > 0.0);
   }
 }
+
+TEST_CASE("ii_start_radius: an object smaller than the ball starts below its size, only when shrinking") {
+  const double across = 2.0 * std::sqrt(3.0);  // a 2-voxel cube's diagonal
+  const IIStartRadius speck = ii_start_radius(4.0, across, true);
+  CHECK(speck.smaller_than_ball);
+  CHECK(speck.radius == doctest::Approx(kIIShrinkFactor * across).epsilon(1e-15));
+  const IIStartRadius kept = ii_start_radius(4.0, across, false);
+  CHECK_FALSE(kept.smaller_than_ball);
+  CHECK(kept.radius == 4.0);
+  CHECK_FALSE(ii_start_radius(4.0, 10.0, true).smaller_than_ball);
+  CHECK(ii_start_radius(4.0, 10.0, true).radius == 4.0);
+  // One voxel or less across: nothing smaller to start from.
+  CHECK_FALSE(ii_start_radius(4.0, 1.0, true).smaller_than_ball);
+  // A ball of 1.2 voxels on a 1.5-voxel object starts at one voxel, not below.
+  CHECK(ii_start_radius(1.2, 1.2, true).radius == 1.0);
+}
