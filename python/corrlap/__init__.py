@@ -63,6 +63,13 @@ def _warn(messages):
         warnings.warn(m, RuntimeWarning, stacklevel=3)
 
 
+def _thin_parts(value):
+    """thin_parts as a string or None; its value is the library's to check (ValueError)."""
+    if value is None or isinstance(value, str):
+        return value
+    raise TypeError(f"thin_parts: expected 'shrink', 'keep' or None, got {type(value).__name__} {value!r}")
+
+
 def _real(value, name, required=False):
     """A real argument as a float, None (the default) as None. Its range is the library's to check
     (ValueError naming the parameter); here only the type: a bool, a string or a complex number is
@@ -171,7 +178,7 @@ def write_volume(path, array, affine=None, space=None):
 
 def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0="auto",
                       curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
-                      space=None, curvature_spacing=None, **params):
+                      space=None, curvature_spacing=None, thin_parts=None, **params):
     """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
     from the voxels, docs/regularization.md), in physical coordinates.
 
@@ -189,6 +196,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
     space      volume files only: None (the file's own physical space, as read_volume's affine), 'RAS'
                or 'LPS' (x and y flipped from the file's space, as `--output-space`; ValueError for a
                file that names no space, or with an array)
+    thin_parts the II normals' balls where a part is thinner than them, as ii_normals (None: "shrink")
 
     Returns V (#V, 3) in physical coordinates and F (#F, 4) int64 quads facing outwards.
     """
@@ -201,7 +209,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
         _alpha0(alpha0), _real(curvature_radius, "curvature_radius"),
         _real(curvature_spacing, "curvature_spacing"), _real(size, "size"),
         str(solver), dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"),
-        "" if space is None else str(space))
+        "" if space is None else str(space), _thin_parts(thin_parts))
     _warn(warnings)
     return V, F
 
@@ -232,7 +240,7 @@ def true_normals(shape, V, F, at="faces", center=(0.0, 0.0, 0.0)):
 
 
 def ii_normals(volume_or_shape, V, F, h=None, alpha=None, k=None, at="faces", bbox=(-10.0, 10.0), offset=5,
-               center=(0.0, 0.0, 0.0), threshold=0.0):
+               center=(0.0, 0.0, 0.0), threshold=0.0, thin_parts=None):
     """Integral-invariant normals (docs/math.md 7): covariance of the voxels in a ball of radius
     k h^alpha around each surfel.
 
@@ -244,15 +252,19 @@ def ii_normals(volume_or_shape, V, F, h=None, alpha=None, k=None, at="faces", bb
                      (the paper says 1/3); for a volume 1 and {voxel_ii_radius}, a radius of {voxel_ii_radius}
                      voxels (docs/regularization.md, "Default radii")
     at               "faces": (#F, 3); "vertices": normalized sums of face normals, (#V, 3)
+    thin_parts       "shrink": estimate again with smaller balls where the ball sees across a part
+                     thinner than itself (docs/math.md 7.2); "keep": the radius everywhere; None:
+                     the CLI's default, "shrink" for a volume and "keep" for a shape (`--ii-thin-parts`)
     """
     if isinstance(volume_or_shape, str):
         if h is None:
             raise ValueError("h: required with a shape")
         lo, hi = _bbox(bbox)
         return _core.ii_normals_shape(volume_or_shape, V, F, _real(h, "h"), lo, hi, _integer(offset, "offset"),
-                                      _np.reshape(center, (1, 3)), _real(k, "k"), _real(alpha, "alpha"), str(at))
+                                      _np.reshape(center, (1, 3)), _real(k, "k"), _real(alpha, "alpha"), str(at),
+                                      _thin_parts(thin_parts))
     return _core.ii_normals_volume(volume_or_shape, V, F, _real(h, "h"), _real(threshold, "threshold", required=True),
-                                   _real(k, "k"), _real(alpha, "alpha"), str(at))
+                                   _real(k, "k"), _real(alpha, "alpha"), str(at), _thin_parts(thin_parts))
 
 
 def curvature(V, F, face_normals=None, vertex_normals=None, radius=None, at="vertices", constant=False):

@@ -256,4 +256,11 @@ py::array_t<std::int64_t> faces_to_numpy(const FaceMatrix& f) {
   return a;
 }
 
+std::optional<bool> thin_parts_arg(const std::optional<std::string>& thin_parts) {
+  if (!thin_parts) return std::nullopt;
+  if (*thin_parts != "shrink" && *thin_parts != "keep")
+    throw py::value_error("thin_parts: '" + *thin_parts + "': expected 'shrink' or 'keep'");
+  return *thin_parts == "shrink";
+}
+
 }  // namespace corrlap::python

@@ -47,6 +47,10 @@ NormalRequest given_normals_arg(py::handle face_normals, py::handle vertex_norma
 /// None is "not given" (the default).
 Config config_arg(const py::dict& options, const std::string& what);
 
+/// thin_parts: "shrink" | "keep" (docs/math.md §7.2, the CLI's --ii-thin-parts) as
+/// IIParams::shrink_on_thin_parts; None: the input's default (default_ii_params). ValueError otherwise.
+std::optional<bool> thin_parts_arg(const std::optional<std::string>& thin_parts);
+
 /// CSC arrays (data, indices, indptr, shape) viewing the matrix's own storage: the matrix is moved
 /// into the arrays' owner, so no entry is copied.
 py::tuple sparse_out(Eigen::SparseMatrix<double>&& matrix);

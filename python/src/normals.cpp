@@ -69,21 +69,23 @@ void bind_normals(py::module_& m) {
   m.def(
       "ii_normals_shape",
       [](const std::string& shape, py::handle V, py::handle F, double h, double bbox_min, double bbox_max, int offset,
-         py::handle center, std::optional<double> k, std::optional<double> alpha, const std::string& at) {
+         py::handle center, std::optional<double> k, std::optional<double> alpha, const std::string& at,
+         std::optional<std::string> thin_parts) {
         return ii_normals(shape_voxels(shape, h, bbox_min, bbox_max, offset, center), V, F,
-                          default_ii_params(/*implicit_shape=*/true, k, alpha), at);
+                          default_ii_params(/*implicit_shape=*/true, k, alpha, thin_parts_arg(thin_parts)), at);
       },
       py::arg("shape"), py::arg("V"), py::arg("F"), py::arg("h"), py::arg("bbox_min"), py::arg("bbox_max"),
-      py::arg("offset"), py::arg("center"), py::arg("k"), py::arg("alpha"), py::arg("at"));
+      py::arg("offset"), py::arg("center"), py::arg("k"), py::arg("alpha"), py::arg("at"), py::arg("thin_parts"));
   m.def(
       "ii_normals_volume",
       [](py::handle volume, py::handle V, py::handle F, std::optional<double> h, double threshold,
-         std::optional<double> k, std::optional<double> alpha, const std::string& at) {
+         std::optional<double> k, std::optional<double> alpha, const std::string& at,
+         std::optional<std::string> thin_parts) {
         return ii_normals(array_voxels(volume, h, threshold), V, F,
-                          default_ii_params(/*implicit_shape=*/false, k, alpha), at);
+                          default_ii_params(/*implicit_shape=*/false, k, alpha, thin_parts_arg(thin_parts)), at);
       },
       py::arg("volume"), py::arg("V"), py::arg("F"), py::arg("h"), py::arg("threshold"), py::arg("k"), py::arg("alpha"),
-      py::arg("at"));
+      py::arg("at"), py::arg("thin_parts"));
   m.def(
       "curvature",
       [](py::handle V, py::handle F, py::object face_normals, py::object vertex_normals, std::optional<double> radius,

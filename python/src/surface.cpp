@@ -6,6 +6,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
+#include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
@@ -191,8 +192,11 @@ void bind_surface(py::module_& m) {
          std::optional<double> h, const std::string& method, const py::dict& params, std::optional<double> alpha0,
          std::optional<double> curvature_radius, std::optional<double> curvature_spacing, std::optional<double> size,
          const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy,
-         const std::string& space) {
+         const std::string& space, std::optional<std::string> thin_parts) {
         const InsideRule inside = inside_arg(label, threshold);
+        NormalRequest ii_normals;  // II from the voxels, with the voxel defaults but for the thin parts asked
+        if (const std::optional<bool> shrink = thin_parts_arg(thin_parts))
+          ii_normals.ii = default_ii_params(/*implicit_shape=*/false, {}, {}, shrink);
         const PhysicalSpace wanted = space_arg(space, "space");
         py::array values;
         SurfaceInput input;
@@ -234,8 +238,7 @@ void bind_surface(py::module_& m) {
           }
           check_regularizable(surface.mesh);
           check_regularization_options(surface.mesh, o);
-          const NormalFields normals =
-              resolve_normals(surface, NormalKind::Vertex, NormalRequest{}, "regularize_volume");
+          const NormalFields normals = resolve_normals(surface, NormalKind::Vertex, ii_normals, "regularize_volume");
           const RegularizedSurface r = regularize_surface(surface, normals, o);
           warnings = r.warnings;
           out = r.mesh;
@@ -249,7 +252,7 @@ void bind_surface(py::module_& m) {
       },
       py::arg("volume"), py::arg("label"), py::arg("threshold"), py::arg("affine"), py::arg("h"), py::arg("method"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("curvature_spacing"), py::arg("size"),
-      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"));
+      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"), py::arg("thin_parts"));
   m.def(
       "read_mesh",
       [](const std::string& path) {

@@ -332,6 +332,35 @@ def test_digitize_volume_equals_cli_on_the_same_raw_volume(tmp_path):
 
 
 @needs_cli
+def test_ii_normals_thin_parts_as_the_cli(tmp_path):
+    # A rod 1.5 voxels in radius along x: the 4-voxel balls see across it (docs/math.md 7.2).
+    x, y, z = np.meshgrid(np.arange(40), np.arange(12), np.arange(12), indexing="ij")
+    volume = (y - 5.5) ** 2 + (z - 5.7) ** 2 <= 1.5 ** 2
+    volume[:4] = volume[36:] = False
+    (tmp_path / "v.raw").write_bytes((volume.transpose(2, 1, 0) * 255).astype(np.uint8).tobytes())
+    V, F = corrlap.digitize_volume(volume)
+    default = corrlap.ii_normals(volume, V, F)
+    for thin_parts in ("shrink", "keep"):
+        run_cli("normals", "--volume", tmp_path / "v.raw", "--raw-dimensions", 40, 12, 12, "--normals", "ii",
+                "--ii-thin-parts", thin_parts, "--out", tmp_path / f"{thin_parts}.txt")
+        n = corrlap.ii_normals(volume, V, F, thin_parts=thin_parts)
+        assert np.array_equal(n, np.loadtxt(tmp_path / f"{thin_parts}.txt"))
+        assert np.array_equal(n, default) == (thin_parts == "shrink")  # the volume's default shrinks
+    with pytest.raises(ValueError, match="thin_parts: 'smaller'"):
+        corrlap.ii_normals(volume, V, F, thin_parts="smaller")
+    with pytest.raises(TypeError, match="thin_parts"):
+        corrlap.ii_normals(volume, V, F, thin_parts=True)
+    # regularize_volume's normals take the same choice: its default shrinks.
+    P, _ = corrlap.regularize_volume(volume)
+    P2, _ = corrlap.regularize_volume(volume, thin_parts="shrink")
+    assert np.array_equal(P, P2)
+    P3, _ = corrlap.regularize_volume(volume, thin_parts="keep")
+    assert np.abs(P - P3).max() > 0.1  # the kept radius's normals point across the rod
+    with pytest.raises(ValueError, match="thin_parts: 'no'"):
+        corrlap.regularize_volume(volume, thin_parts="no")
+
+
+@needs_cli
 @pytest.mark.parametrize("estimator,at", [("true", "faces"), ("true", "vertices"), ("ii", "faces"),
                                           ("ii", "vertices")])
 def test_normals_equal_cli_normals(sphere, tmp_path, estimator, at):
