@@ -131,8 +131,8 @@ void check_same_frame(const VoxelFrame& a, const VoxelFrame& b) {
 }  // namespace
 
 TEST_CASE("distributed problem of a volume file, II normals kept on thin parts: the serial Poisson solution") {
-  // .npy without geometry, and NRRD and NIfTI with a physical spacing and origin.
-  for (const std::string name : {"torus.npy", "torus.nrrd", "torus.nii.gz"}) {
+  // .npy and TIFF without geometry; NRRD, NIfTI and MetaImage with a physical spacing and origin.
+  for (const std::string name : {"torus.npy", "torus.nrrd", "torus.nii.gz", "torus.mha", "torus.tif"}) {
     CAPTURE(name);
     const std::string path = written(grey_torus(Eigen::Vector3d::Constant(0.75)), name);
     const SurfaceInput input = volume_input(path, 127.0);
