@@ -6,10 +6,12 @@ std::string to_string(FrontEnd front_end) { return front_end == FrontEnd::Distri
 
 FrontEnd choose_front_end(const FrontEndRequest& r) {
 #if defined(CORRLAP_WITH_PETSC)
-  // distributed/ assembles the fem method's consistent mass from each face's true normal, which
-  // needs no neighbouring voxels: any other normal or method would need a halo around the slab.
-  const bool surface_and_operators = r.implicit_shape && (r.normals == "auto" || r.normals == "true") &&
-                                     !r.normals_from_file && r.method == "fem" && r.method_parameters.empty();
+  // distributed/ assembles the fem method's consistent mass from the faces' true normals (shapes
+  // only) or II normals (their halo around the slab); other normals and methods are not distributed.
+  const bool surface = r.implicit_shape || r.volume_file;
+  const bool normals =
+      !r.normals_from_file && (r.normals == "auto" || r.normals == "ii" || (r.normals == "true" && r.implicit_shape));
+  const bool surface_and_operators = surface && normals && r.method == "fem" && r.method_parameters.empty();
   const bool problem = (r.task == FrontEndRequest::Task::Poisson && r.rhs_from_test_function && r.solver == "petsc") ||
                        (r.task == FrontEndRequest::Task::Eigen && r.solver == "slepc");
   return surface_and_operators && problem ? FrontEnd::Distributed : FrontEnd::Serial;

@@ -18,6 +18,7 @@ struct FrontEndRequest {
   enum class Task { Poisson, Heat, Eigen };
   Task task = Task::Poisson;
   bool implicit_shape = false;     ///< the surface digitizes a shape (--shape, --polynomial), not a file
+  bool volume_file = false;        ///< the surface is read from a volume file (--volume)
   std::string normals = "auto";    ///< the normals' source: auto, true, ii, trivial, convolved
   bool normals_from_file = false;  ///< face or vertex normals read from a file
   std::string method = "fem";
@@ -27,14 +28,16 @@ struct FrontEndRequest {
 };
 
 /// The distributed front end exactly when it computes the command's own result, in a build with
-/// PETSc (-DCORRLAP_WITH_PETSC=ON): the digitization of an implicit shape, its true normals
-/// (`auto` means true there), the fem method with its default parameters (consistent mass), and
+/// PETSc (-DCORRLAP_WITH_PETSC=ON): the digitization of an implicit shape or a volume file, with
+/// true normals (shapes) or II normals (`auto` means true for a shape, II for a volume), the fem
+/// method with its default parameters (consistent mass), and
 ///  - Poisson: a test function for b and the `petsc` solver, with any of its options;
 ///  - Eigen: the `slepc` eigen solver, with any of its options.
-/// The heat system, volumes and meshes, other normals and methods, and every other solver take the
-/// serial front end. A surface the distributed one can only refuse once it is built (pinched
-/// voxels, normals the serial method would clamp) is refused on every rank with an InputError, and
-/// the caller then runs the serial one.
+/// The heat system, meshes, other normals and methods, and every other solver take the serial
+/// front end. What the distributed one can only refuse once it reads the input or builds the
+/// surface (anisotropic voxels, pinched voxels, II parameters it does not distribute, normals the
+/// serial method would clamp) is refused on every rank with an InputError
+/// (distributed/distributed_problem.hpp), and the caller then runs the serial one.
 FrontEnd choose_front_end(const FrontEndRequest& request);
 
 }  // namespace corrlap

@@ -16,8 +16,8 @@
 #if defined(CORRLAP_WITH_PETSC)
 #include <corrlap/core/stopwatch.hpp>
 #include <corrlap/distributed/distributed_eigs.hpp>
-#include <corrlap/distributed/distributed_surface.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/distributed/distributed_problem.hpp>
+#include <variant>
 #endif
 
 #include "command.hpp"
@@ -41,6 +41,7 @@ FrontEndRequest front_end_request(const EigsArgs& a) {
   FrontEndRequest r;
   r.task = FrontEndRequest::Task::Eigen;
   r.implicit_shape = !a.options.source.shape.empty() || !a.options.source.polynomial.empty();
+  r.volume_file = !a.options.source.volume.empty();
   r.normals = a.options.normals.source;
   r.normals_from_file = !a.options.normals.face_file.empty() || !a.options.normals.vertex_file.empty();
   r.method = a.options.method.method;
@@ -60,9 +61,9 @@ void print_values(const Eigen::VectorXd& values, std::optional<StagedFile>& out,
 }
 
 #if defined(CORRLAP_WITH_PETSC)
-// False when the distributed front end refused the input (pinched voxels, normals the serial method
-// would clamp): its refusals are collective, so every rank then takes the serial front end. The
-// eigenvectors stay distributed: the command writes only the values.
+// False when the distributed front end refused the input (distributed_problem.hpp): its refusals
+// are collective, so every rank then takes the serial front end. The eigenvectors stay
+// distributed: the command writes only the values.
 bool run_distributed(const EigsArgs& a) {
   // The solver's options first: a bad key fails before the assembly, on every rank.
   SlepcEigenSolver solver;
@@ -70,29 +71,26 @@ bool run_distributed(const EigsArgs& a) {
   std::optional<StagedFile> out;  // checked before the computation; rank 0 writes
   if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const SurfaceInput input = a.options.source.input();
-  const auto& shape_input = std::get<ImplicitShapeInput>(input);
-  const ImplicitShape shape = make_implicit_shape(shape_input.shape, shape_input.center);
-  std::optional<DistributedSurface> surface_part;
-  std::optional<DistributedFem> fem_part;
-  try {
-    surface_part.emplace(distributed_surface(shape, shape_input.digitization));
-    fem_part.emplace(*surface_part, true_face_normals(shape, surface_part->mesh));
-  } catch (const InputError& e) {
-    if (is_output_rank()) std::cerr << "note: " << e.what() << "; using the serial front end\n";
+  std::string refused;
+  const auto problem = make_distributed_problem(
+      input, a.options.normals.request(std::holds_alternative<ImplicitShapeInput>(input)), refused);
+  if (!problem) {
+    if (is_output_rank()) std::cerr << "note: " << refused << "; using the serial front end\n";
     return false;
   }
+  const DistributedSurface& surface = problem->surface();
   const Stopwatch watch;
   const EigenResult r =
-      distributed_eigs(*fem_part, int(std::min<std::int64_t>(a.k, surface_part->num_vertices)), solver);
+      distributed_eigs(problem->fem(), int(std::min<std::int64_t>(a.k, surface.num_vertices)), solver);
   const double seconds = watch.elapsed();
   if (!r.values.allFinite()) throw NumericalError("eigs: the eigen solver returned a value that is not finite");
   if (!is_output_rank()) return true;
-  const OutputUnits units = a.output.parse(VoxelFrame(a.options.source.h, Eigen::Vector3d::Zero()));
+  const OutputUnits units = a.output.parse(problem->frame());
   print_values(units.inverse_areas(r.values), out, units);
   if (r.values.size() < a.k) std::cerr << "eigs: only " << r.values.size() << " eigenvalues exist\n";
-  std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << surface_part->num_vertices << " x "
-            << surface_part->num_vertices << " problem with " << r.method << " (" << r.iterations
-            << " iterations) on the distributed front end over " << surface_part->ranks << " ranks in " << seconds
+  std::cerr << "eigs: " << r.values.size() << " eigenvalues of a " << surface.num_vertices << " x "
+            << surface.num_vertices << " problem with " << r.method << " (" << r.iterations
+            << " iterations) on the distributed front end over " << surface.ranks << " ranks in " << seconds
             << " s; values in 1/length^2 of " << units.name() << " units\n";
   return true;
 }

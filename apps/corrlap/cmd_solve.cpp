@@ -20,10 +20,9 @@
 
 #if defined(CORRLAP_WITH_PETSC)
 #include <corrlap/backends/petsc.hpp>
-#include <corrlap/distributed/distributed_fem.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
-#include <corrlap/distributed/distributed_surface.hpp>
-#include <corrlap/estimators/implicit_normals.hpp>
+#include <corrlap/distributed/distributed_problem.hpp>
+#include <variant>
 #endif
 
 #include "command.hpp"
@@ -56,6 +55,7 @@ FrontEndRequest front_end_request(const SolveArgs& a) {
   FrontEndRequest r;
   r.task = a.system == "heat" ? FrontEndRequest::Task::Heat : FrontEndRequest::Task::Poisson;
   r.implicit_shape = !a.source.shape.empty() || !a.source.polynomial.empty();
+  r.volume_file = !a.source.volume.empty();
   r.normals = a.normals.source;
   r.normals_from_file = !a.normals.face_file.empty() || !a.normals.vertex_file.empty();
   r.method = a.method.method;
@@ -67,8 +67,8 @@ FrontEndRequest front_end_request(const SolveArgs& a) {
 #endif
 
 #if defined(CORRLAP_WITH_PETSC)
-// False when the distributed front end refused the input (pinched voxels, normals the serial method
-// would clamp): its refusals are collective, so every rank then takes the serial front end.
+// False when the distributed front end refused the input (distributed_problem.hpp): its refusals
+// are collective, so every rank then takes the serial front end.
 bool run_distributed(const SolveArgs& a) {
   // The backend's options first: a bad key fails before the assembly, on every rank.
   PetscLinearSolver solver;
@@ -77,31 +77,30 @@ bool run_distributed(const SolveArgs& a) {
   if (!a.out.empty() && is_output_rank()) out.emplace(a.out);
   const Stopwatch watch;
   const SurfaceInput input = a.source.input();
-  const auto& shape_input = std::get<ImplicitShapeInput>(input);
-  const ImplicitShape shape = make_implicit_shape(shape_input.shape, shape_input.center);
-  std::optional<DistributedSurface> surface_part;
-  std::optional<DistributedFem> fem_part;
-  try {
-    surface_part.emplace(distributed_surface(shape, shape_input.digitization));
-    fem_part.emplace(*surface_part, true_face_normals(shape, surface_part->mesh));
-  } catch (const InputError& e) {
-    if (is_output_rank()) std::cerr << "note: " << e.what() << "; using the serial front end\n";
+  std::string refused;
+  const auto problem =
+      make_distributed_problem(input, a.normals.request(std::holds_alternative<ImplicitShapeInput>(input)), refused);
+  if (!problem) {
+    if (is_output_rank()) std::cerr << "note: " << refused << "; using the serial front end\n";
     return false;
   }
-  const DistributedSurface& surface = *surface_part;
-  const DistributedFem& fem = *fem_part;
+  const DistributedSurface& surface = problem->surface();
+  const DistributedFem& fem = problem->fem();
   const double assemble_s = watch.elapsed();
   const TestFunction& function = test_function(a.rhs);
-  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, solver, shape_input.center);
+  // The serial front end's centre of the projections onto the unit sphere (docs/math.md §10.1).
+  const Eigen::Vector3d c(a.source.center[0], a.source.center[1], a.source.center[2]);
+  const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, solver, c);
   const Eigen::VectorXd g = gather_on_rank0(surface, r.g);
   if (!is_output_rank()) return true;
-  const OutputUnits units = a.output.parse(VoxelFrame(a.source.h, Eigen::Vector3d::Zero()));
+  const OutputUnits units = a.output.parse(problem->frame());
+  const std::string normals = to_string(problem->normals());
   if (out) {
     write_scalars(out->path(), g);
     out->commit();
   }
   // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
-  const bool unit_sphere = std::abs(shape.sphere_radius() - 1.0) < 1e-12;
+  const bool unit_sphere = problem->shape() && std::abs(problem->shape()->sphere_radius() - 1.0) < 1e-12;
   if (a.json) {
     nlohmann::json j;
     j["solver"] = "petsc";
@@ -109,7 +108,7 @@ bool run_distributed(const SolveArgs& a) {
     j["output_units"] = units.name();
     j["method"] = a.method.method;
     j["surface"] = a.source.describe();
-    j["normals"] = "true";
+    j["normals"] = normals;
     j["rhs"] = a.rhs;
     j["boundary"] = BoundaryCondition{}.label();  // voxel surfaces inside the box are closed
     j["n"] = surface.num_vertices;
@@ -133,7 +132,7 @@ bool run_distributed(const SolveArgs& a) {
   std::cout << "surface     " << a.source.describe() << " (" << surface.num_vertices << " vertices)\n"
             << "front end   distributed over " << surface.ranks << " ranks (docs/distributed.md)\n"
             << "system      poisson: L g = M b, vertex 0 pinned\n"
-            << "method      fem (normals true)\n"
+            << "method      fem (normals " << normals << ")\n"
             << "solver      petsc\n"
             << "assemble    " << assemble_s << " s\n"
             << "factorize   " << r.report.factorize_seconds << " s"

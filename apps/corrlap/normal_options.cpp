@@ -57,14 +57,14 @@ void NormalOptions::add_options(CLI::App& cmd) {
       ->check(CLI::IsMember({"shrink", "keep"}));
 }
 
-NormalRequest NormalOptions::request(const LoadedSurface& s) const {
+NormalRequest NormalOptions::request(bool implicit_shape) const {
   NormalRequest r;
   r.source = parse_normal_source(source);
   r.face_normals_file = face_file;
   r.vertex_normals_file = vertex_file;
   std::optional<bool> shrink;
   if (!ii_thin_parts.empty()) shrink = ii_thin_parts == "shrink";
-  r.ii = default_ii_params(s.shape_ptr() != nullptr, ii_k, ii_alpha, shrink);
+  r.ii = default_ii_params(implicit_shape, ii_k, ii_alpha, shrink);
   r.progress = stderr_progress("ii normals");
   return r;
 }

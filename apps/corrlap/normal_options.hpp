@@ -25,7 +25,9 @@ struct NormalOptions {
 
   void add_options(CLI::App& cmd);
   /// The request for this surface (its kind decides the II defaults).
-  NormalRequest request(const LoadedSurface& surface) const;
+  NormalRequest request(const LoadedSurface& surface) const { return request(surface.shape_ptr() != nullptr); }
+  /// The same before the surface is loaded (the distributed front end): `implicit_shape` decides.
+  NormalRequest request(bool implicit_shape) const;
   /// resolve_normals for the surface (its shape and voxels); `what` names the consumer in errors,
   /// which name the CLI flags.
   NormalFields resolve(const LoadedSurface& surface, NormalKind need, const std::string& what) const;

@@ -332,7 +332,8 @@ TEST_CASE("choose_front_end: the distributed front end exactly for the inputs it
   };
   for (const FrontEndRequest& r : {solve, eigs}) {
     CHECK(with(r, [](FrontEndRequest& q) { q.implicit_shape = false; }) == FrontEnd::Serial);
-    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "ii"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "ii"; }) == FrontEnd::Distributed);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "trivial"; }) == FrontEnd::Serial);
     CHECK(with(r, [](FrontEndRequest& q) { q.normals = "true"; }) == FrontEnd::Distributed);
     CHECK(with(r, [](FrontEndRequest& q) { q.normals_from_file = true; }) == FrontEnd::Serial);
     CHECK(with(r, [](FrontEndRequest& q) { q.method = "interpolated"; }) == FrontEnd::Serial);

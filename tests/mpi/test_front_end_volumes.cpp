@@ -1,0 +1,257 @@
+// The distributed front end of the commands on volume files and with II normals
+// (distributed/distributed_problem.hpp), under mpirun with 1, 2 and 4 ranks: every rank also
+// builds the serial surface, normals and operators (test only) through load_surface and
+// resolve_normals, as the serial front end does, and the distributed results must equal them.
+#include <doctest/doctest.h>
+#include <mpi.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <corrlap/backends/petsc.hpp>
+#include <corrlap/backends/registry.hpp>
+#include <corrlap/discretizations/methods.hpp>
+#include <corrlap/distributed/distributed_eigs.hpp>
+#include <corrlap/distributed/distributed_poisson.hpp>
+#include <corrlap/distributed/distributed_problem.hpp>
+#include <corrlap/io/volume_io.hpp>
+#include <corrlap/pipeline/front_end.hpp>
+#include <corrlap/pipeline/load_surface.hpp>
+#include <corrlap/problems/problems.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+using namespace corrlap;
+
+namespace {
+
+int world_rank() {
+  ensure_petsc_runtime();  // MPI is started by the first distributed call; this may come before it
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+
+// A grey-level torus, 0 .. 255 falling off with the distance to the tube's core circle, so that
+// the threshold decides the surface: about 4000 surfels at threshold 127.
+VolumeData grey_torus(const Eigen::Vector3d& spacing) {
+  VolumeData v;
+  v.size = Eigen::Vector3i(44, 40, 18);
+  v.bytes.assign(std::size_t(v.size.prod()), 0);
+  const double R = 12.5, r = 5.2;
+  for (int z = 0; z < v.size.z(); ++z)
+    for (int y = 0; y < v.size.y(); ++y)
+      for (int x = 0; x < v.size.x(); ++x) {
+        const double px = x - 21.7, py = y - 19.4, pz = z - 8.6;
+        const double d = std::hypot(std::hypot(px, py) - R, pz);
+        const double value = std::clamp(255.0 * (1.0 - d / (2.0 * r)), 0.0, 255.0);
+        v.bytes[std::size_t(x + v.size.x() * (y + v.size.y() * z))] = std::uint8_t(std::lround(value));
+      }
+  v.geometry.spacing = spacing;
+  v.geometry.origin = Eigen::Vector3d(-3.0, 7.5, 1.25);
+  return v;
+}
+
+// Written by rank 0 under a name every rank agrees on, visible to every rank on return.
+std::string written(const VolumeData& v, const std::string& name) {
+  ensure_petsc_runtime();
+  long pid = long(::getpid());
+  MPI_Bcast(&pid, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("corrlap_front_end_volumes_" + std::to_string(pid) + "_" + name))
+          .string();
+  if (world_rank() == 0) write_volume_data(path, v);
+  MPI_Barrier(MPI_COMM_WORLD);
+  return path;
+}
+
+void remove_shared(const std::string& path) {
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (world_rank() == 0) std::remove(path.c_str());
+}
+
+VolumeFileInput volume_input(const std::string& path, double threshold) {
+  VolumeFileInput in;
+  in.path = path;
+  in.inside = InsideRule::above(threshold);
+  return in;
+}
+
+NormalRequest ii_request(bool implicit_shape, std::optional<bool> shrink) {
+  NormalRequest r;
+  r.source = NormalSource::II;
+  r.ii = default_ii_params(implicit_shape, {}, {}, shrink);
+  return r;
+}
+
+// The serial front end's operators: load_surface, resolve_normals and the fem method.
+struct Serial {
+  LoadedSurface surface;
+  Operators ops;
+};
+Serial serial_problem(const SurfaceInput& input, const NormalRequest& normals) {
+  Serial s;
+  s.surface = load_surface(input);
+  const NormalFields n = resolve_normals(s.surface, NormalKind::Face, normals);
+  s.ops = corrected_fem(s.surface.mesh, n.face);
+  return s;
+}
+
+// The largest difference of the Poisson solutions (MUMPS on the distributed problem, CHOLMOD on the
+// serial one), relative to the largest value of the serial solution, on every rank.
+double poisson_difference(const DistributedProblem& p, const Serial& s) {
+  const DistributedSurface& d = p.surface();
+  const TestFunction& expx = test_function("expx");
+  PetscLinearSolver solver;
+  solver.configure(Config());  // the default: MUMPS's Cholesky
+  const DistributedPoissonResult r = distributed_solve_poisson(d, p.fem(), expx, solver);
+  auto cholmod = make_linear_solver("cholmod");
+  const PoissonResult g = solve_poisson(s.ops, s.surface.mesh.positions, expx, *cholmod);
+  double worst = 0.0;
+  for (int v = 0; v < d.num_owned; ++v) worst = std::max(worst, std::abs(r.g[v] - g.g[d.vertex_ids[std::size_t(v)]]));
+  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  const Eigen::VectorXd whole = gather_on_rank0(d, r.g);
+  if (d.rank == 0) CHECK((whole - g.g).cwiseAbs().maxCoeff() / g.g.cwiseAbs().maxCoeff() < 1e-10);
+  return worst / g.g.cwiseAbs().maxCoeff();
+}
+
+void check_same_frame(const VoxelFrame& a, const VoxelFrame& b) {
+  CHECK(a.h() == b.h());
+  CHECK(a.shift() == b.shift());
+  REQUIRE(a.geometry().has_value() == b.geometry().has_value());
+  if (!a.geometry()) return;
+  CHECK(a.geometry()->spacing == b.geometry()->spacing);
+  CHECK(a.geometry()->origin == b.geometry()->origin);
+  CHECK(a.geometry()->direction == b.geometry()->direction);
+  CHECK(a.geometry()->space == b.geometry()->space);
+}
+
+}  // namespace
+
+TEST_CASE("distributed problem of a volume file, II normals kept on thin parts: the serial Poisson solution") {
+  // .npy and TIFF without geometry; NRRD, NIfTI and MetaImage with a physical spacing and origin.
+  for (const std::string name : {"torus.npy", "torus.nrrd", "torus.nii.gz", "torus.mha", "torus.tif"}) {
+    CAPTURE(name);
+    const std::string path = written(grey_torus(Eigen::Vector3d::Constant(0.75)), name);
+    const SurfaceInput input = volume_input(path, 127.0);
+    const NormalRequest normals = ii_request(false, /*shrink=*/false);
+    const DistributedProblem p(input, normals);
+    const Serial s = serial_problem(input, normals);
+    CHECK(p.normals() == NormalSource::II);
+    CHECK(p.shape() == nullptr);
+    CHECK(p.surface().num_vertices == s.surface.mesh.num_vertices());
+    CHECK(p.surface().num_faces == s.surface.mesh.num_faces());
+    check_same_frame(p.frame(), s.surface.frame);
+    const double difference = poisson_difference(p, s);
+    if (p.surface().rank == 0)
+      MESSAGE(name << ": " << p.surface().num_faces << " faces, largest relative difference " << difference);
+    CHECK(difference < 1e-10);
+    remove_shared(path);
+  }
+}
+
+TEST_CASE("distributed problem of a shape with II normals (kept on thin parts): the serial Poisson solution") {
+  ImplicitShapeInput input;
+  input.shape = "torus";
+  input.digitization.h = 0.35;
+  input.digitization.min_aabb = -10.0;
+  input.digitization.max_aabb = 10.0;
+  const NormalRequest normals = ii_request(true, /*shrink=*/false);
+  const DistributedProblem p(input, normals);
+  const Serial s = serial_problem(input, normals);
+  CHECK(p.normals() == NormalSource::II);
+  CHECK(p.shape() != nullptr);
+  check_same_frame(p.frame(), s.surface.frame);
+  const double difference = poisson_difference(p, s);
+  if (p.surface().rank == 0) MESSAGE("torus, h = 0.35: largest relative difference " << difference);
+  CHECK(difference < 1e-10);
+}
+
+TEST_CASE("distributed eigs of a volume file (II normals): the serial eigenvalues to 1e-8") {
+  const std::string path = written(grey_torus(Eigen::Vector3d::Constant(0.75)), "torus_eigs.nrrd");
+  const SurfaceInput input = volume_input(path, 127.0);
+  const NormalRequest normals = ii_request(false, /*shrink=*/false);
+  const DistributedProblem p(input, normals);
+  const Serial s = serial_problem(input, normals);
+  const int k = 12;
+  auto spectra = make_eigen_solver(kDefaultEigenSolver, Config::from_key_values({"solver=cholmod"}));
+  const EigenResult serial = spectra->solve(s.ops.L, s.ops.M, k);
+  SlepcEigenSolver solver;
+  solver.configure(Config());
+  const EigenResult r = distributed_eigs(p.fem(), k, solver);
+  REQUIRE(r.values.size() == k);
+  const double difference = (r.values - serial.values).cwiseAbs().maxCoeff() / serial.values.cwiseAbs().maxCoeff();
+  if (p.surface().rank == 0) MESSAGE("largest eigenvalue difference " << difference);
+  CHECK(difference < 1e-8);
+  remove_shared(path);
+}
+
+TEST_CASE("distributed problem with the default II (smaller balls on thin parts): the serial result") {
+  const std::string path = written(grey_torus(Eigen::Vector3d::Constant(0.75)), "torus_shrink.npy");
+  const SurfaceInput input = volume_input(path, 127.0);
+  NormalRequest normals;  // auto on a volume: II, with the voxel defaults
+  normals.ii = default_ii_params(false);
+  REQUIRE(normals.ii->shrink_on_thin_parts);
+  std::string refused;
+  const auto p = make_distributed_problem(input, normals, refused);
+  CAPTURE(refused);
+  REQUIRE(p);
+  const double difference = poisson_difference(*p, serial_problem(input, normals));
+  if (world_rank() == 0) MESSAGE("shrink distributed: largest relative difference " << difference);
+  CHECK(difference < 1e-10);
+  remove_shared(path);
+}
+
+TEST_CASE("distributed problem: inputs it does not compute as the serial front end are refused on every rank") {
+  // Anisotropic voxels: load_surface resamples them to cubes, the slab reader does not.
+  const std::string path = written(grey_torus(Eigen::Vector3d(0.75, 0.75, 1.5)), "torus_anisotropic.nrrd");
+  std::string refused;
+  CHECK(make_distributed_problem(volume_input(path, 127.0), ii_request(false, false), refused) == nullptr);
+  CHECK(refused.find("anisotropic") != std::string::npos);
+  // True normals need a shape; trivial normals and given normals are not distributed.
+  const std::string iso = written(grey_torus(Eigen::Vector3d::Constant(1.0)), "torus_iso.npy");
+  NormalRequest normals;
+  normals.source = NormalSource::True;
+  CHECK(make_distributed_problem(volume_input(iso, 127.0), normals, refused) == nullptr);
+  normals.source = NormalSource::Trivial;
+  CHECK(make_distributed_problem(volume_input(iso, 127.0), normals, refused) == nullptr);
+  normals.source = NormalSource::II;
+  normals.face_normals_file = "normals.txt";
+  CHECK(make_distributed_problem(volume_input(iso, 127.0), normals, refused) == nullptr);
+  remove_shared(path);
+  remove_shared(iso);
+}
+
+TEST_CASE("choose_front_end: volume files and II normals take the distributed front end") {
+  FrontEndRequest solve;
+  solve.volume_file = true;
+  solve.solver = "petsc";
+  FrontEndRequest eigs = solve;
+  eigs.task = FrontEndRequest::Task::Eigen;
+  eigs.solver = "slepc";
+  auto with = [](FrontEndRequest r, auto change) {
+    change(r);
+    return choose_front_end(r);
+  };
+  for (const FrontEndRequest& r : {solve, eigs}) {
+    CHECK(choose_front_end(r) == FrontEnd::Distributed);  // auto: II on a volume
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "ii"; }) == FrontEnd::Distributed);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "true"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "trivial"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals = "convolved"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.normals_from_file = true; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.method = "interpolated"; }) == FrontEnd::Serial);
+    CHECK(with(r, [](FrontEndRequest& q) { q.volume_file = false; }) == FrontEnd::Serial);  // a mesh file
+    // A shape with II or true normals.
+    CHECK(with(r, [](FrontEndRequest& q) {
+            q.volume_file = false;
+            q.implicit_shape = true;
+            q.normals = "ii";
+          }) == FrontEnd::Distributed);
+  }
+  CHECK(with(solve, [](FrontEndRequest& q) { q.task = FrontEndRequest::Task::Heat; }) == FrontEnd::Serial);
+  CHECK(with(solve, [](FrontEndRequest& q) { q.rhs_from_test_function = false; }) == FrontEnd::Serial);
+  CHECK(with(solve, [](FrontEndRequest& q) { q.solver = "cholmod"; }) == FrontEnd::Serial);
+}
