@@ -65,10 +65,11 @@ double relative_residual(const Eigen::MatrixXd& R, const Eigen::MatrixXd& rhs) {
   return worst;
 }
 
-void check_alpha(double alpha, const Eigen::SparseMatrix<double>& Ml, const Eigen::MatrixX3d& p) {
+// area: the sum of M_l.
+void check_alpha(double alpha, double area, const Eigen::MatrixX3d& p) {
   if (!(alpha > 0.0) || !std::isfinite(alpha))
     throw InputError("regularization: alpha must be a positive number", "alpha");
-  const double largest = max_regularization_alpha(Ml.sum(), p.cwiseAbs().maxCoeff());
+  const double largest = max_regularization_alpha(area, p.cwiseAbs().maxCoeff());
   if (alpha > largest) {
     std::ostringstream os;
     os << "regularization: alpha = " << alpha << " is beyond what the solve represents in double precision on "
@@ -130,7 +131,7 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
                                       SolverReport* report) {
   check_inputs(L, M, p, normals, H);
   const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
-  check_alpha(alpha, Ml, p);
+  check_alpha(alpha, Ml.sum(), p);
   const Eigen::VectorXd inverse_mass = Ml.diagonal().cwiseInverse();
   // L M_l^{-1} L + alpha M_l: symmetric, and positive definite since L M_l^{-1} L >= 0 and M_l > 0.
   const Eigen::SparseMatrix<double> scaled_L = inverse_mass.asDiagonal() * L;
@@ -151,25 +152,46 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
   return q;
 }
 
-Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
-                                                     const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
-                                                     const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
-                                                     double alpha, LinearSolver& solver, SolverReport* report,
-                                                     double accuracy, double* error_bound) {
+PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMatrix<double>& L,
+                                                           const Eigen::SparseMatrix<double>& M,
+                                                           const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                                           const Eigen::VectorXd& H, LinearSolver& solver)
+    : L_(L), p_(p), solver_(solver) {
   check_inputs(L, M, p, normals, H);
+  lumped_mass_ = lumped_mass(M);
+  mass_ = lumped_mass_.diagonal();
+  inverse_mass_ = mass_.cwiseInverse();
+  // alpha M_l p - 2 L (H n): the curvature part does not depend on alpha.
+  curvature_rhs_ = -2.0 * (L * mean_curvature_normals(normals, H));
+  abs_L_ = L;  // a copy with its values replaced (faster than L.cwiseAbs())
+  abs_L_.makeCompressed();
+  for (Eigen::Index i = 0; i < abs_L_.nonZeros(); ++i) abs_L_.valuePtr()[i] = std::abs(abs_L_.valuePtr()[i]);
+}
+
+Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accuracy, SolverReport* report,
+                                                     double* error_bound, const Eigen::MatrixX3d* start) {
   if (!(accuracy >= 0.0) || !std::isfinite(accuracy))
     throw InputError("regularization: the solve accuracy must be a finite number >= 0", "accuracy");
-  const Eigen::SparseMatrix<double> Ml = lumped_mass(M);
-  check_alpha(alpha, Ml, p);
-  const Eigen::VectorXd mass = Ml.diagonal(), inverse_mass = mass.cwiseInverse();
-  const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
+  const Eigen::SparseMatrix<double>& L = L_;
+  const Eigen::VectorXd &mass = mass_, &inverse_mass = inverse_mass_;
+  check_alpha(alpha, mass.sum(), p_);
+  if (start && (start->rows() != p_.rows() || !start->allFinite()))
+    throw InputError("regularization: the start positions must be finite, one row per vertex", "start");
+  const Eigen::MatrixX3d rhs = alpha * (lumped_mass_ * p_) + curvature_rhs_;
   // B = sqrt(alpha) M_l - L, SPD when L is negative semi-definite (the header's bound).
   Eigen::SparseMatrix<double> B = L;  // a plain copy, negated in place: the expression -L is slower
   B *= -1.0;
   add_to_diagonal(B, std::sqrt(alpha) * mass);
+  // The pattern is the same for every alpha (a positive diagonal, and -L's entries off it), so one
+  // symbolic analysis serves every solve.
   B.prune(0.0);
-  solver.set_positions(p);  // orders the factorization (geometric nested dissection)
-  solver.compute(std::move(B));
+  if (!analyzed_) {
+    solver_.set_positions(p_);  // orders the factorization (geometric nested dissection)
+    solver_.analyze(B);
+    analyzed_ = true;
+  }
+  solver_.factorize_owned(std::move(B));
+  LinearSolver& solver = solver_;
   const auto multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
     return L * (inverse_mass.asDiagonal() * (L * X)) + alpha * (mass.asDiagonal() * X);
   };
@@ -178,7 +200,7 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
     return solver.solve(mass.asDiagonal() * solver.solve(R));
   };
   SymmetricOperator A;
-  A.rows = p.rows();
+  A.rows = p_.rows();
   // The CG blocks are transposed (k by n): multiply through plain n by k matrices.
   A.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
     Yt = multiply(Xt.transpose()).transpose();
@@ -207,9 +229,7 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   cg_options.set("on_no_convergence", "warn");
   SolverReport local;
   SolverReport& cg = report ? *report : local;
-  Eigen::SparseMatrix<double> absL = L;  // a copy with its values replaced (faster than L.cwiseAbs())
-  absL.makeCompressed();
-  for (Eigen::Index i = 0; i < absL.nonZeros(); ++i) absL.valuePtr()[i] = std::abs(absL.valuePtr()[i]);
+  const Eigen::SparseMatrix<double>& absL = abs_L_;
   const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
     const Eigen::MatrixXd absq = q.cwiseAbs();
     const Eigen::MatrixXd scale = absL * (inverse_mass.asDiagonal() * (absL * absq)) +
@@ -221,7 +241,11 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
     return worst;
   };
   // Not from p: L p is the staircase's Laplacian, so |b - A p| is orders of magnitude above |b|.
-  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p.rows(), 3), residual = rhs;
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p_.rows(), 3), residual = rhs;
+  if (start) {
+    q = *start;
+    residual = rhs - multiply(q);
+  }
   int iterations = 0;
   double normwise = 1.0, backward = 1.0, bound = std::numeric_limits<double>::infinity();
   const auto at_rounding = [&] { return normwise <= 1e-10 || backward <= kBackwardTolerance; };  // NaN: not known
@@ -268,6 +292,15 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
   cg.status = SolverStatus::Success;
   cg.message = accuracy == 0.0 && normwise > 1e-10 ? os.str() + " (the rounding of A q)" : std::string();
   return q;
+}
+
+Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<double>& L,
+                                                     const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
+                                                     const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
+                                                     double alpha, LinearSolver& solver, SolverReport* report,
+                                                     double accuracy, double* error_bound) {
+  PreconditionedRegularization regularization(L, M, p, normals, H, solver);
+  return regularization.solve(alpha, accuracy, report, error_bound);
 }
 
 Eigen::MatrixX3d regularize_positions_unattached(const Eigen::SparseMatrix<double>& L,

@@ -64,6 +64,31 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
                                                      double alpha, LinearSolver& solver, SolverReport* report = nullptr,
                                                      double accuracy = 0.0, double* error_bound = nullptr);
 
+/// regularize_positions_preconditioned for several alpha on one surface, e.g. the trials of the
+/// automatic alpha0 (docs/math.md §9.4). B's pattern does not depend on alpha, so `solver` analyzes it
+/// once and each solve only factorizes; a solve can start from an earlier one's positions, which
+/// are closer to its solution than 0 is. L and `solver` are kept by reference and must outlive
+/// this; `solver` is this object's alone while it lives.
+class PreconditionedRegularization {
+ public:
+  /// Checks the inputs as regularize_positions_preconditioned.
+  PreconditionedRegularization(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
+                               const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
+                               LinearSolver& solver);
+  /// p' for this alpha, as regularize_positions_preconditioned, with CG started from `start`
+  /// (#V x 3, finite) when given, else from 0.
+  Eigen::MatrixX3d solve(double alpha, double accuracy = 0.0, SolverReport* report = nullptr,
+                         double* error_bound = nullptr, const Eigen::MatrixX3d* start = nullptr);
+
+ private:
+  const Eigen::SparseMatrix<double>& L_;
+  Eigen::MatrixX3d p_, curvature_rhs_;
+  Eigen::VectorXd mass_, inverse_mass_;
+  Eigen::SparseMatrix<double> lumped_mass_, abs_L_;
+  LinearSolver& solver_;
+  bool analyzed_ = false;
+};
+
 /// docs/math.md §9.3: the same energy without the attachment (alpha = 0, paper Fig. 11), whose
 /// minimizers solve L p' = g' (g = -2 M_l H n projected onto the range of L) and are unique up to a
 /// translation per connected component of L's graph; each component is placed with its

@@ -269,9 +269,13 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     int iterations = 0;
     double error_bound = 0.0, residual = 0.0;
   };
+  std::vector<Solved> solved;
+  std::optional<PreconditionedRegularization> preconditioned;  // its analysis serves every trial
   const auto solve_at = [&](double alpha) -> Solved {
     Solved out;
+    bool analyzed = true;  // whether this solve ran a symbolic analysis
     if (alpha == 0.0) {
+      preconditioned.reset();  // the solver analyzes another pattern
       SolverReport unattached;
       out.positions =
           regularize_positions_unattached(ops.L, ops.M, mesh.positions, r.normals, r.H, *solver, &unattached);
@@ -286,14 +290,18 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
         SolverReport cg;
         const double step = mesh.grid_step();
         double bound = 0.0;
-        out.positions = regularize_positions_preconditioned(ops.L, ops.M, mesh.positions, r.normals, r.H, alpha,
-                                                            *solver, &cg, o.solve_accuracy * step, &bound);
+        analyzed = !preconditioned;
+        if (!preconditioned) preconditioned.emplace(ops.L, ops.M, mesh.positions, r.normals, r.H, *solver);
+        // A later trial starts from the last one's positions: a larger alpha0 moves them less.
+        const Eigen::MatrixX3d* start = solved.empty() ? nullptr : &solved.back().positions;
+        out.positions = preconditioned->solve(alpha, o.solve_accuracy * step, &cg, &bound, start);
         out.scheme = "preconditioned-cg";
         out.iterations = cg.iterations;
         out.error_bound = bound / step;
         out.residual = cg.residual;
       } catch (const SolverError& e) {
         if (e.status() != SolverStatus::NotPositiveDefinite) throw;
+        preconditioned.reset();  // the direct solve below analyzes another pattern with the same solver
         // Once, though every trial of the automatic alpha0 meets it.
         const std::string warning = "regularization: " + std::string(e.what()) +
                                     "; L is not negative semi-definite, solved the normal equations directly";
@@ -302,17 +310,17 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     }
     if (out.scheme.empty()) {
       SolverReport direct;
+      analyzed = true;
       out.positions = regularize_positions(ops.L, ops.M, mesh.positions, r.normals, r.H, alpha, *solver, &direct);
       out.scheme = "direct";
       out.residual = direct.residual;
     }
     const SolverReport& backend = solver->info();
-    r.factorize_seconds += backend.analyze_seconds + backend.factorize_seconds;
+    r.factorize_seconds += (analyzed ? backend.analyze_seconds : 0.0) + backend.factorize_seconds;
     r.factor_nonzeros = backend.factor_nonzeros;
     r.factor_flops = backend.factor_flops;
     return out;
   };
-  std::vector<Solved> solved;
   solved.push_back(solve_at(r.alpha));
   // Curvature edits move the surface away from the staircase on purpose: the bias test would undo them.
   const bool edited = o.h_scale != 1.0 || o.h_clamp || o.k1_edit.active() || o.k2_edit.active();

@@ -2,6 +2,7 @@
 // energy's minimizer, a digitized sphere moves towards the true one, bad inputs are named.
 #include <doctest/doctest.h>
 
+#include <corrlap/backends/cholmod.hpp>
 #include <corrlap/corrlap.hpp>
 #include <numbers>
 
@@ -247,6 +248,61 @@ TEST_CASE("regularize_positions_preconditioned to an accuracy: the error is with
   CHECK_THROWS_AS(
       regularize_positions_preconditioned(ops.L, ops.M, p, n, H, regularization_alpha(h), *factor, nullptr, -1.0),
       InputError);
+}
+
+TEST_CASE("PreconditionedRegularization: one analysis for every alpha, warm starts within the bound") {
+  const test::RegularizationSphere& base = test::regularization_sphere();
+  const Eigen::MatrixX3d& p = base.mesh.positions;
+  const Eigen::MatrixX3d& n = base.normals.vertex;
+  std::srand(13);
+  const Eigen::VectorXd H = Eigen::VectorXd::Ones(p.rows()) + 0.3 * Eigen::VectorXd::Random(p.rows());
+  const double h = base.mesh.grid_step();
+  const Operators ops = make_discretization("fem")->assemble(base.mesh, base.normals, Config());
+  const Eigen::VectorXd mass = lumped_mass(ops.M).diagonal();
+  CholmodSolver shared;
+  PreconditionedRegularization repeated(ops.L, ops.M, p, n, H, shared);
+  Eigen::MatrixX3d last;
+  double last_alpha0 = 0.0;
+  for (const double alpha0 : {10.0, 1000.0, 30.0}) {
+    CAPTURE(alpha0);
+    const double alpha = regularization_alpha(h, alpha0);
+    // From 0, the same arithmetic as the one-shot function: equal bit for bit.
+    auto fresh = make_linear_solver("cholmod");
+    SolverReport one_shot_report;
+    const Eigen::MatrixX3d one_shot =
+        regularize_positions_preconditioned(ops.L, ops.M, p, n, H, alpha, *fresh, &one_shot_report, 1e-3 * h);
+    SolverReport report;
+    const Eigen::MatrixX3d q = repeated.solve(alpha, 1e-3 * h, &report);
+    CHECK((q - one_shot).cwiseAbs().maxCoeff() == 0.0);
+    CHECK(report.iterations == one_shot_report.iterations);
+    // Only the first solve analyzed B: the others factorized the analyzed pattern again.
+    CHECK(shared.analysis_count() == 1);
+    if (last.rows() > 0) {
+      // From the last alpha's positions: within the bound of the exact solution, as from 0.
+      auto direct = make_linear_solver("cholmod");
+      const Eigen::MatrixX3d exact = regularize_positions(ops.L, ops.M, p, n, H, alpha, *direct);
+      double bound = -1.0;
+      SolverReport warm;
+      const Eigen::MatrixX3d w = repeated.solve(alpha, 1e-3 * h, &warm, &bound, &last);
+      CHECK(bound > 0.0);
+      CHECK(bound <= 1e-3 * h);
+      for (Eigen::Index j = 0; j < 3; ++j) {
+        const Eigen::VectorXd e = w.col(j) - exact.col(j);
+        CHECK(std::sqrt(e.dot(mass.asDiagonal() * e) / mass.sum()) <= bound * (1.0 + 1e-6));
+      }
+      // A raise of alpha (the automatic alpha0's only direction) moves the solution less than
+      // the shape's size: no more iterations than from 0.
+      if (alpha0 > last_alpha0) CHECK(warm.iterations <= report.iterations);
+    }
+    last = q;
+    last_alpha0 = alpha0;
+  }
+  // Start positions of the wrong size, or not finite, are named.
+  const Eigen::MatrixX3d short_start = Eigen::MatrixX3d::Zero(3, 3);
+  CHECK_THROWS_AS(repeated.solve(regularization_alpha(h), 0.0, nullptr, nullptr, &short_start), InputError);
+  Eigen::MatrixX3d nan_start = p;
+  nan_start(0, 0) = std::nan("");
+  CHECK_THROWS_AS(repeated.solve(regularization_alpha(h), 0.0, nullptr, nullptr, &nan_start), InputError);
 }
 
 TEST_CASE("regularize_positions_preconditioned refuses an L that is not negative semi-definite") {
