@@ -163,9 +163,6 @@ PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMa
   inverse_mass_ = mass_.cwiseInverse();
   // alpha M_l p - 2 L (H n): the curvature part does not depend on alpha.
   curvature_rhs_ = -2.0 * (L * mean_curvature_normals(normals, H));
-  abs_L_ = L;  // a copy with its values replaced (faster than L.cwiseAbs())
-  abs_L_.makeCompressed();
-  for (Eigen::Index i = 0; i < abs_L_.nonZeros(); ++i) abs_L_.valuePtr()[i] = std::abs(abs_L_.valuePtr()[i]);
 }
 
 Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accuracy, SolverReport* report,
@@ -229,7 +226,9 @@ Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accura
   cg_options.set("on_no_convergence", "warn");
   SolverReport local;
   SolverReport& cg = report ? *report : local;
-  const Eigen::SparseMatrix<double>& absL = abs_L_;
+  Eigen::SparseMatrix<double> absL = L;  // a copy with its values replaced (faster than L.cwiseAbs())
+  absL.makeCompressed();
+  for (Eigen::Index i = 0; i < absL.nonZeros(); ++i) absL.valuePtr()[i] = std::abs(absL.valuePtr()[i]);
   const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
     const Eigen::MatrixXd absq = q.cwiseAbs();
     const Eigen::MatrixXd scale = absL * (inverse_mass.asDiagonal() * (absL * absq)) +

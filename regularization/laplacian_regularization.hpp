@@ -67,7 +67,7 @@ Eigen::MatrixX3d regularize_positions_preconditioned(const Eigen::SparseMatrix<d
 /// regularize_positions_preconditioned for several alpha on one surface, e.g. the trials of the
 /// automatic alpha0 (docs/math.md §9.4). B's pattern does not depend on alpha, so `solver` analyzes it
 /// once and each solve only factorizes; a solve can start from an earlier one's positions, which
-/// are closer to its solution than 0 is. L and `solver` are kept by reference and must outlive
+/// are closer to its solution than 0 is. L, p and `solver` are kept by reference and must outlive
 /// this; `solver` is this object's alone while it lives.
 class PreconditionedRegularization {
  public:
@@ -82,9 +82,10 @@ class PreconditionedRegularization {
 
  private:
   const Eigen::SparseMatrix<double>& L_;
-  Eigen::MatrixX3d p_, curvature_rhs_;
+  const Eigen::MatrixX3d& p_;
+  Eigen::MatrixX3d curvature_rhs_;
   Eigen::VectorXd mass_, inverse_mass_;
-  Eigen::SparseMatrix<double> lumped_mass_, abs_L_;
+  Eigen::SparseMatrix<double> lumped_mass_;
   LinearSolver& solver_;
   bool analyzed_ = false;
 };
