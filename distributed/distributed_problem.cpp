@@ -13,12 +13,9 @@ namespace corrlap {
 
 namespace {
 
-// load_surface resamples anisotropic voxels to cubes and refuses a degenerate voxel-to-physical
-// map; the slab reader does neither, so such volumes stay with the serial front end.
+// load_surface refuses a degenerate voxel-to-physical map, so such volumes stay with the serial
+// front end, which says why.
 void check_volume_geometry(const VolumeGeometry& g, const std::string& path) {
-  if (!g.isotropic())
-    throw InputError("distributed front end: volume file '" + path +
-                     "' has anisotropic voxels, which only the serial front end resamples to cubes");
   const bool finite = g.spacing.allFinite() && g.origin.allFinite() && g.direction.allFinite();
   if (!finite || !(g.spacing.minCoeff() > 0.0) || !(std::abs(g.direction.determinant()) > 1e-12))
     throw InputError("distributed front end: volume file '" + path + "' has a degenerate voxel-to-physical map");
@@ -47,10 +44,15 @@ DistributedProblem::DistributedProblem(const SurfaceInput& input, const NormalRe
     options.raw_dimensions = v->raw_dimensions;
     const VolumeVoxelBox box = read_volume_voxel_box(v->path, options);
     check_volume_geometry(box.geometry, v->path);
-    source_ = volume_slab_source(v->path, options);
-    // load_surface's frame: the box is the volume's voxels [0, size - 1] - shift, padded by one.
-    const Eigen::Vector3i shift = -box.lower - Eigen::Vector3i::Ones();
-    frame_ = VoxelFrame(box.h, shift.cast<double>(), box.geometry);
+    if (box.geometry.isotropic()) {
+      source_ = volume_slab_source(v->path, options);
+      frame_ = volume_voxel_frame(box.lower, box.h, box.geometry);
+    } else {
+      // load_surface's cubes of the finest spacing, with their own box, step and geometry.
+      const IsotropicResampling resampling = isotropic_resampling(box.size, box.geometry, v->h);
+      source_ = resampled_volume_slab_source(v->path, options, resampling);
+      frame_ = volume_voxel_frame(resampling.lower(), resampling.h, resampling.geometry);
+    }
   } else {
     throw InputError("distributed front end: only implicit shapes and volume files are distributed");
   }

@@ -18,13 +18,14 @@ namespace corrlap {
 class DistributedProblem {
  public:
   /// Collective over MPI_COMM_WORLD. `input`: an ImplicitShapeInput, or a VolumeFileInput read as
-  /// load_surface reads it (centred, its step h or 2 / the longest side). `normals`: the source
-  /// True or II, or Auto (true for a shape, II for a volume, as resolve_normals); its `ii`, when
-  /// unset, is default_ii_params for the input, as resolve_normals would use.
+  /// load_surface reads it (centred, anisotropic voxels resampled to cubes, its step h or 2 / the
+  /// longest side). `normals`: the source True or II, or Auto (true for a shape, II for a volume,
+  /// as resolve_normals); its `ii`, when unset, is default_ii_params for the input, as
+  /// resolve_normals would use.
   ///
   /// Throws InputError, on every rank alike, for anything whose result would not be the serial
-  /// front end's: other inputs and normal sources, given normals, a volume with anisotropic or
-  /// degenerate voxels (load_surface resamples or refuses them), and the refusals of
+  /// front end's: other inputs and normal sources, given normals, a volume with a degenerate
+  /// voxel-to-physical map (load_surface refuses it), and the refusals of
   /// distributed_surface, distributed_ii_normals and DistributedFem. The caller then runs the
   /// serial front end, which computes the result or gives its own error.
   DistributedProblem(const SurfaceInput& input, const NormalRequest& normals);

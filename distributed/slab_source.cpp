@@ -29,6 +29,18 @@ SlabSource volume_slab_source(const std::string& path, const VolumeReadOptions& 
   return s;
 }
 
+SlabSource resampled_volume_slab_source(const std::string& path, const VolumeReadOptions& options,
+                                        const IsotropicResampling& resampling) {
+  SlabSource s;
+  s.lower = resampling.lower();
+  s.upper = resampling.upper();
+  s.h = resampling.h;
+  s.voxels = [path, options, resampling](int x_first, int x_last) {
+    return read_resampled_volume_slab(path, options, resampling, x_first, x_last);
+  };
+  return s;
+}
+
 VoxelGrid collective_slab_voxels(const SlabSource& source, int x_first, int x_last) {
   VoxelGrid grid;
   std::exception_ptr failure;

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <corrlap/core/voxel_grid.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/pipeline/isotropic_resampling.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
 #include <functional>
 #include <string>
@@ -27,6 +28,13 @@ SlabSource implicit_slab_source(const ImplicitShape& shape, const DigitizationPa
 /// come from the header, read here; each slab reads the file again, keeping only its bits. Throws as
 /// read_volume for a bad header.
 SlabSource volume_slab_source(const std::string& path, const VolumeReadOptions& options);
+
+/// load_surface's voxels of an anisotropic volume file per slab: read_volume_as_voxels(path,
+/// options) (centred) resampled to cubes by `resampling` (isotropic_resampling of the file's size
+/// and geometry), the resampled box and step. Each slab reads the file columns its columns copy
+/// (read_resampled_volume_slab).
+SlabSource resampled_volume_slab_source(const std::string& path, const VolumeReadOptions& options,
+                                        const IsotropicResampling& resampling);
 
 /// source.voxels(x_first, x_last) on every rank of MPI_COMM_WORLD (collective): when it throws on
 /// some ranks only (a memory limit crossed by the widest slab), the others throw too, an InputError

@@ -35,8 +35,8 @@ struct FrontEndRequest {
 ///  - Eigen: the `slepc` eigen solver, with any of its options.
 /// The heat system, meshes, other normals and methods, and every other solver take the serial
 /// front end. What the distributed one can only refuse once it reads the input or builds the
-/// surface (anisotropic voxels, pinched voxels, II parameters it does not distribute, normals the
-/// serial method would clamp) is refused on every rank with an InputError
+/// surface (a degenerate voxel-to-physical map, pinched voxels, II parameters it does not
+/// distribute, normals the serial method would clamp) is refused on every rank with an InputError
 /// (distributed/distributed_problem.hpp), and the caller then runs the serial one.
 FrontEnd choose_front_end(const FrontEndRequest& request);
 

@@ -17,6 +17,8 @@
 #include <sstream>
 #include <type_traits>
 
+#include "isotropic_resampling.hpp"
+
 namespace corrlap {
 namespace {
 
@@ -149,48 +151,15 @@ VoxelGrid threshold_array(const VolumeArrayInput& in) {
   return io_detail::visit_value_type(in.type, [&](auto t) { return threshold_as<decltype(t)>(in); });
 }
 
-// Anisotropic voxels become cubes of the finest spacing, each taking the value of the file voxel
-// whose centre is nearest: the digitization and the paper's defaults need cubic voxels, nearest
-// neighbour invents no value, and a part one voxel thick stays at least one voxel thick. File voxel
-// i is at grid point grid.lower() + 1 + i (the padded box of read_volume_as_voxels); the result is
-// laid out the same way and centred, and `geometry` becomes the resampled voxels' map.
+// Anisotropic voxels become cubes of the finest spacing (isotropic_resampling). `grid` holds the
+// file's voxels in the centred, padded box of read_volume_as_voxels; the result is laid out the
+// same way, and `geometry` becomes the resampled voxels' map.
 VoxelGrid resample_isotropic(const VoxelGrid& grid, VolumeGeometry& geometry, std::optional<double> h) {
-  const Eigen::Vector3i size = grid.size() - Eigen::Vector3i::Constant(2);
-  const double fine = geometry.spacing.minCoeff();
-  Eigen::Vector3i m;
-  std::array<std::vector<int>, 3> source;
-  for (int a = 0; a < 3; ++a) {
-    const double ratio = geometry.spacing[a] / fine;
-    const double n = std::round(double(size[a]) * ratio);
-    if (!(n < double(std::numeric_limits<int>::max() - 2))) {
-      std::ostringstream os;
-      os << "volume: resampling the voxels to cubes of " << fine << " gives " << n << " voxels along axis " << a
-         << ", more than a voxel grid holds";
-      throw InputError(os.str(), "volume");
-    }
-    m[a] = std::max(1, int(n));
-    auto& s = source[std::size_t(a)];
-    s.resize(std::size_t(m[a]));
-    // Resampled voxel r covers [r, r + 1) / ratio - 1/2 in file indices; its centre's nearest voxel:
-    for (int r = 0; r < m[a]; ++r) s[std::size_t(r)] = std::min(size[a] - 1, int(std::floor((r + 0.5) / ratio)));
-  }
-  const Eigen::Vector3i shift = volume_centering_shift(m);
+  const IsotropicResampling resampling = isotropic_resampling(grid.size() - Eigen::Vector3i::Constant(2), geometry, h);
   // The constructor checks the grid against the memory budget before allocating it.
-  VoxelGrid out(Eigen::Vector3i::Constant(-1) - shift, m - shift, h ? *h : unit_size_grid_step(m));
-  const Eigen::Vector3i in0 = grid.lower() + Eigen::Vector3i::Ones();
-  for (int z = 0; z < m.z(); ++z)
-    for (int y = 0; y < m.y(); ++y) {
-      const std::uint64_t* in = grid.row(in0.y() + source[1][std::size_t(y)], in0.z() + source[2][std::size_t(z)]);
-      std::uint64_t* row = out.row(y - shift.y(), z - shift.z());
-      for (int x = 0; x < m.x(); ++x) {
-        const int from = source[0][std::size_t(x)] + 1, to = x + 1;
-        if ((in[from >> 6] >> (from & 63)) & 1u) row[to >> 6] |= std::uint64_t{1} << (to & 63);
-      }
-    }
-  // Resampled voxel r's centre is at file index (r + 1/2) / ratio - 1/2.
-  const Eigen::Vector3d half_offset = 0.5 * (Eigen::Vector3d::Constant(fine) - geometry.spacing);
-  geometry.origin += geometry.direction * half_offset;
-  geometry.spacing = Eigen::Vector3d::Constant(fine);
+  VoxelGrid out(resampling.lower(), resampling.upper(), resampling.h);
+  resample_voxels(grid, resampling, out);
+  geometry = resampling.geometry;
   return out;
 }
 
@@ -338,14 +307,16 @@ LoadedSurface load_surface(const SurfaceInput& input, const LoadMessages& messag
   s.grid = volume ? volume_voxels(input, geometry, &s.anisotropy) : load_voxels(input, messages);
   if (s.grid->count() == 0)
     throw InputError("the volume is empty: no voxel is inside, so the surface has no surfel (" + s.description + ")");
-  // A volume's box is its voxels [0, size - 1] - shift, padded by one voxel (read_volume_as_voxels).
-  Eigen::Vector3i shift = Eigen::Vector3i::Zero();
-  if (volume) shift = -s.grid->lower() - Eigen::Vector3i::Ones();
   s.mesh = extract_surface(*s.grid);
   s.h = s.mesh.grid_step();
-  s.frame = VoxelFrame(s.h, shift.cast<double>(), volume ? std::optional<VolumeGeometry>(geometry) : std::nullopt);
+  s.frame = volume ? volume_voxel_frame(s.grid->lower(), s.h, geometry) : VoxelFrame(s.h, Eigen::Vector3d::Zero());
   face_components(s.mesh, s.components);
   return s;
+}
+
+VoxelFrame volume_voxel_frame(const Eigen::Vector3i& lower, double h, const VolumeGeometry& geometry) {
+  const Eigen::Vector3i shift = -lower - Eigen::Vector3i::Ones();
+  return VoxelFrame(h, shift.cast<double>(), geometry);
 }
 
 Eigen::MatrixX3d VoxelFrame::to_physical(const Eigen::MatrixX3d& world) const {

@@ -119,6 +119,12 @@ class VoxelFrame {
   std::optional<VolumeGeometry> geometry_;
 };
 
+/// The frame of a volume's voxels in the centred box of read_volume_as_voxels (or of their
+/// resampling to cubes, isotropic_resampling.hpp), whose lower corner is `lower`: the box is the
+/// voxels [0, size - 1] - shift padded by one, so shift = -lower - 1. `geometry` maps the voxel
+/// index to physical coordinates. load_surface's frame of a volume, and the distributed front end's.
+VoxelFrame volume_voxel_frame(const Eigen::Vector3i& lower, double h, const VolumeGeometry& geometry);
+
 /// A digital surface with what it came from.
 struct LoadedSurface {
   SurfelMesh mesh;

@@ -16,12 +16,14 @@
 #include <corrlap/distributed/distributed_problem.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/pipeline/front_end.hpp>
+#include <corrlap/pipeline/isotropic_resampling.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
 #include <corrlap/problems/problems.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 
 using namespace corrlap;
 
@@ -188,6 +190,45 @@ TEST_CASE("distributed eigs of a volume file (II normals): the serial eigenvalue
   remove_shared(path);
 }
 
+TEST_CASE("distributed problem of an anisotropic volume: load_surface's cubes, the serial Poisson solution") {
+  // A coarse z (x not resampled), and a coarse x: each file column becomes three resampled ones,
+  // so slabs cut between resampled columns that copy the same file column.
+  const std::pair<Eigen::Vector3d, std::string> cases[] = {{Eigen::Vector3d(1.0, 1.0, 2.5), "torus_z.nrrd"},
+                                                           {Eigen::Vector3d(3.0, 1.0, 1.0), "torus_x.mha"}};
+  for (const auto& [spacing, name] : cases) {
+    CAPTURE(name);
+    const std::string path = written(grey_torus(spacing), name);
+    const SurfaceInput input = volume_input(path, 127.0);
+    for (const bool shrink : {false, true}) {
+      CAPTURE(shrink);
+      const NormalRequest normals = ii_request(false, shrink);
+      std::string refused;
+      const auto p = make_distributed_problem(input, normals, refused);
+      CAPTURE(refused);
+      REQUIRE(p);  // the distributed front end, no fallback
+      const Serial s = serial_problem(input, normals);
+      REQUIRE(s.surface.anisotropy > 1.0);
+      CHECK(p->surface().num_vertices == s.surface.mesh.num_vertices());
+      CHECK(p->surface().num_faces == s.surface.mesh.num_faces());
+      check_same_frame(p->frame(), s.surface.frame);
+      const double difference = poisson_difference(*p, s);
+      if (p->surface().rank == 0)
+        MESSAGE(name << std::string(shrink ? ", shrink" : ", keep") << ": " << p->surface().num_faces
+                     << " faces, largest relative difference " << difference);
+      CHECK(difference < 1e-10);
+      // The ranks whose slab starts inside a file column: its first resampled column copies the
+      // same file column as the previous rank's last one (3 x 1 x 1 on 4 ranks: one).
+      const IsotropicResampling r = isotropic_resampling(Eigen::Vector3i(44, 40, 18), grey_torus(spacing).geometry, {});
+      const int k = p->surface().slab.first - r.lower().x() - 1;  // its first resampled index
+      int shared = k > 0 && k < r.size.x() && r.source[0][std::size_t(k)] == r.source[0][std::size_t(k - 1)];
+      MPI_Allreduce(MPI_IN_PLACE, &shared, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+      if (p->surface().rank == 0) MESSAGE(name << ": " << shared << " slab cuts inside a file column");
+      if (spacing.x() > 1.0 && p->surface().ranks == 4) CHECK(shared == 1);
+    }
+    remove_shared(path);
+  }
+}
+
 TEST_CASE("distributed problem with the default II (smaller balls on thin parts): the serial result") {
   const std::string path = written(grey_torus(Eigen::Vector3d::Constant(0.75)), "torus_shrink.npy");
   const SurfaceInput input = volume_input(path, 127.0);
@@ -205,13 +246,9 @@ TEST_CASE("distributed problem with the default II (smaller balls on thin parts)
 }
 
 TEST_CASE("distributed problem: inputs it does not compute as the serial front end are refused on every rank") {
-  // Anisotropic voxels: load_surface resamples them to cubes, the slab reader does not.
-  const std::string path = written(grey_torus(Eigen::Vector3d(0.75, 0.75, 1.5)), "torus_anisotropic.nrrd");
-  std::string refused;
-  CHECK(make_distributed_problem(volume_input(path, 127.0), ii_request(false, false), refused) == nullptr);
-  CHECK(refused.find("anisotropic") != std::string::npos);
   // True normals need a shape; trivial normals and given normals are not distributed.
   const std::string iso = written(grey_torus(Eigen::Vector3d::Constant(1.0)), "torus_iso.npy");
+  std::string refused;
   NormalRequest normals;
   normals.source = NormalSource::True;
   CHECK(make_distributed_problem(volume_input(iso, 127.0), normals, refused) == nullptr);
@@ -220,7 +257,6 @@ TEST_CASE("distributed problem: inputs it does not compute as the serial front e
   normals.source = NormalSource::II;
   normals.face_normals_file = "normals.txt";
   CHECK(make_distributed_problem(volume_input(iso, 127.0), normals, refused) == nullptr);
-  remove_shared(path);
   remove_shared(iso);
 }
 
