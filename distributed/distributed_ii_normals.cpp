@@ -207,8 +207,9 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
 
   // Two balls per face (docs/math.md §7.1: inner and outer voxel, seed = inner voxel), each the sum
   // over the pieces of the seed's component that reach its kernel cube: the moments of the listed
-  // rows of `needed` at digital radius r, inner and outer per row.
-  const auto side_moments = [&](double r, const std::vector<std::size_t>& rows) {
+  // rows of `needed` at digital radius r, inner and outer per row; `joined_count`, if given, receives the
+  // number of balls that took more than one piece.
+  const auto side_moments = [&](double r, const std::vector<std::size_t>& rows, std::int64_t* joined_count = nullptr) {
     const int reach = int(std::ceil(r)) + 1;
     std::vector<IIBall> balls;
     std::vector<std::size_t> ball_begin;  // balls of (row i, side s): ball_begin[2 i + s] .. [2 i + s + 1]
@@ -236,7 +237,7 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
       }
     }
     ball_begin.push_back(balls.size());
-    if (r == rd) out.joined_balls = joined_balls;  // the count of the first estimate's balls
+    if (joined_count) *joined_count = joined_balls;
     const ComponentMoments moments = ii_component_moments(halo.grid, r, h, balls);
     std::vector<BallMoments> sides(2 * rows.size());
     for (std::size_t i = 0; i < sides.size(); ++i)
@@ -257,7 +258,7 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
   }
   std::vector<std::size_t> all(needed.size());
   std::iota(all.begin(), all.end(), std::size_t{0});
-  const std::vector<BallMoments> first = side_moments(rd, all);
+  const std::vector<BallMoments> first = side_moments(rd, all, &out.joined_balls);
   Eigen::MatrixX3d normals(rows, 3);
   std::vector<std::uint8_t> ambiguous(needed.size(), 0);
   for (std::size_t i = 0; i < needed.size(); ++i) {

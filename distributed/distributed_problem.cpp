@@ -71,8 +71,7 @@ DistributedProblem::DistributedProblem(const SurfaceInput& input, const NormalRe
   }
   // resolve_normals' II parameters and checks, then the same face normals as ii_face_normals.
   const IIParams ii = normals.ii ? *normals.ii : default_ii_params(shape_ != nullptr);
-  if (!(ii.k > 0.0 && std::isfinite(ii.k)) || !std::isfinite(ii.alpha))
-    throw InputError("distributed front end: the II radius parameters are not positive and finite");
+  check_ii_params(ii);
   const DistributedNormals n = distributed_ii_normals(source_, surface_, ii);
   fem_ = std::make_unique<DistributedFem>(surface_, n.face_normals);
 }

@@ -87,6 +87,13 @@ void check_ii_vertex_normals(const SurfelMesh& mesh, const Eigen::MatrixX3d& ver
 
 }  // namespace detail
 
+void check_ii_params(const IIParams& ii) {
+  if (!(ii.k > 0.0 && std::isfinite(ii.k)))
+    throw InputError("II normals: the radius factor k = " + std::to_string(ii.k) + " must be positive and finite",
+                     "ii_radius");
+  if (!std::isfinite(ii.alpha)) throw InputError("II normals: the radius exponent alpha must be finite", "ii_alpha");
+}
+
 NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const NormalRequest& request,
                              const ImplicitShape* shape, const VoxelGrid* grid, const std::string& what) {
   NormalFields n;
@@ -104,11 +111,7 @@ NormalFields resolve_normals(const SurfelMesh& mesh, NormalKind need, const Norm
   const IIParams ii = request.ii ? *request.ii : default_ii_params(shape != nullptr);
   bool ii_estimated = false;
   if (!have_all && !n.has_face() && estimates) {
-    if (source == NormalSource::II && !(ii.k > 0.0 && std::isfinite(ii.k)))
-      throw InputError("II normals: the radius factor k = " + std::to_string(ii.k) + " must be positive and finite",
-                       "ii_radius");
-    if (source == NormalSource::II && !std::isfinite(ii.alpha))
-      throw InputError("II normals: the radius exponent alpha must be finite", "ii_alpha");
+    if (source == NormalSource::II) check_ii_params(ii);
     n.face = estimate_face_normals(source, mesh, grid, shape, ii, request.progress);
     ii_estimated = source == NormalSource::II;
   }

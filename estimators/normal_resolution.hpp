@@ -58,6 +58,10 @@ Eigen::MatrixX3d true_vertex_normals_from_faces(const ImplicitShape& shape, cons
 /// source Exact gives at vertices, not what "true" gives.
 Eigen::MatrixX3d exact_vertex_normals(const ImplicitShape& shape, const SurfelMesh& mesh);
 
+/// resolve_normals' check of the II radius parameters, for every front end that estimates II normals:
+/// InputError "ii_radius" unless k is positive and finite, "ii_alpha" unless alpha is finite.
+void check_ii_params(const IIParams& ii);
+
 namespace detail {
 /// resolve_normals' check of II vertex normals (the normalized sums of the faces'): returns when
 /// none is zero, else throws InputError, parameter "ii_radius" when the radius reaches across the

@@ -92,15 +92,14 @@ for name in anisotropic coarse_x; do
   done
 done
 
-python3 - "$work" <<'PY'
-import sys
+python3 - "$work" "$(dirname "$0")" <<'PY'
+import os, sys
 work = sys.argv[1]
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, sys.argv[2])
+from solution_files import load as load_path, relative_difference as rel
 def load(name):
-    with open(f"{work}/{name}") as f:
-        return [float(line) for line in f if line.strip() and not line.startswith("#")]
-def rel(a, b):
-    assert len(a) == len(b), (len(a), len(b))
-    return max(abs(x - y) for x, y in zip(a, b)) / max(abs(y) for y in b)
+    return load_path(os.path.join(work, name))
 worst = {}
 for case in ("volume", "shape"):
     for np in (1, 2, 4):

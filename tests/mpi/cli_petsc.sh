@@ -41,16 +41,15 @@ ls -a "$work" | grep -q corrlap-tmp && { echo "a temporary file was left behind"
 grep -q "slepc" "$work/eigs_slepc.err" || { echo "eigs did not report the slepc solver"; cat "$work/eigs_slepc.err"; exit 1; }
 grep -q "on the distributed front end over 2 ranks" "$work/eigs_slepc.err" || { echo "eigs did not take the distributed front end"; cat "$work/eigs_slepc.err"; exit 1; }
 
-# Plain Python (no numpy: whatever python3 is first on PATH).
-python3 - "$work" <<'PY'
-import sys
+# Plain Python (no numpy: whatever python3 is first on PATH), with solution_files.py beside this script.
+python3 - "$work" "$(dirname "$0")" <<'PY'
+import os, sys
 work = sys.argv[1]
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, sys.argv[2])
+from solution_files import load as load_path, relative_difference as rel
 def load(name):
-    with open(f"{work}/{name}") as f:
-        return [float(line) for line in f if line.strip() and not line.startswith("#")]
-def rel(a, b):
-    assert len(a) == len(b), (len(a), len(b))
-    return max(abs(x - y) for x, y in zip(a, b)) / max(abs(y) for y in b)
+    return load_path(os.path.join(work, name))
 g0 = load("cholmod.txt")
 for name, tol in (("petsc.txt", 1e-10), ("gamg.txt", 1e-6)):
     assert rel(load(name), g0) < tol, (name, rel(load(name), g0))
