@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -125,25 +126,30 @@ FaceClusters cluster_faces(const std::vector<WalkFace>& face, const std::vector<
 // The rows of `points` (#points x 3) in Z-order (Morton order) of their cells of side `cell`:
 // new -> old. Points near in space end up near in the order, so walks over neighbouring balls
 // read the same cache lines.
+// 21 bits -> every third bit of 63 (a Morton key's coordinate).
+std::uint64_t morton_spread(std::uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+// Lattice coordinates anchored at the origin, shifted into the 21 bits of morton_spread.
+constexpr std::int64_t kZOrderOffset = std::int64_t{1} << 20;
+
 std::vector<int> z_order(const Eigen::MatrixX3d& points, double cell) {
   const Eigen::Index n = points.rows();
   std::vector<std::pair<std::uint64_t, int>> keyed(static_cast<std::size_t>(n));
   if (n == 0) return {};
   const Eigen::RowVector3d low = points.colwise().minCoeff();
-  const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-  };
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     std::uint64_t key = 0;
     for (int j = 0; j < 3; ++j) {
       const double c = std::floor((points(i, j) - low[j]) / cell);
-      key |= spread(std::uint64_t(std::clamp(c, 0.0, double(0x1fffff)))) << j;
+      key |= morton_spread(std::uint64_t(std::clamp(c, 0.0, double(0x1fffff)))) << j;
     }
     keyed[std::size_t(i)] = {key, int(i)};
   });
@@ -751,24 +757,56 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(do
   if (!interpolated_ || r < 1e-6 || spacing < 2.0 * edge) return mean_curvature_at_vertices(r);
   const Eigen::Index V = positions_.rows();
   const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
-  // Greedy cover in Z-order: a vertex becomes a site unless a site within spacing / 2 has a
-  // normal within 60 degrees of its own.
   const double cover2 = 0.25 * spacing * spacing, reach2 = spacing * spacing, agree = 0.5;
+  // Sites per cell of a lattice of side `spacing` anchored at the origin (docs/math.md §8.4): the
+  // choice in a cell depends on its vertices alone, so any part of the surface that holds a cell's
+  // vertices chooses its sites the same (the distributed front end's slabs), and cells run in parallel.
+  struct Keyed {
+    std::array<std::int64_t, 3> cell;
+    std::uint64_t z;  // Z-order of the vertex in the lattice of side grid_cell_, anchored at the origin
+    int v;
+    bool operator<(const Keyed& o) const { return cell != o.cell ? cell < o.cell : z != o.z ? z < o.z : v < o.v; }
+  };
+  std::vector<Keyed> keyed;
+  keyed.reserve(std::size_t(V));
+  for (Eigen::Index v = 0; v < V; ++v) {
+    if (vertex_face_[std::size_t(v)] < 0) continue;
+    Keyed k{{}, 0, int(v)};
+    for (int j = 0; j < 3; ++j) {
+      k.cell[std::size_t(j)] = std::int64_t(std::floor(positions_(v, j) / spacing));
+      k.z |= morton_spread(std::uint64_t(std::int64_t(std::floor(positions_(v, j) / grid_cell_)) + kZOrderOffset)) << j;
+    }
+    keyed.push_back(k);
+  }
+  tbb::parallel_sort(keyed.begin(), keyed.end());
+  std::vector<std::size_t> run_begin;  // the vertices of each cell: keyed[run_begin[c] .. run_begin[c + 1])
+  for (std::size_t i = 0; i < keyed.size(); ++i)
+    if (i == 0 || keyed[i].cell != keyed[i - 1].cell) run_begin.push_back(i);
+  run_begin.push_back(keyed.size());
+  // In each cell, in Z-order: a vertex becomes a site unless a site of its cell within spacing / 2
+  // has a normal within 60 degrees of its own.
+  std::vector<std::vector<int>> cell_sites(run_begin.size() - 1);
+  tbb::parallel_for(std::size_t(0), cell_sites.size(), [&](std::size_t c) {
+    std::vector<int>& sites = cell_sites[c];
+    for (std::size_t i = run_begin[c]; i < run_begin[c + 1]; ++i) {
+      const int v = keyed[i].v;
+      const V3 p = positions_.row(v).transpose(), n = vertex_normals_.row(v).transpose();
+      const bool covered = std::any_of(sites.begin(), sites.end(), [&](int u) {
+        return (positions_.row(u).transpose() - p).squaredNorm() <= cover2 && vertex_normals_.row(u).dot(n) >= agree;
+      });
+      if (!covered) sites.push_back(v);
+    }
+  });
+  std::vector<int> vertex_rank(static_cast<std::size_t>(V));
+  for (std::size_t i = 0; i < vertex_order.size(); ++i) vertex_rank[std::size_t(vertex_order[i])] = int(i);
   SiteGrid grid(positions_, spacing);
   std::vector<int> site_vertex, site_rank;  // mesh index and Z-order rank of each site
-  for (std::size_t i = 0; i < vertex_order.size(); ++i) {
-    const int v = vertex_order[i];
-    if (vertex_face_[std::size_t(v)] < 0) continue;
-    const V3 p = positions_.row(v).transpose(), n = vertex_normals_.row(v).transpose();
-    const bool covered = grid.any_near(p, [&](int s) {
-      const int u = site_vertex[std::size_t(s)];
-      return (positions_.row(u).transpose() - p).squaredNorm() <= cover2 && vertex_normals_.row(u).dot(n) >= agree;
-    });
-    if (covered) continue;
-    grid.add(int(site_vertex.size()), p);
-    site_vertex.push_back(v);
-    site_rank.push_back(int(i));
-  }
+  for (const std::vector<int>& sites : cell_sites)
+    for (int v : sites) {
+      grid.add(int(site_vertex.size()), positions_.row(v).transpose());
+      site_vertex.push_back(v);
+      site_rank.push_back(vertex_rank[std::size_t(v)]);
+    }
   const MeanCurvature walked = walk_mean_curvature(r, vertex_order, site_rank);
   MeanCurvature out{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V)};
   tbb::parallel_for(Eigen::Index(0), V, [&](Eigen::Index v) {
