@@ -758,9 +758,12 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(do
   const Eigen::Index V = positions_.rows();
   const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
   const double cover2 = 0.25 * spacing * spacing, reach2 = spacing * spacing, agree = 0.5;
-  // Sites per cell of a lattice of side `spacing` anchored at the origin (docs/math.md §8.4): the
-  // choice in a cell depends on its vertices alone, so any part of the surface that holds a cell's
-  // vertices chooses its sites the same (the distributed front end's slabs), and cells run in parallel.
+  // Sites per cell of a lattice anchored at the origin (docs/math.md §8.4): the choice in a cell
+  // depends on its vertices alone, so any part of the surface that holds a cell's vertices chooses
+  // its sites the same (the distributed front end's slabs), and cells run in parallel. Cells of two
+  // spacings: sites on either side of a cell's border do not cover each other, and smaller cells
+  // add more such sites to walk than larger ones save in the cover (bench/RESULTS.md).
+  const double cell = 2.0 * spacing;
   struct Keyed {
     std::array<std::int64_t, 3> cell;
     std::uint64_t z;  // Z-order of the vertex in the lattice of side grid_cell_, anchored at the origin
@@ -773,7 +776,7 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(do
     if (vertex_face_[std::size_t(v)] < 0) continue;
     Keyed k{{}, 0, int(v)};
     for (int j = 0; j < 3; ++j) {
-      k.cell[std::size_t(j)] = std::int64_t(std::floor(positions_(v, j) / spacing));
+      k.cell[std::size_t(j)] = std::int64_t(std::floor(positions_(v, j) / cell));
       k.z |= morton_spread(std::uint64_t(std::int64_t(std::floor(positions_(v, j) / grid_cell_)) + kZOrderOffset)) << j;
     }
     keyed.push_back(k);
