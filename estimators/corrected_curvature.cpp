@@ -761,8 +761,8 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(do
   // Sites per cell of a lattice anchored at the origin (docs/math.md §8.4): the choice in a cell
   // depends on its vertices alone, so any part of the surface that holds a cell's vertices chooses
   // its sites the same (the distributed front end's slabs), and cells run in parallel. Cells of two
-  // spacings: sites on either side of a cell's border do not cover each other, and smaller cells
-  // add more such sites to walk than larger ones save in the cover (bench/RESULTS.md).
+  // spacings: sites on either side of a border do not cover each other, so smaller cells add sites
+  // to walk, and larger ones lengthen each vertex's cover test (bench/RESULTS.md).
   const double cell = 2.0 * spacing;
   struct Keyed {
     std::array<std::int64_t, 3> cell;
