@@ -50,11 +50,16 @@ Eigen::MatrixX3d mean_curvature_normals(const Eigen::MatrixX3d& normals, const E
   return H.asDiagonal() * normals;
 }
 
-// The right-hand side of the normal equations, alpha M_l p - 2 L (H n) (#V x 3).
-Eigen::MatrixX3d normal_equations_rhs(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& Ml,
-                                      const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
-                                      const Eigen::VectorXd& H, double alpha) {
-  return alpha * (Ml * p) - 2.0 * (L * mean_curvature_normals(normals, H));
+// The part of the normal equations' right-hand side that alpha does not change, -2 L (H n) (#V x 3).
+Eigen::MatrixX3d curvature_rhs(const Eigen::SparseMatrix<double>& L, const Eigen::MatrixX3d& normals,
+                               const Eigen::VectorXd& H) {
+  return -2.0 * (L * mean_curvature_normals(normals, H));
+}
+
+// The right-hand side of the normal equations, alpha M_l p - 2 L (H n) (#V x 3), from its curvature part.
+Eigen::MatrixX3d normal_equations_rhs(const Eigen::SparseMatrix<double>& Ml, const Eigen::MatrixX3d& p,
+                                      const Eigen::MatrixX3d& curvature, double alpha) {
+  return alpha * (Ml * p) + curvature;
 }
 
 // The relative residual of the normal equations, max over the columns of |R_j| / |b_j|.
@@ -138,7 +143,7 @@ Eigen::MatrixX3d regularize_positions(const Eigen::SparseMatrix<double>& L, cons
   Eigen::SparseMatrix<double> A = L * scaled_L;
   A += alpha * Ml;
   A.prune(0.0);
-  const Eigen::MatrixX3d rhs = normal_equations_rhs(L, Ml, p, normals, H, alpha);
+  const Eigen::MatrixX3d rhs = normal_equations_rhs(Ml, p, curvature_rhs(L, normals, H), alpha);
   solver.set_positions(p);  // orders the factorization (geometric nested dissection)
   solver.compute(std::move(A));
   const Eigen::MatrixXd q = solver.solve(rhs);
@@ -161,8 +166,7 @@ PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMa
   lumped_mass_ = lumped_mass(M);
   mass_ = lumped_mass_.diagonal();
   inverse_mass_ = mass_.cwiseInverse();
-  // alpha M_l p - 2 L (H n): the curvature part does not depend on alpha.
-  curvature_rhs_ = -2.0 * (L * mean_curvature_normals(normals, H));
+  curvature_rhs_ = curvature_rhs(L, normals, H);
 }
 
 Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accuracy, SolverReport* report,
@@ -174,7 +178,7 @@ Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accura
   check_alpha(alpha, mass.sum(), p_);
   if (start && (start->rows() != p_.rows() || !start->allFinite()))
     throw InputError("regularization: the start positions must be finite, one row per vertex", "start");
-  const Eigen::MatrixX3d rhs = alpha * (lumped_mass_ * p_) + curvature_rhs_;
+  const Eigen::MatrixX3d rhs = normal_equations_rhs(lumped_mass_, p_, curvature_rhs_, alpha);
   // B = sqrt(alpha) M_l - L, SPD when L is negative semi-definite (the header's bound).
   Eigen::SparseMatrix<double> B = L;  // a plain copy, negated in place: the expression -L is slower
   B *= -1.0;
