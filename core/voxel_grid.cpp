@@ -42,7 +42,7 @@ VoxelGrid::VoxelGrid(const Eigen::Vector3i& lower, const Eigen::Vector3i& upper,
   {
     std::ostringstream what;
     what << "voxel grid: a box of " << n.x() << "x" << n.y() << "x" << n.z() << " voxels";
-    check_memory_budget(double(words) * sizeof(std::uint64_t), what.str(), "use a larger grid step or a smaller box");
+    check_memory_budget(bytes_for(n), what.str(), "use a larger grid step or a smaller box");
   }
   // All zero without writing (see ZeroFilledAllocator): digitization then touches only the pages
   // holding inside voxels.

@@ -74,6 +74,11 @@ class VoxelGrid {
   const std::uint64_t* row(int y, int z) const { return words_.data() + row_offset(y, z); }
   std::uint64_t* row(int y, int z) { return words_.data() + row_offset(y, z); }
   std::size_t memory_bytes() const { return words_.size() * sizeof(std::uint64_t); }
+  /// The bytes a grid of that many voxels per axis holds (rows of whole words), computed in
+  /// double so that a size check can come before the multiplication overflows.
+  static double bytes_for(const Eigen::Vector3i& size) {
+    return double((std::int64_t(size.x()) + 63) / 64) * double(size.y()) * double(size.z()) * sizeof(std::uint64_t);
+  }
 
  private:
   std::size_t row_offset(int y, int z) const {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <corrlap/surface/surfel_order.hpp>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -155,12 +156,19 @@ void add(BallMoments& sum, const BallMoments& m) {
   for (int k = 0; k < 6; ++k) sum.m2[k] += m.m2[k];
 }
 
-}  // namespace
+// The II normals of the faces whose lower voxel lies within `columns` of the slab (`needed`, faces
+// of `halo`, in its order), bit for bit the serial ones.
+struct NormalsNearSlab {
+  DistributedHalo halo;
+  std::vector<int> needed;
+  Eigen::MatrixX3d normals;  // #needed x 3
+  std::int64_t joined_balls = 0;
+};
 
-int ii_halo_width(double digital_radius) { return int(std::ceil(digital_radius)) + 2; }
-
-DistributedNormals distributed_ii_normals(const SlabSource& source, const DistributedSurface& surface,
-                                          const IIParams& params) {
+NormalsNearSlab ii_normals_near_slab(const SlabSource& source, const DistributedSurface& surface,
+                                     const IIParams& params, int columns) {
+  if (columns < 1)
+    throw InputError("distributed II normals: at least 1 column beyond the slab, got " + std::to_string(columns));
   // The checks of ii_face_normals, on the whole box and the whole surface (same on every rank).
   const double h = source.h;
   Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity());
@@ -178,10 +186,10 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
   ii_check_radius((source.upper - source.lower + Eigen::Vector3i::Ones()).maxCoeff(), rd);
   ii_check_radius_fits_object(across, rd);
 
-  DistributedNormals out;
+  NormalsNearSlab out;
   // §7.2's retries use smaller balls than the first: the first's halo serves them all.
-  out.halo_width = ii_halo_width(rd);
-  const DistributedHalo halo = distributed_halo(source, surface, out.halo_width);
+  out.halo = distributed_halo(source, surface, ii_halo_width(rd) + columns - 1);
+  const DistributedHalo& halo = out.halo;
 
   // docs/math.md §7.1 over the whole grid: the components of the slab, joined over the ranks, and
   // the whole-grid component of each piece the halo's voxels hold.
@@ -193,16 +201,10 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
   std::unordered_map<std::int64_t, std::vector<int>> pieces_of;
   for (int p = 0; p < pieces.count; ++p) pieces_of[piece_roots[std::size_t(p)]].push_back(p);
 
-  // The faces whose normals are needed: the owned ones and those one column beyond, which share
-  // the owned vertices (a vertex's faces have lower voxels in the columns x - 1 and x of its pointel).
-  std::vector<int> needed;
-  std::vector<int> row_of(std::size_t(halo.mesh.num_faces()), -1);
+  std::vector<int>& needed = out.needed;
   for (int f = 0; f < halo.mesh.num_faces(); ++f) {
     const int x = halo.mesh.surfels[std::size_t(f)].lower_voxel.x();
-    if (x >= surface.slab.first - 1 && x <= surface.slab.last + 1) {
-      row_of[std::size_t(f)] = int(needed.size());
-      needed.push_back(f);
-    }
+    if (x >= surface.slab.first - columns && x <= surface.slab.last + columns) needed.push_back(f);
   }
 
   // Two balls per face (docs/math.md §7.1: inner and outer voxel, seed = inner voxel), each the sum
@@ -250,16 +252,15 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
   const auto rows = Eigen::Index(needed.size());
   Eigen::MatrixX3d trivial(rows, 3), around = Eigen::MatrixX3d::Zero(rows, 3);
   const Eigen::MatrixX3d around_halo = shrink ? ii_trivial_normals_around(halo.mesh) : Eigen::MatrixX3d();
-  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces(rows, 4);
   for (Eigen::Index i = 0; i < rows; ++i) {
     trivial.row(i) = halo.mesh.surfels[std::size_t(needed[std::size_t(i)])].trivial_normal().transpose();
     if (shrink) around.row(i) = around_halo.row(needed[std::size_t(i)]);
-    faces.row(i) = halo.mesh.faces.row(needed[std::size_t(i)]);
   }
   std::vector<std::size_t> all(needed.size());
   std::iota(all.begin(), all.end(), std::size_t{0});
   const std::vector<BallMoments> first = side_moments(rd, all, &out.joined_balls);
-  Eigen::MatrixX3d normals(rows, 3);
+  Eigen::MatrixX3d& normals = out.normals;
+  normals.resize(rows, 3);
   std::vector<std::uint8_t> ambiguous(needed.size(), 0);
   for (std::size_t i = 0; i < needed.size(); ++i) {
     const IIFaceEstimate e =
@@ -269,6 +270,29 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
     ambiguous[i] = e.ambiguous ? 1 : 0;
   }
   if (shrink) ii_retry_thin_parts(start, trivial, around, ambiguous, normals, side_moments);
+  return out;
+}
+
+}  // namespace
+
+int ii_halo_width(double digital_radius) { return int(std::ceil(digital_radius)) + 2; }
+
+DistributedNormals distributed_ii_normals(const SlabSource& source, const DistributedSurface& surface,
+                                          const IIParams& params) {
+  // The owned faces and those one column beyond, which share the owned vertices (a vertex's faces
+  // have lower voxels in the columns x - 1 and x of its pointel).
+  const NormalsNearSlab near = ii_normals_near_slab(source, surface, params, 1);
+  const DistributedHalo& halo = near.halo;
+  const Eigen::MatrixX3d& normals = near.normals;
+  std::vector<int> row_of(std::size_t(halo.mesh.num_faces()), -1);
+  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces(Eigen::Index(near.needed.size()), 4);
+  for (std::size_t i = 0; i < near.needed.size(); ++i) {
+    row_of[std::size_t(near.needed[i])] = int(i);
+    faces.row(Eigen::Index(i)) = halo.mesh.faces.row(near.needed[i]);
+  }
+  DistributedNormals out;
+  out.halo_width = halo.width;
+  out.joined_balls = near.joined_balls;
 
   // Owned faces, and owned vertices: the serial normalized sum, whose terms (the faces of a vertex)
   // come in serial face order here too.
@@ -283,6 +307,59 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
       halo_vertex[std::size_t(surface.mesh.faces(f, c))] = halo.mesh.faces(halo.owned_faces[std::size_t(f)], c);
   out.vertex_normals.resize(surface.num_owned, 3);
   for (int v = 0; v < surface.num_owned; ++v) out.vertex_normals.row(v) = vertex.row(halo_vertex[std::size_t(v)]);
+  return out;
+}
+
+NearSlabNormals distributed_ii_normals_near_slab(const SlabSource& source, const DistributedSurface& surface,
+                                                 const IIParams& params, int columns) {
+  const NormalsNearSlab near = ii_normals_near_slab(source, surface, params, columns);
+  const DistributedHalo& halo = near.halo;
+  NearSlabNormals out;
+  out.columns = columns;
+  // The needed faces keep the halo's (serial) order; their vertices are renumbered by first
+  // appearance, as extract_surface numbers them.
+  const int F = int(near.needed.size());
+  std::vector<int> local(std::size_t(halo.mesh.num_vertices()), -1);
+  out.mesh.h = halo.mesh.h;
+  out.mesh.faces.resize(F, 4);
+  out.mesh.surfels.reserve(std::size_t(F));
+  for (int f = 0; f < F; ++f) {
+    const int g = near.needed[std::size_t(f)];
+    out.mesh.surfels.push_back(halo.mesh.surfels[std::size_t(g)]);
+    out.face_ids.push_back(halo.face_ids[std::size_t(g)]);
+    for (int c = 0; c < 4; ++c) {
+      int& l = local[std::size_t(halo.mesh.faces(g, c))];
+      if (l < 0) {
+        l = int(out.pointels.size());
+        out.pointels.push_back(halo.pointels[std::size_t(halo.mesh.faces(g, c))]);
+      }
+      out.mesh.faces(f, c) = l;
+    }
+  }
+  const int V = int(out.pointels.size());
+  out.mesh.positions.resize(V, 3);
+  for (int v = 0; v < V; ++v)
+    for (int a = 0; a < 3; ++a)
+      out.mesh.positions(v, a) = pointel_coordinate(out.pointels[std::size_t(v)][a], source.h);
+  out.face_normals = near.normals;
+  out.vertex_normals = vertex_normals_from_face_normals(out.face_normals, out.mesh.faces, V);
+  // A vertex at the ragged edge, missing faces, can sum to zero where its whole fan would not:
+  // give it one of its faces' normals, so that the field stays unit (its value is not exact there).
+  for (int f = 0; f < F; ++f)
+    for (int c = 0; c < 4; ++c)
+      if (out.vertex_normals.row(out.mesh.faces(f, c)).squaredNorm() == 0.0)
+        out.vertex_normals.row(out.mesh.faces(f, c)) = out.face_normals.row(f);
+  // The owned vertices through their owned faces, which lie within one column of the slab.
+  std::vector<int> face_of_halo(std::size_t(halo.mesh.num_faces()), -1);
+  for (int f = 0; f < F; ++f) face_of_halo[std::size_t(near.needed[std::size_t(f)])] = f;
+  out.owned_vertices.assign(std::size_t(surface.num_owned), -1);
+  for (std::size_t f = 0; f < halo.owned_faces.size(); ++f) {
+    const int here = face_of_halo[std::size_t(halo.owned_faces[f])];
+    for (int c = 0; c < 4; ++c) {
+      const int v = surface.mesh.faces(Eigen::Index(f), c);
+      if (v < surface.num_owned) out.owned_vertices[std::size_t(v)] = out.mesh.faces(here, c);
+    }
+  }
   return out;
 }
 

@@ -750,13 +750,43 @@ class SiteGrid {
 }  // namespace
 
 CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(double r, double spacing) const {
+  return sites_mean_curvature(r, spacing, nullptr);
+}
+
+CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(double r, double spacing,
+                                                                              const std::vector<int>& vertices) const {
+  const Eigen::Index V = positions_.rows();
+  for (int v : vertices)
+    if (v < 0 || v >= V)
+      throw InputError("curvature: vertex " + std::to_string(v) + " is not one of the mesh's " + std::to_string(V));
+  return sites_mean_curvature(r, spacing, &vertices);
+}
+
+CorrectedCurvature::MeanCurvature CorrectedCurvature::sites_mean_curvature(double r, double spacing,
+                                                                           const std::vector<int>* only) const {
   check_radius(r, positions_);
   if (!(spacing >= 0.0) || !std::isfinite(spacing))
     throw InputError("curvature: site spacing must be >= 0, got " + std::to_string(spacing));
-  const double edge = 0.5 * grid_cell_;
-  if (!interpolated_ || r < 1e-6 || spacing < 2.0 * edge) return mean_curvature_at_vertices(r);
   const Eigen::Index V = positions_.rows();
+  // wanted[v]: v's H is asked for.
+  std::vector<char> wanted(std::size_t(V), only ? 0 : 1);
+  if (only)
+    for (int v : *only) wanted[std::size_t(v)] = 1;
+  const auto keep_wanted = [&](MeanCurvature m) {
+    if (only)
+      for (Eigen::Index v = 0; v < V; ++v)
+        if (!wanted[std::size_t(v)]) m.H[v] = m.area[v] = 0.0;
+    return m;
+  };
+  const double edge = 0.5 * grid_cell_;
+  if (!interpolated_ || r < 1e-6) return keep_wanted(mean_curvature_at_vertices(r));
   const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
+  if (spacing < 2.0 * edge) {
+    std::vector<int> at;
+    for (std::size_t i = 0; i < vertex_order.size(); ++i)
+      if (wanted[std::size_t(vertex_order[i])]) at.push_back(int(i));
+    return walk_mean_curvature(r, vertex_order, at);
+  }
   const double cover2 = 0.25 * spacing * spacing, reach2 = spacing * spacing, agree = 0.5;
   // Sites per cell of a lattice anchored at the origin (docs/math.md §8.4): the choice in a cell
   // depends on its vertices alone, so any part of the surface that holds a cell's vertices chooses
@@ -764,17 +794,23 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(do
   // spacings: sites on either side of a border do not cover each other, so smaller cells add sites
   // to walk, and larger ones lengthen each vertex's cover test (bench/RESULTS.md).
   const double cell = 2.0 * spacing;
+  // Ties of the Z-order (a lattice cell of grid_cell_ holds several vertices) go by position, not
+  // by vertex index: another part of the mesh numbers its vertices otherwise. The index decides
+  // only between copies of one point.
   struct Keyed {
     std::array<std::int64_t, 3> cell;
     std::uint64_t z;  // Z-order of the vertex in the lattice of side grid_cell_, anchored at the origin
+    std::array<double, 3> p;
     int v;
-    bool operator<(const Keyed& o) const { return cell != o.cell ? cell < o.cell : z != o.z ? z < o.z : v < o.v; }
+    bool operator<(const Keyed& o) const {
+      return cell != o.cell ? cell < o.cell : z != o.z ? z < o.z : p != o.p ? p < o.p : v < o.v;
+    }
   };
   std::vector<Keyed> keyed;
   keyed.reserve(std::size_t(V));
   for (Eigen::Index v = 0; v < V; ++v) {
     if (vertex_face_[std::size_t(v)] < 0) continue;
-    Keyed k{{}, 0, int(v)};
+    Keyed k{{}, 0, {positions_(v, 0), positions_(v, 1), positions_(v, 2)}, int(v)};
     for (int j = 0; j < 3; ++j) {
       k.cell[std::size_t(j)] = std::int64_t(std::floor(positions_(v, j) / cell));
       k.z |= morton_spread(std::uint64_t(std::int64_t(std::floor(positions_(v, j) / grid_cell_)) + kZOrderOffset)) << j;
@@ -803,23 +839,42 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::mean_curvature_at_sites(do
   std::vector<int> vertex_rank(static_cast<std::size_t>(V));
   for (std::size_t i = 0; i < vertex_order.size(); ++i) vertex_rank[std::size_t(vertex_order[i])] = int(i);
   SiteGrid grid(positions_, spacing);
-  std::vector<int> site_vertex, site_rank;  // mesh index and Z-order rank of each site
+  std::vector<int> site_vertex;  // mesh index of each site
   for (const std::vector<int>& sites : cell_sites)
     for (int v : sites) {
       grid.add(int(site_vertex.size()), positions_.row(v).transpose());
       site_vertex.push_back(v);
-      site_rank.push_back(vertex_rank[std::size_t(v)]);
     }
+  // A site contributes to v when within `spacing` with a normal within 60 degrees.
+  const auto contributes = [&](int u, const V3& p, const V3& n, double& d2) {
+    d2 = (positions_.row(u).transpose() - p).squaredNorm();
+    return d2 < reach2 && vertex_normals_.row(u).dot(n) >= agree;
+  };
+  // The sites to walk: all, or those contributing to a wanted vertex.
+  std::vector<char> walk_site(site_vertex.size(), only ? 0 : 1);
+  if (only)
+    for (int v : *only) {
+      if (vertex_face_[std::size_t(v)] < 0) continue;
+      const V3 p = positions_.row(v).transpose(), n = vertex_normals_.row(v).transpose();
+      grid.any_near(p, [&](int s) {
+        double d2;
+        if (contributes(site_vertex[std::size_t(s)], p, n, d2)) walk_site[std::size_t(s)] = 1;
+        return false;
+      });
+    }
+  std::vector<int> site_rank;  // Z-order ranks of the sites walked
+  for (std::size_t s = 0; s < site_vertex.size(); ++s)
+    if (walk_site[s]) site_rank.push_back(vertex_rank[std::size_t(site_vertex[s])]);
   const MeanCurvature walked = walk_mean_curvature(r, vertex_order, site_rank);
   MeanCurvature out{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V)};
   tbb::parallel_for(Eigen::Index(0), V, [&](Eigen::Index v) {
-    if (vertex_face_[std::size_t(v)] < 0) return;  // as at_vertices: 0
+    if (vertex_face_[std::size_t(v)] < 0 || !wanted[std::size_t(v)]) return;  // as at_vertices: 0
     const V3 p = positions_.row(v).transpose(), n = vertex_normals_.row(v).transpose();
     double weights = 0.0, H = 0.0, area = 0.0;
     grid.any_near(p, [&](int s) {
       const int u = site_vertex[std::size_t(s)];
-      const double d2 = (positions_.row(u).transpose() - p).squaredNorm();
-      if (d2 < reach2 && vertex_normals_.row(u).dot(n) >= agree) {
+      double d2;
+      if (contributes(u, p, n, d2)) {
         const double t = 1.0 - d2 / reach2, weight = t * t;
         weights += weight, H += weight * walked.H[u], area += weight * walked.area[u];
       }

@@ -58,14 +58,22 @@ class CorrectedCurvature {
   /// The constant variant and radii below 1e-6 use at_vertices.
   MeanCurvature mean_curvature_at_vertices(double r) const;
   /// Approximates mean_curvature_at_vertices(r) with the ball walked at fewer vertices, the
-  /// sites: taken greedily in Z-order so that every vertex has a site within spacing / 2 whose
-  /// normal is within 60 degrees of its own (sheets of a thin part get their own sites). A
+  /// sites: chosen per cell of a lattice of side 2 spacing anchored at the origin, greedily in
+  /// Z-order among the cell's vertices, so that every vertex has a site of its cell within
+  /// spacing / 2 whose normal is within 60 degrees of its own (sheets of a thin part get their own
+  /// sites). Any part of the mesh holding a cell's vertices chooses that cell's sites alike. A
   /// vertex's H (and area) is the mean over those sites within `spacing`, weighted by
   /// (1 - (d / spacing)^2)^2. The ball estimate varies at the scale of r, not of an edge, so a
   /// spacing of a fraction of r changes it far less than its own error (docs/math.md §8.4); the
   /// walk's cost per vertex grows as r^2, the sites' count falls as 1 / spacing^2. Spacings below
   /// 2 edges walk every vertex (then the result is mean_curvature_at_vertices(r)).
   MeanCurvature mean_curvature_at_sites(double r, double spacing) const;
+  /// mean_curvature_at_sites(r, spacing) at the listed vertices (the others get 0), walking only
+  /// the sites within `spacing` of them. A listed vertex's value depends on the mesh within
+  /// 3 spacing + r of it alone (its sites' cells and their balls), and there equals the whole
+  /// mesh's to rounding: the distributed front end's halos rely on it. Throws InputError for an
+  /// index outside the mesh.
+  MeanCurvature mean_curvature_at_sites(double r, double spacing, const std::vector<int>& vertices) const;
   /// Estimates with balls centred at arbitrary points (#P x 3): the seed is the face with the
   /// nearest centroid, found through a uniform grid of face centroids; N = that face's normal.
   CurvatureEstimates at_points(const Eigen::MatrixX3d& points, double r) const;
@@ -77,6 +85,8 @@ class CorrectedCurvature {
   /// mean_curvature_at_vertices' walk at the vertices vertex_order[at[k]] (vertex_order: every
   /// vertex in Z-order); the others get 0.
   MeanCurvature walk_mean_curvature(double r, const std::vector<int>& vertex_order, const std::vector<int>& at) const;
+  /// Both mean_curvature_at_sites: every vertex when `only` is null.
+  MeanCurvature sites_mean_curvature(double r, double spacing, const std::vector<int>* only) const;
   void compute_vertex_mu2();
   void estimate(const Eigen::Vector3d& x, double r, int seed, const Eigen::Vector3d& N, CurvatureEstimates& out,
                 Eigen::Index i) const;

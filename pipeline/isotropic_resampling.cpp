@@ -12,11 +12,6 @@ namespace corrlap {
 
 namespace {
 
-// The bytes of a voxel grid of that box (core/voxel_grid.hpp: rows of whole 64-bit words).
-double grid_bytes(const Eigen::Vector3i& size) {
-  return double((std::int64_t(size.x()) + 63) / 64) * double(size.y()) * double(size.z()) * sizeof(std::uint64_t);
-}
-
 std::string describe_size(const Eigen::Vector3i& size) {
   return std::to_string(size.x()) + "x" + std::to_string(size.y()) + "x" + std::to_string(size.z());
 }
@@ -104,7 +99,7 @@ VoxelGrid read_resampled_volume_slab(const std::string& path, const VolumeReadOp
   const Eigen::Vector3i size = upper - lower + Eigen::Vector3i::Ones();
   const Eigen::Vector3i file_size(file_last - file_first + 1, resampling.file_size.y() + 2,
                                   resampling.file_size.z() + 2);
-  check_memory_budget(grid_bytes(size) + grid_bytes(file_size),
+  check_memory_budget(VoxelGrid::bytes_for(size) + VoxelGrid::bytes_for(file_size),
                       "volume '" + path + "': a slab of " + describe_size(size) + " resampled voxels and the file's " +
                           describe_size(file_size) + " voxels it copies",
                       "use fewer voxels per slab (more ranks)");

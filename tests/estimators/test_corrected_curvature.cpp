@@ -231,6 +231,83 @@ TEST_CASE("mean_curvature_at_sites: a mean of walked values, close to walking ev
   CHECK_THROWS_AS(cc.mean_curvature_at_sites(0.3, std::nan("")), InputError);
 }
 
+TEST_CASE("mean_curvature_at_sites: local, so listed vertices, renumbered vertices and a cut-out piece agree") {
+  // docs/math.md §8.4: sites are chosen per cell of a lattice anchored at the origin, so a vertex's
+  // value depends on the mesh near it alone, not on the vertex numbering nor on faces far away.
+  const SurfelMesh m = surface("torus", 0.2, -10.0, 10.0);
+  const Eigen::MatrixX3d n =
+      vertex_normals_from_face_normals(m.face_normals_from_positions(), m.faces, int(m.num_vertices()))
+          .rowwise()
+          .normalized();
+  // r of 12 edges: the walk sums clusters of faces at once.
+  const double h = m.grid_step(), r = 12.0 * h, spacing = 0.5 * r;
+  const CorrectedCurvature cc = CorrectedCurvature::interpolated(m, n);
+  const Eigen::VectorXd H = cc.mean_curvature_at_sites(r, spacing).H;
+  const double scale = H.cwiseAbs().maxCoeff();
+  REQUIRE(scale > 0.0);
+  // 1e-12 of the largest |H|: the same faces, sites and weights, sums in another order.
+  const double tolerance = 1e-12 * scale;
+
+  // The vertices with x < 0 listed: their values, 0 elsewhere.
+  std::vector<int> listed;
+  for (int v = 0; v < int(m.num_vertices()); ++v)
+    if (m.positions(v, 0) < 0.0) listed.push_back(v);
+  const Eigen::VectorXd part = cc.mean_curvature_at_sites(r, spacing, listed).H;
+  double worst = 0.0;
+  std::vector<char> is_listed(std::size_t(m.num_vertices()), 0);
+  for (int v : listed) is_listed[std::size_t(v)] = 1, worst = std::max(worst, std::abs(part[v] - H[v]));
+  CHECK(worst <= tolerance);
+  int nonzero_elsewhere = 0;
+  for (int v = 0; v < int(m.num_vertices()); ++v) nonzero_elsewhere += !is_listed[std::size_t(v)] && part[v] != 0.0;
+  CHECK(nonzero_elsewhere == 0);
+
+  // The vertices numbered backwards (faces keep their order).
+  SurfelMesh reversed = m;
+  const int V = int(m.num_vertices());
+  for (int v = 0; v < V; ++v) reversed.positions.row(V - 1 - v) = m.positions.row(v);
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int c = 0; c < 4; ++c) reversed.faces(f, c) = V - 1 - m.faces(f, c);
+  const Eigen::VectorXd backwards =
+      CorrectedCurvature::interpolated(reversed, n.colwise().reverse()).mean_curvature_at_sites(r, spacing).H;
+  CHECK((backwards.reverse() - H).cwiseAbs().maxCoeff() <= tolerance);
+
+  // The faces with a corner at x < 3 spacing + r + 2 h kept: the vertices at x < 0 keep their values.
+  const double cut = 3.0 * spacing + r + 2.0 * h;
+  std::vector<int> kept;
+  for (int f = 0; f < m.num_faces(); ++f) {
+    double low = m.positions(m.faces(f, 0), 0);
+    for (int c = 1; c < 4; ++c) low = std::min(low, m.positions(m.faces(f, c), 0));
+    if (low < cut) kept.push_back(f);
+  }
+  REQUIRE(int(kept.size()) < m.num_faces());
+  SurfelMesh piece;
+  piece.h = m.h;
+  piece.faces.resize(Eigen::Index(kept.size()), 4);
+  std::vector<int> local(std::size_t(V), -1), original;
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    piece.surfels.push_back(m.surfels[std::size_t(kept[i])]);
+    for (int c = 0; c < 4; ++c) {
+      int& l = local[std::size_t(m.faces(kept[i], c))];
+      if (l < 0) l = int(original.size()), original.push_back(m.faces(kept[i], c));
+      piece.faces(Eigen::Index(i), c) = l;
+    }
+  }
+  piece.positions.resize(Eigen::Index(original.size()), 3);
+  Eigen::MatrixX3d piece_normals(Eigen::Index(original.size()), 3);
+  for (std::size_t l = 0; l < original.size(); ++l) {
+    piece.positions.row(Eigen::Index(l)) = m.positions.row(original[l]);
+    piece_normals.row(Eigen::Index(l)) = n.row(original[l]);
+  }
+  std::vector<int> piece_listed;
+  for (int v : listed) piece_listed.push_back(local[std::size_t(v)]);
+  const Eigen::VectorXd cut_H =
+      CorrectedCurvature::interpolated(piece, piece_normals).mean_curvature_at_sites(r, spacing, piece_listed).H;
+  worst = 0.0;
+  for (int v : listed) worst = std::max(worst, std::abs(cut_H[local[std::size_t(v)]] - H[v]));
+  CHECK(worst <= tolerance);
+  CHECK_THROWS_AS(cc.mean_curvature_at_sites(r, spacing, std::vector<int>{V}), InputError);
+}
+
 TEST_CASE("mean_curvature_at_sites changes H far less than its error against the truth") {
   // sphere1 (H = 1) and the torus (H known at every point) at 200 voxels across with their true
   // normals, at the regularization's radius (0.1 size, 10 voxels) and site spacing (a quarter of

@@ -1,23 +1,28 @@
-// Volumes read per slab, the halo and the distributed II normals (distributed/) under mpirun with
-// 1, 2 and 4 ranks: every rank also builds the serial grid, surface and normals (test only) and
-// checks its share of the distributed ones against them, bit for bit.
+// Volumes read per slab, the halo, the distributed II normals and mean curvature (distributed/)
+// under mpirun with 1, 2 and 4 ranks: every rank also builds the serial grid, surface and normals
+// (test only) and checks its share of the distributed ones against them, bit for bit (H: to
+// rounding).
 #include <doctest/doctest.h>
 #include <mpi.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <corrlap/backends/petsc.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/distributed/distributed_curvature.hpp>
 #include <corrlap/distributed/distributed_halo.hpp>
 #include <corrlap/distributed/distributed_ii_normals.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
+#include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/partial_digitization.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -362,4 +367,89 @@ TEST_CASE("slab sources: a bad file or a slab that fails on one rank fails on ev
     CHECK_THROWS_WITH_AS((void)distributed_surface(source),
                          doctest::Contains(("rank " + std::to_string(ranks - 1) + " could not read its slab").c_str()),
                          InputError);
+}
+
+namespace {
+
+// The near-slab normals and the distributed H against the serial ones: faces bit for bit, vertices
+// bit for bit where their fans are whole, H of the owned vertices to rounding.
+void check_curvature(const SlabSource& source, const DistributedSurface& d, const VoxelGrid& grid,
+                     const SurfelMesh& serial, const IIParams& params, double r, double spacing) {
+  CAPTURE(r);
+  CAPTURE(spacing);
+  const double h = grid.h();
+  const int columns = curvature_halo_columns(r, spacing, h);
+  const NearSlabNormals near = distributed_ii_normals_near_slab(source, d, params, columns);
+  const Eigen::MatrixX3d face = ii_face_normals(grid, serial, params);
+  const Eigen::MatrixX3d vertex = ii_vertex_normals(grid, serial, params);
+  REQUIRE(near.face_ids.size() == std::size_t(near.mesh.num_faces()));
+  std::int64_t faces_differ = 0, vertices_differ = 0, vertices_checked = 0;
+  for (int f = 0; f < near.mesh.num_faces(); ++f)
+    faces_differ += (near.face_normals.row(f).array() != face.row(near.face_ids[std::size_t(f)]).array()).any();
+  std::map<std::array<double, 3>, Eigen::Index> serial_vertex;
+  for (Eigen::Index v = 0; v < serial.num_vertices(); ++v)
+    serial_vertex[{serial.positions(v, 0), serial.positions(v, 1), serial.positions(v, 2)}] = v;
+  for (int v = 0; v < near.mesh.num_vertices(); ++v) {
+    const int x = near.pointels[std::size_t(v)].x();
+    if (x < d.slab.first - columns + 1 || x > d.slab.last + columns) continue;
+    const auto it =
+        serial_vertex.find({near.mesh.positions(v, 0), near.mesh.positions(v, 1), near.mesh.positions(v, 2)});
+    if (it == serial_vertex.end()) {
+      ++vertices_differ;  // a vertex the serial surface does not have
+      continue;
+    }
+    ++vertices_checked;
+    vertices_differ += (near.vertex_normals.row(v).array() != vertex.row(it->second).array()).any();
+  }
+  CHECK(sum_over_ranks(faces_differ) == 0);
+  CHECK(sum_over_ranks(vertices_differ) == 0);
+  CHECK(sum_over_ranks(vertices_checked) >= serial.num_vertices());
+
+  const Eigen::VectorXd H = distributed_mean_curvature(d, near, r, spacing);
+  const Eigen::VectorXd expected =
+      CorrectedCurvature::interpolated(serial, vertex).mean_curvature_at_sites(r, spacing).H;
+  REQUIRE(H.size() == d.num_owned);
+  double worst = 0.0;
+  for (int v = 0; v < d.num_owned; ++v)
+    worst = std::max(worst, std::abs(H[v] - expected[d.vertex_ids[std::size_t(v)]]));
+  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  // The same faces, sites and weights; the walk sums them in another order: 1e-12 of the largest |H|.
+  CHECK(worst <= 1e-12 * expected.cwiseAbs().maxCoeff());
+  if (columns > 1) {
+    const NearSlabNormals narrow = distributed_ii_normals_near_slab(source, d, params, columns - 1);
+    CHECK_THROWS_AS((void)distributed_mean_curvature(d, narrow, r, spacing), InputError);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("distributed mean curvature at sites equals the serial one, from the surface near each slab") {
+  // An implicit shape with the paper's II parameters and a volume read per slab with the voxel
+  // defaults (smaller balls on thin parts); a radius of a few voxels with every vertex walked, and
+  // a larger one whose sites are spaced 4 edges and more apart (cells of docs/math.md §8.4 that
+  // cross the slabs' boundaries).
+  {
+    const ImplicitShape shape = make_implicit_shape("goursat");
+    const SlabSource source = implicit_slab_source(shape, torus_params(0.3));
+    const DistributedSurface d = distributed_surface(source);
+    const VoxelGrid grid = digitize(shape, torus_params(0.3));
+    const SurfelMesh serial = extract_surface(grid);
+    check_curvature(source, d, grid, serial, default_ii_params(true), 0.9, 0.25 * 0.9);
+    check_curvature(source, d, grid, serial, default_ii_params(true), 2.4, 0.5 * 2.4);
+  }
+  {
+    const std::string path = written(torus_volume(0.35), "torus_curvature.nii.gz");
+    VolumeReadOptions options;
+    options.centered = true;
+    options.h = 0.0;
+    const SlabSource source = volume_slab_source(path, options);
+    const DistributedSurface d = distributed_surface(source);
+    const VoxelGrid grid = read_volume_as_voxels(path, options);
+    const SurfelMesh serial = extract_surface(grid);
+    const double h = grid.h();
+    check_curvature(source, d, grid, serial, default_ii_params(false), 12.0 * h, 6.0 * h);
+    remove_shared(path);
+  }
+  CHECK_THROWS_AS((void)curvature_halo_columns(0.0, 0.1, 0.1), InputError);
+  CHECK_THROWS_AS((void)curvature_halo_columns(1.0, std::nan(""), 0.1), InputError);
 }
