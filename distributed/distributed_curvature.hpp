@@ -4,8 +4,8 @@
 // serial H of their vertices without the whole surface (docs/distributed.md).
 #include <Eigen/Core>
 
-#include "distributed_ii_normals.hpp"
 #include "distributed_surface.hpp"
+#include "near_slab.hpp"
 
 namespace corrlap {
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "distributed_surface.hpp"
+#include "near_slab.hpp"
 #include "slab_source.hpp"
 
 namespace corrlap {
@@ -45,27 +46,7 @@ int ii_halo_width(double digital_radius);
 DistributedNormals distributed_ii_normals(const SlabSource& source, const DistributedSurface& surface,
                                           const IIParams& params);
 
-/// The surface near a rank's slab with its II normals, for estimators that look beyond the slab
-/// (distributed_curvature.hpp).
-struct NearSlabNormals {
-  int columns = 0;  ///< the faces' lower voxels lie within this many columns of the slab
-  /// Those faces in serial face order, on local vertices numbered by first appearance:
-  /// mesh.faces #Fn by 4, mesh.positions #Vn by 3, mesh.surfels #Fn.
-  SurfelMesh mesh;
-  std::vector<std::int64_t> face_ids;     ///< #Fn serial face ids (extract_surface's)
-  std::vector<Eigen::Vector3i> pointels;  ///< #Vn: the pointel of each local vertex
-  /// #Fn x 3: the serial ii_face_normals, bit for bit.
-  Eigen::MatrixX3d face_normals;
-  /// #Vn x 3: the normalized sums of the faces' normals around each vertex. The serial
-  /// ii_vertex_normals, bit for bit, at the vertices whose faces are all here: those whose pointel
-  /// x lies in [slab.first - columns + 1, slab.last + columns] (within the box); a unit vector at
-  /// the others.
-  Eigen::MatrixX3d vertex_normals;
-  /// num_owned: the local vertex here of each owned vertex of the DistributedSurface.
-  std::vector<int> owned_vertices;
-};
-
-/// The faces within `columns` >= 1 columns of the slab and their normals, as above: the II balls
+/// The NearSlabNormals of `columns` >= 1 columns with II normals: the II balls
 /// run on a halo of ii_halo_width + columns - 1 columns. A collective call of every rank of
 /// MPI_COMM_WORLD; throws InputError as distributed_ii_normals, and for columns < 1.
 NearSlabNormals distributed_ii_normals_near_slab(const SlabSource& source, const DistributedSurface& surface,

@@ -6,51 +6,21 @@
 #include <algorithm>
 #include <cmath>
 
+#include "detail/owned_vectors.hpp"
 #include "detail/petsc_matrices.hpp"
 
 namespace corrlap {
 
 namespace {
 
+using detail::global_max;
+using detail::global_sum;
+using detail::owned_values;
+using detail::owned_vector;
 using detail::petsc_check;
 using detail::PetscMatOwner;
 using detail::PetscVecOwner;
-
-// A vector of the rows owned here with the given values (#owned).
-void owned_vector(const DistributedSurface& s, const Eigen::VectorXd& values, PetscVecOwner& v) {
-  petsc_check(VecCreateMPI(PETSC_COMM_WORLD, s.num_owned, PetscInt(s.num_vertices), v.out()), "VecCreateMPI");
-  PetscScalar* local = nullptr;
-  petsc_check(VecGetArray(v, &local), "VecGetArray");
-  std::copy(values.data(), values.data() + values.size(), local);
-  petsc_check(VecRestoreArray(v, &local), "VecRestoreArray");
-}
-
-Eigen::VectorXd owned_values(Vec v) {
-  PetscInt n = 0;
-  petsc_check(VecGetLocalSize(v, &n), "VecGetLocalSize");
-  const PetscScalar* local = nullptr;
-  petsc_check(VecGetArrayRead(v, &local), "VecGetArrayRead");
-  Eigen::VectorXd values = Eigen::Map<const Eigen::VectorXd>(local, n);
-  petsc_check(VecRestoreArrayRead(v, &local), "VecRestoreArrayRead");
-  return values;
-}
-
-Eigen::VectorXd product(Mat A, const DistributedSurface& s, const Eigen::VectorXd& x) {
-  PetscVecOwner in, out;
-  owned_vector(s, x, in);
-  petsc_check(VecDuplicate(in, out.out()), "VecDuplicate");
-  petsc_check(MatMult(A, in, out), "MatMult");
-  return owned_values(out);
-}
-
-double global_sum(double x) {
-  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  return x;
-}
-double global_max(double x) {
-  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return x;
-}
+using detail::product;
 
 }  // namespace
 

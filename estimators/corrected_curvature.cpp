@@ -781,7 +781,10 @@ CorrectedCurvature::MeanCurvature CorrectedCurvature::sites_mean_curvature(doubl
   const double edge = 0.5 * grid_cell_;
   if (!interpolated_ || r < 1e-6) return keep_wanted(mean_curvature_at_vertices(r));
   const std::vector<int> vertex_order = z_order(positions_, grid_cell_);
-  if (spacing < 2.0 * edge) {
+  // The edge is a mean over the faces, whose last bits depend on which faces the mesh holds: a
+  // spacing of exactly two edges (0.25 r at r = 8 h) would take either branch on two pieces of one
+  // surface. The margin puts such round values on one side.
+  if (spacing < 2.0 * edge * (1.0 - 1e-9)) {
     std::vector<int> at;
     for (std::size_t i = 0; i < vertex_order.size(); ++i)
       if (wanted[std::size_t(vertex_order[i])]) at.push_back(int(i));

@@ -66,7 +66,8 @@ class CorrectedCurvature {
   /// (1 - (d / spacing)^2)^2. The ball estimate varies at the scale of r, not of an edge, so a
   /// spacing of a fraction of r changes it far less than its own error (docs/math.md §8.4); the
   /// walk's cost per vertex grows as r^2, the sites' count falls as 1 / spacing^2. Spacings below
-  /// 2 edges walk every vertex (then the result is mean_curvature_at_vertices(r)).
+  /// 2 edges (less 1e-9 of them) walk every vertex (then the result is
+  /// mean_curvature_at_vertices(r)).
   MeanCurvature mean_curvature_at_sites(double r, double spacing) const;
   /// mean_curvature_at_sites(r, spacing) at the listed vertices (the others get 0), walking only
   /// the sites within `spacing` of them. A listed vertex's value depends on the mesh within

@@ -13,10 +13,12 @@
 #include <corrlap/distributed/distributed_eigs.hpp>
 #include <corrlap/distributed/distributed_fem.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
+#include <corrlap/distributed/distributed_regularization.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/pipeline/front_end.hpp>
 #include <corrlap/problems/problems.hpp>
+#include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <string>
 #include <vector>
@@ -184,6 +186,61 @@ TEST_CASE("distributed Poisson solve equals CHOLMOD's serial solve_poisson to 1e
     CHECK(std::abs(r.errors.l2 - s.errors.l2) < 1e-10 * s.errors.l2 + 1e-14);
     const Eigen::VectorXd whole = gather_on_rank0(d, r.g);
     if (d.rank == 0) CHECK((whole - s.g).cwiseAbs().maxCoeff() / s.g.cwiseAbs().maxCoeff() < 1e-10);
+  }
+}
+
+TEST_CASE("distributed regularization solve equals the serial preconditioned one to 1e-8 of the object size") {
+  // The normal equations of docs/math.md §9.2 with true normals and a smooth H (any H serves: the
+  // solve is what is compared), alpha = 10 / h^2 as the regularization's default.
+  for (const Case& c : {kCases[1], kCases[4]}) {
+    CAPTURE(c.shape);
+    const ImplicitShape shape = make_implicit_shape(c.shape);
+    const DistributedSurface d = distributed_surface(shape, params_of(c));
+    const DistributedFem fem(d, true_face_normals(shape, d.mesh));
+    const auto H_of = [](const Eigen::MatrixX3d& x) -> Eigen::VectorXd { return 1.0 + 0.1 * x.col(0).array(); };
+    const Eigen::MatrixX3d p = d.mesh.positions.topRows(d.num_owned);
+    const Eigen::MatrixX3d n = true_vertex_normals(shape, d.mesh).topRows(d.num_owned);
+    const double alpha = regularization_alpha(c.h);
+    PetscLinearSolver solver;
+    solver.configure(Config());  // MUMPS's Cholesky
+    const DistributedRegularization r = distributed_regularize_positions(d, fem, p, n, H_of(p), alpha, solver);
+    CHECK(r.residual <= 1e-10);
+    CHECK(r.iterations <= 60);
+
+    const SurfelMesh mesh = extract_surface(digitize(shape, params_of(c)));
+    const Operators ops = corrected_fem(mesh, true_face_normals(shape, mesh));
+    auto cholmod = make_linear_solver("cholmod");
+    const Eigen::MatrixX3d serial = regularize_positions_preconditioned(
+        ops.L, ops.M, mesh.positions, true_vertex_normals(shape, mesh), H_of(mesh.positions), alpha, *cholmod);
+    const double size = mesh.positions.cwiseAbs().maxCoeff();
+    double worst = 0.0;
+    for (int v = 0; v < d.num_owned; ++v)
+      worst = std::max(worst, (r.positions.row(v) - serial.row(d.vertex_ids[std::size_t(v)])).norm());
+    MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(worst <= 1e-8 * size);
+    if (d.rank == 0) MESSAGE(c.shape << ": " << r.iterations << " CG iterations, worst difference " << worst / size);
+
+    // To an accuracy: the bound reached, and the error within it (RMS over the area, as the bound).
+    const double accuracy = 1e-3 * c.h;
+    const DistributedRegularization loose =
+        distributed_regularize_positions(d, fem, p, n, H_of(p), alpha, solver, accuracy);
+    CHECK(loose.error_bound <= accuracy);
+    CHECK(loose.iterations < r.iterations);
+    const Eigen::VectorXd mass = (ops.M * Eigen::VectorXd::Ones(mesh.num_vertices()));
+    Eigen::Vector4d sums = Eigen::Vector4d::Zero();  // M_l-weighted squared errors per coordinate, area
+    for (int v = 0; v < d.num_owned; ++v) {
+      const Eigen::Index id = d.vertex_ids[std::size_t(v)];
+      sums.head<3>() += mass[id] * (loose.positions.row(v) - serial.row(id)).cwiseAbs2().transpose();
+      sums[3] += mass[id];
+    }
+    MPI_Allreduce(MPI_IN_PLACE, sums.data(), 4, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    CHECK(std::sqrt(sums.head<3>().maxCoeff() / sums[3]) <= accuracy);
+
+    CHECK_THROWS_AS((void)distributed_regularize_positions(d, fem, p, n, H_of(p), -1.0, solver), InputError);
+    Eigen::VectorXd bad = H_of(p);
+    for (int v = 0; v < d.num_owned; ++v)  // on one rank only: every rank throws
+      if (d.vertex_ids[std::size_t(v)] == 0) bad[v] = std::nan("");
+    CHECK_THROWS_AS((void)distributed_regularize_positions(d, fem, p, n, bad, alpha, solver), InputError);
   }
 }
 

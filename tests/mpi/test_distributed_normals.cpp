@@ -15,7 +15,9 @@
 #include <corrlap/distributed/distributed_halo.hpp>
 #include <corrlap/distributed/distributed_ii_normals.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
+#include <corrlap/distributed/near_slab.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
 #include <corrlap/estimators/integral_invariant.hpp>
 #include <corrlap/io/volume_io.hpp>
 #include <corrlap/surface/extract_surface.hpp>
@@ -449,6 +451,27 @@ TEST_CASE("distributed mean curvature at sites equals the serial one, from the s
     const double h = grid.h();
     check_curvature(source, d, grid, serial, default_ii_params(false), 12.0 * h, 6.0 * h);
     remove_shared(path);
+  }
+  {
+    // True normals (the shape's gradient at every point of the piece), and a spacing of exactly
+    // two edges (0.25 r, r = 8 h): the branch between sites and every vertex must not follow the
+    // rounding of the mean edge, which differs between the piece and the whole surface.
+    const ImplicitShape shape = make_implicit_shape("torus");
+    const SlabSource source = implicit_slab_source(shape, torus_params(0.35));
+    const DistributedSurface d = distributed_surface(source);
+    const SurfelMesh serial = extract_surface(digitize(shape, torus_params(0.35)));
+    const double r = 2.8, spacing = 0.25 * r;
+    const NearSlabNormals near = true_normals_near_slab(shape, source, d, curvature_halo_columns(r, spacing, 0.35));
+    const Eigen::VectorXd H = distributed_mean_curvature(d, near, r, spacing);
+    const Eigen::VectorXd expected = CorrectedCurvature::interpolated(serial, true_vertex_normals(shape, serial))
+                                         .mean_curvature_at_sites(r, spacing)
+                                         .H;
+    double worst = 0.0;
+    for (int v = 0; v < d.num_owned; ++v)
+      worst = std::max(worst, std::abs(H[v] - expected[d.vertex_ids[std::size_t(v)]]));
+    MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(worst <= 1e-12 * expected.cwiseAbs().maxCoeff());
+    CHECK_THROWS_AS((void)true_normals_near_slab(shape, source, d, 0), InputError);
   }
   CHECK_THROWS_AS((void)curvature_halo_columns(0.0, 0.1, 0.1), InputError);
   CHECK_THROWS_AS((void)curvature_halo_columns(1.0, std::nan(""), 0.1), InputError);

@@ -1,0 +1,33 @@
+#include "near_slab.hpp"
+
+#include <corrlap/core/error.hpp>
+#include <corrlap/estimators/implicit_normals.hpp>
+#include <string>
+
+#include "distributed_halo.hpp"
+
+namespace corrlap {
+
+NearSlabNormals true_normals_near_slab(const ImplicitShape& shape, const SlabSource& source,
+                                       const DistributedSurface& surface, int columns) {
+  if (columns < 1)
+    throw InputError("distributed normals: at least 1 column beyond the slab, got " + std::to_string(columns));
+  // The halo of `columns` holds exactly the faces within `columns` of the slab, in serial order.
+  DistributedHalo halo = distributed_halo(source, surface, columns);
+  NearSlabNormals out;
+  out.columns = columns;
+  out.face_normals = true_face_normals(shape, halo.mesh);
+  out.vertex_normals = true_vertex_normals(shape, halo.mesh);
+  out.owned_vertices.assign(std::size_t(surface.num_owned), -1);
+  for (std::size_t f = 0; f < halo.owned_faces.size(); ++f)
+    for (int c = 0; c < 4; ++c) {
+      const int v = surface.mesh.faces(Eigen::Index(f), c);
+      if (v < surface.num_owned) out.owned_vertices[std::size_t(v)] = halo.mesh.faces(halo.owned_faces[f], c);
+    }
+  out.mesh = std::move(halo.mesh);
+  out.face_ids = std::move(halo.face_ids);
+  out.pointels = std::move(halo.pointels);
+  return out;
+}
+
+}  // namespace corrlap
