@@ -19,7 +19,6 @@ namespace {
 
 using detail::global_max;
 using detail::global_sum;
-using detail::owned_values;
 using detail::owned_vector;
 using detail::petsc_check;
 using detail::PetscMatOwner;
