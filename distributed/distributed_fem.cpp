@@ -17,10 +17,10 @@ namespace {
 
 using detail::petsc_check;
 
-// An MPIAIJ matrix with this rank's rows, from the triplets of its faces (COO: PETSc sums repeated
-// (i, j) and sends the entries of other ranks' rows to them).
-void coo_matrix(const DistributedSurface& s, const std::vector<PetscInt>& i, const std::vector<PetscInt>& j,
-                const std::vector<PetscScalar>& values, detail::PetscMatOwner& A) {
+}  // namespace
+
+void detail::coo_matrix(const DistributedSurface& s, const std::vector<PetscInt>& i, const std::vector<PetscInt>& j,
+                        const std::vector<PetscScalar>& values, detail::PetscMatOwner& A) {
   petsc_check(MatCreate(PETSC_COMM_WORLD, A.out()), "MatCreate");
   petsc_check(MatSetSizes(A, s.num_owned, s.num_owned, PetscInt(s.num_vertices), PetscInt(s.num_vertices)),
               "MatSetSizes");
@@ -33,8 +33,6 @@ void coo_matrix(const DistributedSurface& s, const std::vector<PetscInt>& i, con
   petsc_check(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
   petsc_check(MatSetOption(A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE), "MatSetOption");
 }
-
-}  // namespace
 
 DistributedFem::DistributedFem(const DistributedSurface& s, const Eigen::MatrixX3d& u)
     : impl_(std::make_unique<Impl>()) {
@@ -72,8 +70,8 @@ DistributedFem::DistributedFem(const DistributedSurface& s, const Eigen::MatrixX
         m[e] = Mf(a, b);
       }
   }
-  coo_matrix(s, i, j, l, impl_->L);
-  coo_matrix(s, i, j, m, impl_->M);
+  detail::coo_matrix(s, i, j, l, impl_->L);
+  detail::coo_matrix(s, i, j, m, impl_->M);
 }
 
 DistributedFem::~DistributedFem() = default;

@@ -156,4 +156,35 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
   return out;
 }
 
+double distributed_attachment_bias(const DistributedSurface& s, const Eigen::MatrixX3d& staircase,
+                                   const Eigen::MatrixX3d& result, const Eigen::MatrixX3d& normals,
+                                   const Eigen::VectorXd& mass, double step, int rounds) {
+  const Eigen::Index n = s.num_owned;
+  check_everywhere(staircase.rows() == n && result.rows() == n && normals.rows() == n && mass.size() == n,
+                   "attachment_bias: staircase, result, normals and mass need one row per owned vertex");
+  if (!(step > 0.0) || !std::isfinite(step)) throw InputError("attachment_bias: the step must be a positive number");
+  if (rounds < 0) throw InputError("attachment_bias: the number of rounds must be >= 0");
+  if (s.num_vertices == 0) return 0.0;
+  // E: for every face edge (a, b), 1 at (a, b) and at (b, a), summed over the faces.
+  std::vector<PetscInt> i, j;
+  const SurfelMesh& mesh = s.mesh;
+  i.reserve(8 * std::size_t(mesh.num_faces()));
+  j.reserve(8 * std::size_t(mesh.num_faces()));
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 4; ++k) {
+      const PetscInt a = PetscInt(s.rows[std::size_t(mesh.faces(f, k))]);
+      const PetscInt b = PetscInt(s.rows[std::size_t(mesh.faces(f, (k + 1) % 4))]);
+      i.insert(i.end(), {a, b});
+      j.insert(j.end(), {b, a});
+    }
+  PetscMatOwner E;
+  detail::coo_matrix(s, i, j, std::vector<PetscScalar>(i.size(), 1.0), E);
+  const Eigen::VectorXd count = Eigen::VectorXd::Ones(n) + detail::product(E, s, Eigen::VectorXd::Ones(n));
+  Eigen::VectorXd bias = ((staircase - result).cwiseProduct(normals)).rowwise().sum() / step;
+  for (int round = 0; round < rounds; ++round) bias = (bias + detail::product(E, s, bias)).cwiseQuotient(count);
+  const double total = global_sum(mass.sum());
+  if (!(total > 0.0)) throw InputError("attachment_bias: the masses must sum to a positive number");
+  return global_sum(bias.cwiseAbs().dot(mass)) / total;
+}
+
 }  // namespace corrlap

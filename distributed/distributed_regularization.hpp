@@ -6,6 +6,7 @@
 // factorized by the petsc backend (MUMPS's Cholesky) and every vector held per rank.
 #include <Eigen/Core>
 #include <corrlap/backends/petsc.hpp>
+#include <corrlap/regularization/attachment_bias.hpp>
 
 #include "distributed_fem.hpp"
 #include "distributed_surface.hpp"
@@ -33,5 +34,14 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
                                                            const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
                                                            const Eigen::VectorXd& H, double alpha,
                                                            PetscLinearSolver& solver, double accuracy = 0.0);
+
+/// attachment_bias(faces, staircase, result, normals, mass, step, rounds) of the whole surface
+/// (docs/math.md §9.4), from the owned vertices' rows of each rank (#owned each; mass: the row
+/// sums of M). The averaging rounds are products with the edge-count matrix of the faces,
+/// assembled like L; the same sums in another order, so equal to rounding. Throws InputError
+/// (every rank) as attachment_bias. Collective.
+double distributed_attachment_bias(const DistributedSurface& surface, const Eigen::MatrixX3d& staircase,
+                                   const Eigen::MatrixX3d& result, const Eigen::MatrixX3d& normals,
+                                   const Eigen::VectorXd& mass, double step, int rounds = kAttachmentBiasRounds);
 
 }  // namespace corrlap

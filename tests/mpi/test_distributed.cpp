@@ -236,6 +236,22 @@ TEST_CASE("distributed regularization solve equals the serial preconditioned one
     MPI_Allreduce(MPI_IN_PLACE, sums.data(), 4, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     CHECK(std::sqrt(sums.head<3>().maxCoeff() / sums[3]) <= accuracy);
 
+    // The automatic alpha0's bias of the result against the staircase (docs/math.md §9.4).
+    // Of the serial result, so that only the bias is compared.
+    Eigen::VectorXd owned_mass(d.num_owned);
+    Eigen::MatrixX3d owned_serial(d.num_owned, 3);
+    for (int v = 0; v < d.num_owned; ++v) {
+      owned_mass[v] = mass[d.vertex_ids[std::size_t(v)]];
+      owned_serial.row(v) = serial.row(d.vertex_ids[std::size_t(v)]);
+    }
+    const double bias = distributed_attachment_bias(d, p, owned_serial, n, owned_mass, c.h);
+    const double serial_bias =
+        attachment_bias(mesh.faces, mesh.positions, serial, true_vertex_normals(shape, mesh), mass, c.h);
+    // The same sums in another order, 16 rounds of averaging: 1e-12 relative.
+    CHECK(serial_bias > 0.0);
+    CHECK(std::abs(bias - serial_bias) <= 1e-12 * serial_bias);
+    CHECK_THROWS_AS((void)distributed_attachment_bias(d, p, r.positions, n, owned_mass, 0.0), InputError);
+
     CHECK_THROWS_AS((void)distributed_regularize_positions(d, fem, p, n, H_of(p), -1.0, solver), InputError);
     Eigen::VectorXd bad = H_of(p);
     for (int v = 0; v < d.num_owned; ++v)  // on one rank only: every rank throws
