@@ -50,7 +50,8 @@ void check_everywhere(bool ok_here, const std::string& message, const char* opti
 DistributedRegularization distributed_regularize_positions(const DistributedSurface& s, const DistributedFem& fem,
                                                            const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
                                                            const Eigen::VectorXd& H, double alpha,
-                                                           PetscLinearSolver& solver, double accuracy) {
+                                                           PetscLinearSolver& solver, double accuracy,
+                                                           const Eigen::MatrixX3d* start) {
   const Eigen::Index n = s.num_owned;
   check_everywhere(p.rows() == n && normals.rows() == n && H.size() == n,
                    "regularization: positions, normals and H need one row per owned vertex");
@@ -60,6 +61,8 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
                    "regularization: the normals must be unit vectors");
   check_everywhere(accuracy >= 0.0 && std::isfinite(accuracy),
                    "regularization: the solve accuracy must be a finite number >= 0", "accuracy");
+  check_everywhere(!start || (start->rows() == n && start->allFinite()),
+                   "regularization: the start positions must be finite, one row per owned vertex", "start");
   const DistributedFem::Impl& ops = fem.impl();
 
   // M_l = diag(M 1), as lumped_mass.
@@ -114,7 +117,13 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
   // of its recurrence, as the serial solve does.
   constexpr int kMaxIterations = 1000;
   DistributedRegularization out;
+  // Not from p when no start is given: L p is the staircase's Laplacian, so |b - A p| is orders of
+  // magnitude above |b|.
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(n, 3), R = rhs;
+  if (start) {
+    q = *start;
+    R = rhs - multiply(q);
+  }
   double normwise = relative(R), bound = std::numeric_limits<double>::infinity();
   const auto done = [&] { return normwise <= 1e-10 || (accuracy > 0.0 && bound <= accuracy); };
   for (int pass = 0; pass < 3 && !done(); ++pass) {

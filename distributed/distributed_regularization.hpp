@@ -29,11 +29,13 @@ struct DistributedRegularization {
 /// direct petsc solver (a fixed preconditioner: pc_type cholesky or lu); it factorizes B. Throws
 /// InputError (every rank) on mismatched sizes, non-finite input, alpha <= 0 or above
 /// max_regularization_alpha, a vertex without area; SolverError from the solver (B not positive
-/// definite: L not negative semi-definite) or when CG stops short. Collective.
+/// definite: L not negative semi-definite) or when CG stops short. CG starts from `start` (#owned
+/// x 3, finite: e.g. an earlier trial's positions) when given, else from 0. Collective.
 DistributedRegularization distributed_regularize_positions(const DistributedSurface& surface, const DistributedFem& fem,
                                                            const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
                                                            const Eigen::VectorXd& H, double alpha,
-                                                           PetscLinearSolver& solver, double accuracy = 0.0);
+                                                           PetscLinearSolver& solver, double accuracy = 0.0,
+                                                           const Eigen::MatrixX3d* start = nullptr);
 
 /// attachment_bias(faces, staircase, result, normals, mass, step, rounds) of the whole surface
 /// (docs/math.md §9.4), from the owned vertices' rows of each rank (#owned each; mass: the row
