@@ -342,13 +342,7 @@ NearSlabNormals distributed_ii_normals_near_slab(const SlabSource& source, const
     for (int a = 0; a < 3; ++a)
       out.mesh.positions(v, a) = pointel_coordinate(out.pointels[std::size_t(v)][a], source.h);
   out.face_normals = near.normals;
-  out.vertex_normals = vertex_normals_from_face_normals(out.face_normals, out.mesh.faces, V);
-  // A vertex at the ragged edge, missing faces, can sum to zero where its whole fan would not:
-  // give it one of its faces' normals, so that the field stays unit (its value is not exact there).
-  for (int f = 0; f < F; ++f)
-    for (int c = 0; c < 4; ++c)
-      if (out.vertex_normals.row(out.mesh.faces(f, c)).squaredNorm() == 0.0)
-        out.vertex_normals.row(out.mesh.faces(f, c)) = out.face_normals.row(f);
+  set_vertex_normals_from_faces(out);
   // The owned vertices through their owned faces, which lie within one column of the slab.
   std::vector<int> face_of_halo(std::size_t(halo.mesh.num_faces()), -1);
   for (int f = 0; f < F; ++f) face_of_halo[std::size_t(near.needed[std::size_t(f)])] = f;

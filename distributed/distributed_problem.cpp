@@ -67,13 +67,25 @@ DistributedProblem::DistributedProblem(const SurfaceInput& input, const NormalRe
   surface_ = distributed_surface(source_);
   if (normals_ == NormalSource::True) {
     fem_ = std::make_unique<DistributedFem>(surface_, true_face_normals(*shape_, surface_.mesh));
+    // resolve_normals': the normalized sums of the true face normals around each vertex, whose
+    // fans reach one column beyond the slab.
+    const NearSlabNormals near = true_normals_near_slab(*shape_, source_, surface_, 1);
+    vertex_normals_.resize(surface_.num_owned, 3);
+    for (int v = 0; v < surface_.num_owned; ++v)
+      vertex_normals_.row(v) = near.vertex_normals.row(near.owned_vertices[std::size_t(v)]);
     return;
   }
   // resolve_normals' II parameters and checks, then the same face normals as ii_face_normals.
-  const IIParams ii = normals.ii ? *normals.ii : default_ii_params(shape_ != nullptr);
-  check_ii_params(ii);
-  const DistributedNormals n = distributed_ii_normals(source_, surface_, ii);
+  ii_ = normals.ii ? *normals.ii : default_ii_params(shape_ != nullptr);
+  check_ii_params(ii_);
+  DistributedNormals n = distributed_ii_normals(source_, surface_, ii_);
   fem_ = std::make_unique<DistributedFem>(surface_, n.face_normals);
+  vertex_normals_ = std::move(n.vertex_normals);
+}
+
+NearSlabNormals DistributedProblem::near_slab(int columns) const {
+  if (normals_ == NormalSource::True) return true_normals_near_slab(*shape_, source_, surface_, columns);
+  return distributed_ii_normals_near_slab(source_, surface_, ii_, columns);
 }
 
 DistributedProblem::~DistributedProblem() = default;

@@ -11,6 +11,7 @@
 
 #include "distributed_fem.hpp"
 #include "distributed_surface.hpp"
+#include "near_slab.hpp"
 #include "slab_source.hpp"
 
 namespace corrlap {
@@ -41,6 +42,11 @@ class DistributedProblem {
   NormalSource normals() const { return normals_; }
   /// The implicit shape, or null for a volume.
   const ImplicitShape* shape() const { return shape_ ? shape_.get() : nullptr; }
+  /// num_owned x 3: the unit normals of the owned vertices (the serial front end's vertex normals).
+  const Eigen::MatrixX3d& vertex_normals() const { return vertex_normals_; }
+  /// The surface within `columns` >= 1 columns of the slab with the same normals
+  /// (near_slab.hpp), for the estimators that look beyond the slab. Collective.
+  NearSlabNormals near_slab(int columns) const;
 
  private:
   // The slab source of a shape refers to it: it lives at a fixed address for the source's life.
@@ -48,6 +54,8 @@ class DistributedProblem {
   SlabSource source_;
   VoxelFrame frame_;
   NormalSource normals_ = NormalSource::True;
+  IIParams ii_;  // with II normals
+  Eigen::MatrixX3d vertex_normals_;
   DistributedSurface surface_;
   std::unique_ptr<DistributedFem> fem_;
 };

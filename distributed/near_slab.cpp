@@ -1,6 +1,7 @@
 #include "near_slab.hpp"
 
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/normal_fields.hpp>
 #include <corrlap/estimators/implicit_normals.hpp>
 #include <string>
 
@@ -17,7 +18,6 @@ NearSlabNormals true_normals_near_slab(const ImplicitShape& shape, const SlabSou
   NearSlabNormals out;
   out.columns = columns;
   out.face_normals = true_face_normals(shape, halo.mesh);
-  out.vertex_normals = true_vertex_normals(shape, halo.mesh);
   out.owned_vertices.assign(std::size_t(surface.num_owned), -1);
   for (std::size_t f = 0; f < halo.owned_faces.size(); ++f)
     for (int c = 0; c < 4; ++c) {
@@ -27,7 +27,17 @@ NearSlabNormals true_normals_near_slab(const ImplicitShape& shape, const SlabSou
   out.mesh = std::move(halo.mesh);
   out.face_ids = std::move(halo.face_ids);
   out.pointels = std::move(halo.pointels);
+  set_vertex_normals_from_faces(out);
   return out;
+}
+
+void set_vertex_normals_from_faces(NearSlabNormals& near) {
+  near.vertex_normals = vertex_normals_from_face_normals(near.face_normals, near.mesh.faces, near.mesh.num_vertices());
+  // A vertex at the ragged edge, missing faces, can sum to zero where its whole fan would not.
+  for (int f = 0; f < near.mesh.num_faces(); ++f)
+    for (int c = 0; c < 4; ++c)
+      if (near.vertex_normals.row(near.mesh.faces(f, c)).squaredNorm() == 0.0)
+        near.vertex_normals.row(near.mesh.faces(f, c)) = near.face_normals.row(f);
 }
 
 }  // namespace corrlap

@@ -31,8 +31,13 @@ struct NearSlabNormals {
   std::vector<int> owned_vertices;
 };
 
-/// The NearSlabNormals of `columns` >= 1 columns with the shape's true normals
-/// (true_face_normals, true_vertex_normals: exact at every vertex, whole fan or not). `source`
+/// near.vertex_normals from near.face_normals: the normalized sums of the faces around each vertex
+/// (docs/math.md §1.5, as resolve_normals), serial bit for bit where a vertex's whole fan is here.
+/// A vertex at the ragged edge whose faces here sum to zero gets one of their normals.
+void set_vertex_normals_from_faces(NearSlabNormals& near);
+
+/// The NearSlabNormals of `columns` >= 1 columns with the shape's true normals, as resolve_normals
+/// gives them: true_face_normals, and the vertex normals from them. `source`
 /// digitizes `shape` (implicit_slab_source). A collective call of every rank of MPI_COMM_WORLD;
 /// throws InputError for columns < 1.
 NearSlabNormals true_normals_near_slab(const ImplicitShape& shape, const SlabSource& source,

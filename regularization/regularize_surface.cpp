@@ -148,6 +148,25 @@ void check_regularization_options(const SurfelMesh& mesh, const RegularizationOp
   }
 }
 
+void check_curvature_resolvable(std::int64_t absurd, std::int64_t total, double worst, double h, double across) {
+  if (absurd == 0) return;
+  // An object a few voxels across (a speck of a segmentation) really curves by more than 1/h: say
+  // so rather than blame the normals.
+  if (across < kSpeckVoxels)
+    throw InputError("regularization: the object is " + std::to_string(across) +
+                         " voxels across (its bounding box's diagonal), too small for a surface to be regularized: "
+                         "its mean curvature exceeds 1/h at " +
+                         std::to_string(absurd) + " of " + std::to_string(total) +
+                         " vertices; leave it out (a speck of a segmentation), or give h_clamp to clamp H",
+                     "h_clamp");
+  throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / h) + " at " +
+                       std::to_string(absurd) + " of " + std::to_string(total) + " vertices (up to " +
+                       std::to_string(worst) +
+                       "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
+                       "features; give a smaller ii_radius, other normals, or h_clamp to clamp H",
+                   "ii_radius");
+}
+
 RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const NormalFields& normals,
                                                  const RegularizationOptions& o) {
   check_regularization_options(mesh, o);
@@ -177,32 +196,17 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   // moves the surface by many voxels, silently; refuse unless the user clamps H. (The check is on
   // the estimate, before the edits.)
   if (!o.h_clamp) {
-    int absurd = 0;
+    std::int64_t absurd = 0;
     double worst = 0.0;
     for (Eigen::Index v = 0; v < c.H.size(); ++v)
       if (std::abs(c.H[v]) > 1.0 / h) {
         ++absurd;
         worst = std::max(worst, std::abs(c.H[v]));
       }
-    // An object a few voxels across (a speck of a segmentation) really curves by more than 1/h: say
-    // so rather than blame the normals.
     const double across = mesh.num_vertices() > 0
                               ? (mesh.positions.colwise().maxCoeff() - mesh.positions.colwise().minCoeff()).norm() / h
                               : 0.0;
-    if (absurd > 0 && across < kSpeckVoxels)
-      throw InputError("regularization: the object is " + std::to_string(across) +
-                           " voxels across (its bounding box's diagonal), too small for a surface to be regularized: "
-                           "its mean curvature exceeds 1/h at " +
-                           std::to_string(absurd) + " of " + std::to_string(c.H.size()) +
-                           " vertices; leave it out (a speck of a segmentation), or give h_clamp to clamp H",
-                       "h_clamp");
-    if (absurd > 0)
-      throw InputError("regularization: the mean curvature exceeds 1/h = " + std::to_string(1.0 / h) + " at " +
-                           std::to_string(absurd) + " of " + std::to_string(c.H.size()) + " vertices (up to " +
-                           std::to_string(worst) +
-                           "): the normals are likely wrong there, e.g. II normals whose radius exceeds the shape's "
-                           "features; give a smaller ii_radius, other normals, or h_clamp to clamp H",
-                       "ii_radius");
+    check_curvature_resolvable(absurd, c.H.size(), worst, h, across);
   }
   c.normals = normals.vertex;
   if (principal) {

@@ -10,6 +10,7 @@
 #include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/solution_check.hpp>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -142,6 +143,11 @@ struct RegularizationCurvature {
   double size = 1.0, curvature_radius = 0.0, normal_angle_change_deg = 0.0;
   double seconds = 0.0;
 };
+/// regularization_curvature's refusal of |H| > 1/h (the check is on the estimate, before the edits,
+/// and skipped with h_clamp): InputError when `absurd` of the `total` vertices exceed it (up to
+/// `worst`), naming a speck when the object is under 4 voxels across (`across`: its bounding box's
+/// diagonal in voxels); nothing when absurd is 0. Every front end calls it with its own counts.
+void check_curvature_resolvable(std::int64_t absurd, std::int64_t total, double worst, double h, double across);
 /// Throws as regularize_surface for bad options, non-finite H or |H| > 1/h without a clamp.
 RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const NormalFields& normals,
                                                  const RegularizationOptions& options = {});

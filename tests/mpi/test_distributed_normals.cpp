@@ -11,6 +11,7 @@
 #include <cmath>
 #include <corrlap/backends/petsc.hpp>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/normal_fields.hpp>
 #include <corrlap/distributed/distributed_curvature.hpp>
 #include <corrlap/distributed/distributed_halo.hpp>
 #include <corrlap/distributed/distributed_ii_normals.hpp>
@@ -453,9 +454,9 @@ TEST_CASE("distributed mean curvature at sites equals the serial one, from the s
     remove_shared(path);
   }
   {
-    // True normals (the shape's gradient at every point of the piece), and a spacing of exactly
-    // two edges (0.25 r, r = 8 h): the branch between sites and every vertex must not follow the
-    // rounding of the mean edge, which differs between the piece and the whole surface.
+    // True normals (resolve_normals': the shape's normals at the faces, summed at the vertices), and a spacing of
+    // exactly two edges (0.25 r, r = 8 h): the branch between sites and every vertex must not follow the rounding of
+    // the mean edge, which differs between the piece and the whole surface.
     const ImplicitShape shape = make_implicit_shape("torus");
     const SlabSource source = implicit_slab_source(shape, torus_params(0.35));
     const DistributedSurface d = distributed_surface(source);
@@ -463,9 +464,10 @@ TEST_CASE("distributed mean curvature at sites equals the serial one, from the s
     const double r = 2.8, spacing = 0.25 * r;
     const NearSlabNormals near = true_normals_near_slab(shape, source, d, curvature_halo_columns(r, spacing, 0.35));
     const Eigen::VectorXd H = distributed_mean_curvature(d, near, r, spacing);
-    const Eigen::VectorXd expected = CorrectedCurvature::interpolated(serial, true_vertex_normals(shape, serial))
-                                         .mean_curvature_at_sites(r, spacing)
-                                         .H;
+    const Eigen::MatrixX3d true_vertex =
+        vertex_normals_from_face_normals(true_face_normals(shape, serial), serial.faces, int(serial.num_vertices()));
+    const Eigen::VectorXd expected =
+        CorrectedCurvature::interpolated(serial, true_vertex).mean_curvature_at_sites(r, spacing).H;
     double worst = 0.0;
     for (int v = 0; v < d.num_owned; ++v)
       worst = std::max(worst, std::abs(H[v] - expected[d.vertex_ids[std::size_t(v)]]));
