@@ -163,9 +163,9 @@ namespace {
 Eigen::MatrixXd run_block_cg(const detail::TransposedProduct& multiply, const Eigen::MatrixXd& B,
                              const detail::Preconditioner& precondition, double tolerance, int maxit,
                              const std::string& preconditioner, bool warn, SolverReport& report,
-                             double preconditioned_tolerance = 0.0) {
-  const detail::BlockCgResult cg =
-      detail::block_conjugate_gradient(multiply, B, precondition, tolerance, maxit, preconditioned_tolerance);
+                             double preconditioned_tolerance = 0.0, const detail::ColumnSums& sum_over_parts = {}) {
+  const detail::BlockCgResult cg = detail::block_conjugate_gradient(multiply, B, precondition, tolerance, maxit,
+                                                                    preconditioned_tolerance, sum_over_parts);
   if (cg.breakdown_column >= 0) {
     std::ostringstream os;
     os << "cg: matrix is not positive definite (p^T A p = " << cg.breakdown_value << " in column "
@@ -177,11 +177,19 @@ Eigen::MatrixXd run_block_cg(const detail::TransposedProduct& multiply, const Ei
   const Eigen::MatrixXd& X = cg.X;
   Eigen::MatrixXd AXt;
   multiply(X.transpose(), AXt);
+  // Squared norms per column of B, of the residual and of A X, over every process's rows.
+  Eigen::ArrayXd squares(3 * B.cols());
+  for (Eigen::Index j = 0; j < B.cols(); ++j) {
+    squares[3 * j] = B.col(j).squaredNorm();
+    squares[3 * j + 1] = (AXt.row(j).transpose() - B.col(j)).squaredNorm();
+    squares[3 * j + 2] = AXt.row(j).squaredNorm();
+  }
+  if (sum_over_parts) sum_over_parts(squares);
   double worst = 0.0;
   Eigen::Index worst_column = 0;
   for (Eigen::Index j = 0; j < B.cols(); ++j) {
-    const double nb = B.col(j).norm();
-    const double r = nb > 0 ? (AXt.row(j).transpose() - B.col(j)).norm() / nb : AXt.row(j).norm();
+    const double nb = std::sqrt(squares[3 * j]);
+    const double r = nb > 0 ? std::sqrt(squares[3 * j + 1]) / nb : std::sqrt(squares[3 * j + 2]);
     if (r >= worst) {
       worst = r;
       worst_column = j;
@@ -270,7 +278,7 @@ Eigen::MatrixXd conjugate_gradient(const SymmetricOperator& A, const Eigen::Matr
       A.precondition_transposed(Rt, Zt);
   };
   Eigen::MatrixXd X = run_block_cg(A.multiply_transposed, B, precondition, tol, maxit, jacobi ? "jacobi" : "custom",
-                                   on == "warn", r, ptol);
+                                   on == "warn", r, ptol, A.sum_over_parts);
   r.solve_seconds = watch.elapsed();
   return X;
 }

@@ -41,6 +41,11 @@ struct SymmetricOperator {
   /// Optional preconditioner, Zt = (P^{-1} R)^T for Rt = R^T (k by rows), P symmetric positive
   /// definite and fixed (a factorization, not an inner iteration). When set, `diagonal` may be empty.
   std::function<void(const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt)> precondition_transposed;
+  /// Optional, for an operator whose rows are split over processes (MPI ranks), each calling
+  /// conjugate_gradient with its own rows of B: sums k per-column partial inner products over them
+  /// in place, so that every process takes the same steps (give max_iterations: its default
+  /// depends on the local rows).
+  std::function<void(Eigen::ArrayXd& sums)> sum_over_parts;
 };
 
 /// Solves A X = B (#rows by k) with the "cg" backend's iteration and checks (Jacobi or the operator's

@@ -3,10 +3,14 @@
 #include <mpi.h>
 #include <petscmat.h>
 
+#include <algorithm>
 #include <cmath>
+#include <corrlap/backends/iterative.hpp>
+#include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/linear_solver.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -103,65 +107,99 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
   const auto precondition = [&](const Eigen::MatrixXd& R) -> Eigen::MatrixXd {
     return solver.solve_distributed(mass.asDiagonal() * solver.solve_distributed(R));
   };
-  // The header's bound, sqrt(2 r^T P^{-1} r / (alpha area)), worst column, from r^T z.
-  const auto bound_of = [&](const Eigen::VectorXd& rz) {
+  // The serial solve's iteration (PreconditionedRegularization::solve) step for step: the same CG
+  // (conjugate_gradient, its inner products summed over the ranks), passes, tolerances and
+  // acceptance tests, so that every rank and the serial solve take the same steps.
+  SymmetricOperator A;
+  A.rows = n;
+  A.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
+    Yt = multiply(Xt.transpose()).transpose();
+  };
+  A.precondition_transposed = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
+    Zt = precondition(Rt.transpose()).transpose();
+  };
+  A.sum_over_parts = [](Eigen::ArrayXd& sums) {
+    MPI_Allreduce(MPI_IN_PLACE, sums.data(), int(sums.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  };
+  const auto bound_of = [&](const Eigen::MatrixXd& R) {
+    const Eigen::VectorXd rz = dots(R, precondition(R));
     return std::sqrt(2.0 * std::max(rz.maxCoeff(), 0.0) / (alpha * area));
   };
-  const Eigen::VectorXd rhs_norms = dots(rhs, rhs).cwiseSqrt().cwiseMax(std::numeric_limits<double>::min());
-  const auto relative = [&](const Eigen::MatrixXd& R) {
-    return (dots(R, R).cwiseSqrt().array() / rhs_norms.array()).maxCoeff();
+  // The componentwise backward error, max_i |b - A q|_i / (|L| M_l^{-1} |L| |q| + alpha M_l |q| + |b|)_i.
+  PetscMatOwner absL;
+  {
+    std::vector<PetscInt> i, j;
+    std::vector<PetscScalar> values;
+    for (const DistributedFem::Entry& e : fem.owned_entries(DistributedFem::Which::L)) {
+      i.push_back(PetscInt(e.row));
+      j.push_back(PetscInt(e.column));
+      values.push_back(std::abs(e.value));
+    }
+    detail::coo_matrix(s, i, j, values, absL);
+  }
+  const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
+    const Eigen::MatrixXd absq = q.cwiseAbs();
+    const Eigen::MatrixXd scale =
+        product(absL, s, Eigen::MatrixXd(inverse_mass.asDiagonal() * product(absL, s, absq))) +
+        alpha * (mass.asDiagonal() * absq) + Eigen::MatrixXd(rhs.cwiseAbs());
+    double worst = 0.0;
+    for (Eigen::Index c = 0; c < q.cols(); ++c)
+      for (Eigen::Index r = 0; r < q.rows(); ++r)
+        if (scale(r, c) > 0.0) worst = std::max(worst, std::abs(R(r, c)) / scale(r, c));
+    return global_max(worst);
   };
-
-  // Block CG, the three coordinates in step (one product and one preconditioning per iteration,
-  // column-wise scalars), restarted from the true residual (at most 3 passes) against the drift
-  // of its recurrence, as the serial solve does.
-  constexpr int kMaxIterations = 1000;
+  const auto relative = [&](const Eigen::MatrixXd& R) {
+    const Eigen::VectorXd rr = dots(R, R), bb = dots(rhs, rhs);
+    double worst = 0.0;
+    for (Eigen::Index c = 0; c < R.cols(); ++c)
+      worst = std::max(worst, std::sqrt(rr[c]) / std::max(std::sqrt(bb[c]), std::numeric_limits<double>::min()));
+    return worst;
+  };
+  constexpr double kBackwardTolerance = 1e-12;
+  Config cg_options;
+  cg_options.set("on_no_convergence", "warn");
+  // The serial default (2 n) from the whole surface's n, the same on every rank.
+  cg_options.set("max_iterations", double(std::min<std::int64_t>(2 * s.num_vertices, 1 << 30)));
+  SolverReport cg;
   DistributedRegularization out;
   // Not from p when no start is given: L p is the staircase's Laplacian, so |b - A p| is orders of
   // magnitude above |b|.
-  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(n, 3), R = rhs;
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(n, 3), residual = rhs;
   if (start) {
     q = *start;
-    R = rhs - multiply(q);
+    residual = rhs - multiply(q);
   }
-  double normwise = relative(R), bound = std::numeric_limits<double>::infinity();
-  const auto done = [&] { return normwise <= 1e-10 || (accuracy > 0.0 && bound <= accuracy); };
+  double normwise = 1.0, backward = 1.0, bound = std::numeric_limits<double>::infinity();
+  const auto at_rounding = [&] { return normwise <= 1e-10 || backward <= kBackwardTolerance; };
+  const auto done = [&] { return at_rounding() || (accuracy > 0.0 && bound <= accuracy); };
   for (int pass = 0; pass < 3 && !done(); ++pass) {
-    Eigen::MatrixXd Z = precondition(R), D = Z;
-    Eigen::VectorXd rz = dots(R, Z);
-    bound = bound_of(rz);
-    // Each pass aims at 1e-11 of b on its recurrence (or half the accuracy): the true residual
-    // below decides.
-    for (int k = 0; k < kMaxIterations; ++k) {
-      const bool small = relative(R) <= 1e-11 || (accuracy > 0.0 && bound <= 0.5 * accuracy);
-      if (small) break;
-      const Eigen::MatrixXd AD = multiply(D);
-      const Eigen::VectorXd dAd = dots(D, AD);
-      for (Eigen::Index j = 0; j < 3; ++j) {
-        if (!(dAd[j] > 0.0)) continue;  // this coordinate has converged (D = 0)
-        const double step = rz[j] / dAd[j];
-        q.col(j) += step * D.col(j);
-        R.col(j) -= step * AD.col(j);
-      }
-      Z = precondition(R);
-      const Eigen::VectorXd rz_next = dots(R, Z);
-      for (Eigen::Index j = 0; j < 3; ++j) D.col(j) = Z.col(j) + (rz[j] > 0.0 ? rz_next[j] / rz[j] : 0.0) * D.col(j);
-      rz = rz_next;
-      bound = bound_of(rz);
-      ++out.iterations;
+    if (accuracy > 0.0) {
+      cg_options.set("tolerance", 1e-10);
+      cg_options.set("preconditioned_tolerance", 0.5 * accuracy * std::sqrt(0.5 * alpha * area));
+    } else {
+      const double missing = pass == 0 ? 1e-8 : 0.1 * std::max(1e-10 / normwise, kBackwardTolerance / backward);
+      cg_options.set("tolerance", std::clamp(missing, 1e-10, 0.1));
     }
-    R = rhs - multiply(q);  // the true residual
-    normwise = relative(R);
-    bound = bound_of(dots(R, precondition(R)));
+    const Eigen::MatrixXd step = conjugate_gradient(A, residual, cg_options, &cg);
+    out.iterations += cg.iterations;
+    q += step;
+    residual = rhs - multiply(q);
+    normwise = relative(residual);
+    if (accuracy > 0.0) bound = bound_of(residual);
+    backward =
+        accuracy > 0.0 && bound <= accuracy ? std::numeric_limits<double>::quiet_NaN() : backward_error(q, residual);
   }
+  int finite = q.allFinite() ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &finite, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  if (!finite) throw NumericalError("regularization: the solver returned non-finite positions");
   out.positions = q;
   out.residual = normwise;
-  out.error_bound = bound;
+  out.error_bound = accuracy > 0.0 ? bound : bound_of(residual);
   if (!done())
-    throw SolverError(SolverStatus::NoConvergence, "regularization: CG stopped at a relative residual of " +
-                                                       std::to_string(normwise) + " and an error bound of " +
-                                                       std::to_string(bound) + " after " +
-                                                       std::to_string(out.iterations) + " iterations");
+    throw SolverError(SolverStatus::NoConvergence, "regularization: relative residual " + std::to_string(normwise) +
+                                                       " after " + std::to_string(out.iterations) +
+                                                       " preconditioned CG iterations, error bound " +
+                                                       std::to_string(out.error_bound));
   return out;
 }
 
@@ -194,6 +232,22 @@ double distributed_attachment_bias(const DistributedSurface& s, const Eigen::Mat
   const double total = global_sum(mass.sum());
   if (!(total > 0.0)) throw InputError("attachment_bias: the masses must sum to a positive number");
   return global_sum(bias.cwiseAbs().dot(mass)) / total;
+}
+
+RegularizationEnergy distributed_regularization_energy(const DistributedSurface& s, const DistributedFem& fem,
+                                                       const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                                       const Eigen::VectorXd& H, const Eigen::MatrixX3d& q) {
+  const Eigen::Index n = s.num_owned;
+  check_everywhere(p.rows() == n && normals.rows() == n && H.size() == n && q.rows() == n,
+                   "regularization energy: p, q, normals and H need one row per owned vertex");
+  const DistributedFem::Impl& ops = fem.impl();
+  const Eigen::VectorXd mass = detail::product(ops.M, s, Eigen::VectorXd::Ones(n));
+  const Eigen::MatrixXd Hn = normals.array().colwise() * H.array();
+  const Eigen::MatrixXd residual = mass.cwiseInverse().asDiagonal() * product(ops.L, s, Eigen::MatrixXd(q)) + 2.0 * Hn;
+  RegularizationEnergy e;
+  e.laplacian = global_sum((mass.asDiagonal() * residual.cwiseAbs2()).sum());
+  e.attachment = global_sum((mass.asDiagonal() * (q - p).cwiseAbs2()).sum());
+  return e;
 }
 
 }  // namespace corrlap

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <corrlap/backends/petsc.hpp>
 #include <corrlap/regularization/attachment_bias.hpp>
+#include <corrlap/regularization/laplacian_regularization.hpp>
 
 #include "distributed_fem.hpp"
 #include "distributed_surface.hpp"
@@ -45,5 +46,11 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
 double distributed_attachment_bias(const DistributedSurface& surface, const Eigen::MatrixX3d& staircase,
                                    const Eigen::MatrixX3d& result, const Eigen::MatrixX3d& normals,
                                    const Eigen::VectorXd& mass, double step, int rounds = kAttachmentBiasRounds);
+
+/// regularization_energy(L, M, p, normals, H, q) of the whole surface (docs/math.md §9.2's two
+/// terms), from the owned vertices' rows of each rank. Collective.
+RegularizationEnergy distributed_regularization_energy(const DistributedSurface& surface, const DistributedFem& fem,
+                                                       const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                                       const Eigen::VectorXd& H, const Eigen::MatrixX3d& q);
 
 }  // namespace corrlap

@@ -125,6 +125,8 @@ DistributedRegularizedSurface distributed_regularize_surface(const DistributedPr
   r.solve_error_bound = solved.back().error_bound / h;
   r.solve_residual = solved.back().residual;
   r.solve_seconds = watch.lap();
+  r.energy_before = distributed_regularization_energy(s, problem.fem(), p, normals, r.H, p);
+  r.energy_after = distributed_regularization_energy(s, problem.fem(), p, normals, r.H, r.positions);
   return r;
 }
 

@@ -21,6 +21,7 @@ struct DistributedRegularizedSurface {
   double solve_error_bound = 0.0;          ///< in steps of h, as RegularizedSurface's
   double solve_residual = 0.0;
   double curvature_seconds = 0.0, solve_seconds = 0.0;
+  RegularizationEnergy energy_before, energy_after;  ///< at the input and at the result
 };
 
 /// regularize_surface(mesh, normals, options) of the whole surface, at the owned vertices of

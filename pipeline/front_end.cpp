@@ -12,8 +12,10 @@ FrontEnd choose_front_end(const FrontEndRequest& r) {
   const bool normals =
       !r.normals_from_file && (r.normals == "auto" || r.normals == "ii" || (r.normals == "true" && r.implicit_shape));
   const bool surface_and_operators = surface && normals && r.method == "fem" && r.method_parameters.empty();
-  const bool problem = (r.task == FrontEndRequest::Task::Poisson && r.rhs_from_test_function && r.solver == "petsc") ||
-                       (r.task == FrontEndRequest::Task::Eigen && r.solver == "slepc");
+  const bool problem =
+      (r.task == FrontEndRequest::Task::Poisson && r.rhs_from_test_function && r.solver == "petsc") ||
+      (r.task == FrontEndRequest::Task::Eigen && r.solver == "slepc") ||
+      (r.task == FrontEndRequest::Task::Regularize && r.solver == "petsc" && !r.serial_only_regularization);
   return surface_and_operators && problem ? FrontEnd::Distributed : FrontEnd::Serial;
 #else
   (void)r;

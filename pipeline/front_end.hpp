@@ -15,7 +15,7 @@ std::string to_string(FrontEnd front_end);
 
 /// What a command asks for, in the terms the choice depends on.
 struct FrontEndRequest {
-  enum class Task { Poisson, Heat, Eigen };
+  enum class Task { Poisson, Heat, Eigen, Regularize };
   Task task = Task::Poisson;
   bool implicit_shape = false;     ///< the surface digitizes a shape (--shape, --polynomial), not a file
   bool volume_file = false;        ///< the surface is read from a volume file (--volume)
@@ -25,6 +25,9 @@ struct FrontEndRequest {
   Config method_parameters;            ///< the method's parameters that were given (any takes the serial one)
   std::string solver;                  ///< the solver's name: the linear solver, or eigs's eigen solver
   bool rhs_from_test_function = true;  ///< Poisson: b from a test function, not from a file
+  /// Regularize: what only the serial regularization does (principal curvature edits, the
+  /// unattached solve alpha0 = 0, the alignment baseline, every label of a volume).
+  bool serial_only_regularization = false;
 };
 
 /// The distributed front end exactly when it computes the command's own result, in a build with
@@ -32,7 +35,9 @@ struct FrontEndRequest {
 /// true normals (shapes) or II normals (`auto` means true for a shape, II for a volume), the fem
 /// method with its default parameters (consistent mass), and
 ///  - Poisson: a test function for b and the `petsc` solver, with any of its options;
-///  - Eigen: the `slepc` eigen solver, with any of its options.
+///  - Eigen: the `slepc` eigen solver, with any of its options;
+///  - Regularize: the `petsc` solver (a direct one: MUMPS by default), without what only the serial
+///    regularization does (FrontEndRequest::serial_only_regularization).
 /// The heat system, meshes, other normals and methods, and every other solver take the serial
 /// front end. What the distributed one can only refuse once it reads the input or builds the
 /// surface (a degenerate voxel-to-physical map, pinched voxels, II parameters it does not

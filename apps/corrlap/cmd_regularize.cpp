@@ -11,6 +11,7 @@
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/pipeline/front_end.hpp>
 #include <corrlap/pipeline/surface_defaults.hpp>
 #include <corrlap/regularization/alignment_regularization.hpp>
 #include <corrlap/regularization/regularize_surface.hpp>
@@ -22,6 +23,14 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+
+#if defined(CORRLAP_WITH_PETSC)
+#include <corrlap/backends/petsc.hpp>
+#include <corrlap/distributed/distributed_poisson.hpp>
+#include <corrlap/distributed/distributed_problem.hpp>
+#include <corrlap/distributed/distributed_regularize_surface.hpp>
+#include <variant>
+#endif
 
 #include "command.hpp"
 #include "library_errors.hpp"
@@ -170,6 +179,11 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
             << (a.no_render ? "" : ", before.png, after.png") << "\n";
 }
 
+void write_regularization(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
+                          const Eigen::MatrixX3d& input_normals, const RegularizedSurface& r,
+                          const std::string& description, const std::string& dir, const std::string& shown,
+                          FrontEnd front_end, nlohmann::json& stages, Stopwatch& t);
+
 // One surface regularized into `dir` (`shown`: the folder as the user names it).
 void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const LoadedSurface& surface,
                     const std::string& description, const std::string& dir, const std::string& shown, Stopwatch& t) {
@@ -196,9 +210,17 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   stages["solve_s"] = r.solve_seconds;
   t.restart();
   if (!is_output_rank()) return;  // under mpirun rank 0 writes (every rank computed the same result)
+  write_regularization(a, o, surface, normals.vertex, r, description, dir, shown, FrontEnd::Serial, stages, t);
+}
 
+// The outputs of the paper's regularization in `dir`: the surfaces, pictures and metrics.json.
+void write_regularization(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
+                          const Eigen::MatrixX3d& input_normals, const RegularizedSurface& r,
+                          const std::string& description, const std::string& dir, const std::string& shown,
+                          FrontEnd front_end, nlohmann::json& stages, Stopwatch& t) {
+  const SurfelMesh& mesh = surface.mesh;
   MeshAttributes input_attr;
-  input_attr.vertex_normals = normals.vertex;
+  input_attr.vertex_normals = input_normals;
   input_attr.vertex_scalars = {{"H", r.H}};
   const OutputUnits units = a.output.parse(surface);
   write_surfaces(dir, mesh, input_attr, r.mesh, {{"H", r.H}}, units);
@@ -208,6 +230,7 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
 
   nlohmann::json m;
   m["surface"] = description;
+  m["front_end"] = to_string(front_end);
   m["vertices"] = mesh.num_vertices();
   m["faces"] = mesh.num_faces();
   m["h"] = r.h;
@@ -270,6 +293,108 @@ std::string label_name(double label) {
   return os.str();
 }
 
+#if defined(CORRLAP_WITH_PETSC)
+// The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
+FrontEndRequest front_end_request(const RegularizeArgs& a, const RegularizationOptions& o) {
+  FrontEndRequest r;
+  r.task = FrontEndRequest::Task::Regularize;
+  r.implicit_shape = !a.source.shape.empty() || !a.source.polynomial.empty();
+  r.volume_file = !a.source.volume.empty();
+  r.normals = a.normals.source;
+  r.normals_from_file = !a.normals.face_file.empty() || !a.normals.vertex_file.empty();
+  r.method = a.method.method;
+  r.method_parameters = a.method.config();
+  r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
+  r.serial_only_regularization = !a.baseline.empty() || a.source.all_labels() || o.k1_edit.active() ||
+                                 o.k2_edit.active() || (!o.alpha0_auto && o.alpha0 == 0.0);
+  return r;
+}
+
+// The columns of X (#owned x 3) of every rank, on rank 0 in serial vertex order (#V x 3).
+Eigen::MatrixX3d gather_rows_on_rank0(const DistributedSurface& s, const Eigen::MatrixX3d& X) {
+  Eigen::MatrixX3d whole(s.rank == 0 ? Eigen::Index(s.num_vertices) : 0, 3);
+  for (int c = 0; c < 3; ++c) {
+    const Eigen::VectorXd column = gather_on_rank0(s, X.col(c));
+    if (s.rank == 0) whole.col(c) = column;
+  }
+  return whole;
+}
+
+// False when the distributed front end refused the input (distributed_problem.hpp): its refusals
+// are collective, so every rank then takes the serial front end. The ranks regularize their
+// slabs; rank 0 gathers the surface and its result (the mesh, not the operators) and writes.
+bool run_distributed(const RegularizeArgs& a, const RegularizationOptions& o) {
+  PetscLinearSolver solver;
+  solver.configure(a.solver.config());  // a bad option fails before the surface, on every rank
+  Stopwatch t;
+  std::optional<OutputFolder> out;
+  if (is_output_rank()) out.emplace(a.out);
+  const SurfaceInput input = a.source.input();
+  const bool shape = std::holds_alternative<ImplicitShapeInput>(input);
+  std::string refused;
+  const auto problem = make_distributed_problem(input, a.normals.request(shape), refused);
+  if (!problem) {
+    if (is_output_rank()) std::cerr << "note: " << refused << "; using the serial front end\n";
+    return false;
+  }
+  const DistributedSurface& s = problem->surface();
+  nlohmann::json stages;
+  stages["surface_s"] = t.lap();  // with the normals and the operators
+  if (is_output_rank())
+    std::cerr << "regularize: " << a.source.describe() << ": " << s.num_vertices << " vertices, " << s.num_faces
+              << " faces, h = " << s.mesh.h << ", distributed over " << s.ranks << " ranks\n";
+  const DistributedRegularizedSurface d = distributed_regularize_surface(*problem, o, !shape, solver);
+  stages["curvature_s"] = d.curvature_seconds;
+  stages["solve_s"] = d.solve_seconds;
+  t.restart();
+  const Eigen::MatrixX3d staircase = gather_rows_on_rank0(s, s.mesh.positions.topRows(s.num_owned));
+  const Eigen::MatrixX3d result = gather_rows_on_rank0(s, d.positions);
+  const Eigen::MatrixX3d normals = gather_rows_on_rank0(s, problem->vertex_normals());
+  const Eigen::VectorXd H = gather_on_rank0(s, d.H);
+  const auto faces = gather_faces_on_rank0(s);
+  stages["gather_s"] = t.lap();
+  if (!is_output_rank()) return true;
+
+  LoadedSurface surface;
+  surface.mesh.positions = staircase;
+  surface.mesh.faces = faces;
+  surface.mesh.h = s.mesh.h;
+  if (problem->shape()) surface.shape = *problem->shape();
+  surface.h = s.mesh.h;
+  surface.frame = problem->frame();
+  surface.components = compute_mesh_info(surface.mesh).components;
+  surface.description = a.source.describe();
+  RegularizedSurface r;
+  r.h = s.mesh.h;
+  r.mesh = surface.mesh;
+  r.mesh.positions = result;
+  r.H = H;
+  r.normals = normals;
+  r.size = d.size;
+  r.curvature_radius = d.curvature_radius;
+  r.alpha0 = d.alpha0;
+  r.alpha = d.alpha;
+  r.alpha0_trials = d.alpha0_trials;
+  r.solver = "petsc";
+  r.solve_scheme = "preconditioned-cg";
+  r.solve_iterations = d.solve_iterations;
+  r.solve_error_bound = d.solve_error_bound;
+  r.solve_residual = d.solve_residual;
+  r.curvature_seconds = d.curvature_seconds;
+  r.solve_seconds = d.solve_seconds;
+  r.energy_before = d.energy_before;
+  r.energy_after = d.energy_after;
+  // As regularize_surface: a solve stopped at a proven accuracy is checked without its residual.
+  r.check = check_solution(surface.mesh, result,
+                           o.solve_accuracy > 0.0 ? std::nullopt : std::optional<double>(d.solve_residual),
+                           "regularization (fem)");
+  write_regularization(a, o, surface, normals, r, a.source.describe(), out->path(), a.out, FrontEnd::Distributed,
+                       stages, t);
+  out->commit();
+  return true;
+}
+#endif
+
 void run(const RegularizeArgs& a) {
   if (!a.baseline.empty())
     for (const CLI::Option* opt : a.laplacian_only)
@@ -299,6 +424,9 @@ void run(const RegularizeArgs& a) {
 
   // Checked before the (possibly long) computation; written whole at the end or not at all. Under
   // mpirun only rank 0 writes: the other ranks compute alongside (the PETSc backends solve together).
+#if defined(CORRLAP_WITH_PETSC)
+  if (choose_front_end(front_end_request(a, o)) == FrontEnd::Distributed && run_distributed(a, o)) return;
+#endif
   std::optional<OutputFolder> out;
   if (is_output_rank()) out.emplace(a.out);
   const auto folder = [&](const std::string& name) { return out ? out->file(name) : std::string(); };

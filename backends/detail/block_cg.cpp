@@ -16,7 +16,12 @@ BlockCgResult block_conjugate_gradient(const Eigen::SparseMatrix<double>& A, con
 
 BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const Eigen::MatrixXd& B,
                                        const Preconditioner& precondition, double tolerance, int max_iterations,
-                                       double preconditioned_tolerance) {
+                                       double preconditioned_tolerance, const ColumnSums& sum_over_parts) {
+  // Per-column inner products of the rows held here, summed over the processes that hold the rest.
+  const auto summed = [&](Eigen::ArrayXd sums) {
+    if (sum_over_parts) sum_over_parts(sums);
+    return sums;
+  };
   const Eigen::Index n = B.rows(), k = B.cols();
   BlockCgResult result;
   // Rows are the k columns of the system (the transposed layout of symmetric_product_transposed).
@@ -25,14 +30,14 @@ BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const 
   Eigen::MatrixXd Zt, Pt, Qt;
   precondition(Rt, Zt);
   Pt = Zt;
-  Eigen::ArrayXd rz = (Rt.array() * Zt.array()).rowwise().sum();
-  const Eigen::ArrayXd threshold = tolerance * tolerance * Rt.rowwise().squaredNorm().array();
+  Eigen::ArrayXd rz = summed((Rt.array() * Zt.array()).rowwise().sum());
+  const Eigen::ArrayXd threshold = tolerance * tolerance * summed(Rt.rowwise().squaredNorm().array());
   const double rz_threshold = preconditioned_tolerance * preconditioned_tolerance;
   std::vector<bool> active(static_cast<std::size_t>(k), true);
   // rz: r^T P^{-1} r of the current residual (the preconditioned test reads it, no extra work).
   const auto update_active = [&](const Eigen::ArrayXd& rz_now) {
     bool any = false;
-    const Eigen::ArrayXd rr = Rt.rowwise().squaredNorm().array();
+    const Eigen::ArrayXd rr = summed(Rt.rowwise().squaredNorm().array());
     for (Eigen::Index c = 0; c < k; ++c) {
       const bool small = rr[c] <= threshold[c] || (preconditioned_tolerance > 0.0 && rz_now[c] <= rz_threshold);
       active[std::size_t(c)] = active[std::size_t(c)] && !small;
@@ -44,7 +49,7 @@ BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const 
   int iterations = 0;
   while (any_active && iterations < max_iterations) {
     multiply(Pt, Qt);
-    const Eigen::ArrayXd pq = (Pt.array() * Qt.array()).rowwise().sum();
+    const Eigen::ArrayXd pq = summed((Pt.array() * Qt.array()).rowwise().sum());
     Eigen::ArrayXd alpha = Eigen::ArrayXd::Zero(k);
     for (Eigen::Index c = 0; c < k; ++c) {
       if (!active[std::size_t(c)]) continue;
@@ -66,7 +71,7 @@ BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const 
       break;
     }
     precondition(Rt, Zt);
-    const Eigen::ArrayXd rz_next = (Rt.array() * Zt.array()).rowwise().sum();
+    const Eigen::ArrayXd rz_next = summed((Rt.array() * Zt.array()).rowwise().sum());
     if (preconditioned_tolerance > 0.0 && !update_active(rz_next)) {
       any_active = false;
       break;

@@ -10,6 +10,10 @@ namespace corrlap::detail {
 /// Zt = P^{-1} Rt for k residuals stored as the rows of Rt (k x n).
 using Preconditioner = std::function<void(const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt)>;
 
+/// For rows split over processes (each holds its own rows of every vector): sums the k per-column
+/// partial inner products over them, in place. Empty: one process holds every row.
+using ColumnSums = std::function<void(Eigen::ArrayXd& sums)>;
+
 struct BlockCgResult {
   Eigen::MatrixXd X;                   ///< n x k solution (the last iterate when not converged)
   int iterations = 0;                  ///< of the slowest column
@@ -35,8 +39,10 @@ using TransposedProduct = std::function<void(const Eigen::MatrixXd& Pt, Eigen::M
 /// symmetric_product_transposed). With preconditioned_tolerance > 0 a column also stops when the
 /// preconditioned norm of its recurrence residual, sqrt(r^T P^{-1} r), is at most that (absolute):
 /// the quantity CG has at hand that bounds the error in A's norm (|e|_A^2 = r^T A^{-1} r).
+/// With `sum_over_parts` the inner products are summed over the processes, which then take the same
+/// steps and stop together.
 BlockCgResult block_conjugate_gradient(const TransposedProduct& multiply, const Eigen::MatrixXd& B,
                                        const Preconditioner& precondition, double tolerance, int max_iterations,
-                                       double preconditioned_tolerance = 0.0);
+                                       double preconditioned_tolerance = 0.0, const ColumnSums& sum_over_parts = {});
 
 }  // namespace corrlap::detail

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # `corrlap regularize --solver petsc` under mpirun (ctest petsc_mpi_regularize): on an implicit
-# shape with 1, 2 and 4 ranks and on a volume file with 2, the regularized surface equals the serial CHOLMOD one to
-# 1e-8 of the object's size with the same automatic alpha0, and rank 0 alone writes and reports.
+# shape with 1, 2 and 4 ranks and on a volume file with 2, the distributed front end (each rank its
+# slab: the curvature, the solve and the automatic alpha0's trials) gives the serial CHOLMOD
+# surface to 1e-8 of the object's size with the same automatic alpha0, and rank 0 alone writes and
+# reports.
 # Usage: cli_regularize_petsc.sh CORRLAP MPIEXEC WORK_DIR
 set -euo pipefail
 cli=$1 mpiexec=$2 work=$3
@@ -27,6 +29,8 @@ for run in "2 --shape goursat --h 0.4" "1 --shape goursat --h 0.4" "4 --shape go
   [ "$(grep -c 'wrote ' "$work/$name-petsc-np$np.err")" = 1 ] || { echo "expected one 'wrote'"; exit 1; }
   ls -a "$work" | grep -q corrlap-tmp && { echo "a temporary folder was left behind"; exit 1; }
   grep -q '"solver": "petsc"' "$work/$name-petsc-np$np/metrics.json" || { echo "metrics.json does not name petsc"; exit 1; }
+  grep -q '"front_end": "distributed"' "$work/$name-petsc-np$np/metrics.json" ||
+    { echo "metrics.json does not say the distributed front end"; cat "$work/$name-petsc-np$np.err"; exit 1; }
 
   # Plain Python (no numpy: whatever python3 is first on PATH).
   python3 - "$work/$name-serial" "$work/$name-petsc-np$np" "$np" <<'PY'

@@ -292,6 +292,18 @@ TEST_CASE("choose_front_end: volume files and II normals take the distributed fr
   CHECK(with(solve, [](FrontEndRequest& q) { q.task = FrontEndRequest::Task::Heat; }) == FrontEnd::Serial);
   CHECK(with(solve, [](FrontEndRequest& q) { q.rhs_from_test_function = false; }) == FrontEnd::Serial);
   CHECK(with(solve, [](FrontEndRequest& q) { q.solver = "cholmod"; }) == FrontEnd::Serial);
+  // regularize: the petsc solver, without what only the serial regularization does.
+  FrontEndRequest regularize = solve;
+  regularize.task = FrontEndRequest::Task::Regularize;
+  CHECK(choose_front_end(regularize) == FrontEnd::Distributed);
+  CHECK(with(regularize, [](FrontEndRequest& q) { q.solver = "cholmod"; }) == FrontEnd::Serial);
+  CHECK(with(regularize, [](FrontEndRequest& q) { q.serial_only_regularization = true; }) == FrontEnd::Serial);
+  CHECK(with(regularize, [](FrontEndRequest& q) { q.method = "polydec"; }) == FrontEnd::Serial);
+  CHECK(with(regularize, [](FrontEndRequest& q) {
+          q.volume_file = false;
+          q.implicit_shape = true;
+          q.normals = "true";
+        }) == FrontEnd::Distributed);
 }
 
 TEST_CASE("distributed regularization of a shape and of a volume equals the serial regularize_surface") {
