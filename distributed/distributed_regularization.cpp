@@ -3,16 +3,12 @@
 #include <mpi.h>
 #include <petscmat.h>
 
-#include <algorithm>
 #include <cmath>
-#include <corrlap/backends/iterative.hpp>
-#include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/linear_solver.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
-#include <cstdint>
-#include <limits>
 #include <string>
+#include <vector>
 
 #include "detail/owned_vectors.hpp"
 #include "detail/petsc_matrices.hpp"
@@ -33,13 +29,6 @@ Eigen::MatrixXd product(Mat A, const DistributedSurface& s, const Eigen::MatrixX
   Eigen::MatrixXd Y(X.rows(), X.cols());
   for (Eigen::Index j = 0; j < X.cols(); ++j) Y.col(j) = detail::product(A, s, X.col(j));
   return Y;
-}
-
-// The column-wise inner products over the ranks.
-Eigen::VectorXd dots(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Y) {
-  Eigen::VectorXd d = (X.array() * Y.array()).colwise().sum().transpose();
-  MPI_Allreduce(MPI_IN_PLACE, d.data(), int(d.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  return d;
 }
 
 // The same InputError on every rank when any rank's check fails.
@@ -99,33 +88,7 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
   petsc_check(MatSetOption(B, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
   solver.factorize_distributed(detail::PetscDistributedMatrix{B});
 
-  const auto multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
-    return product(ops.L, s, Eigen::MatrixXd(inverse_mass.asDiagonal() * product(ops.L, s, X))) +
-           alpha * (mass.asDiagonal() * X);
-  };
-  // P^{-1} = B^{-1} M_l B^{-1}.
-  const auto precondition = [&](const Eigen::MatrixXd& R) -> Eigen::MatrixXd {
-    return solver.solve_distributed(mass.asDiagonal() * solver.solve_distributed(R));
-  };
-  // The serial solve's iteration (PreconditionedRegularization::solve) step for step: the same CG
-  // (conjugate_gradient, its inner products summed over the ranks), passes, tolerances and
-  // acceptance tests, so that every rank and the serial solve take the same steps.
-  SymmetricOperator A;
-  A.rows = n;
-  A.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
-    Yt = multiply(Xt.transpose()).transpose();
-  };
-  A.precondition_transposed = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
-    Zt = precondition(Rt.transpose()).transpose();
-  };
-  A.sum_over_parts = [](Eigen::ArrayXd& sums) {
-    MPI_Allreduce(MPI_IN_PLACE, sums.data(), int(sums.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  };
-  const auto bound_of = [&](const Eigen::MatrixXd& R) {
-    const Eigen::VectorXd rz = dots(R, precondition(R));
-    return std::sqrt(2.0 * std::max(rz.maxCoeff(), 0.0) / (alpha * area));
-  };
-  // The componentwise backward error, max_i |b - A q|_i / (|L| M_l^{-1} |L| |q| + alpha M_l |q| + |b|)_i.
+  // |L| for the backward error, assembled from L's entries like L.
   PetscMatOwner absL;
   {
     std::vector<PetscInt> i, j;
@@ -137,69 +100,35 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
     }
     detail::coo_matrix(s, i, j, values, absL);
   }
-  const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
-    const Eigen::MatrixXd absq = q.cwiseAbs();
-    const Eigen::MatrixXd scale =
-        product(absL, s, Eigen::MatrixXd(inverse_mass.asDiagonal() * product(absL, s, absq))) +
-        alpha * (mass.asDiagonal() * absq) + Eigen::MatrixXd(rhs.cwiseAbs());
-    double worst = 0.0;
-    for (Eigen::Index c = 0; c < q.cols(); ++c)
-      for (Eigen::Index r = 0; r < q.rows(); ++r)
-        if (scale(r, c) > 0.0) worst = std::max(worst, std::abs(R(r, c)) / scale(r, c));
-    return global_max(worst);
+  // The serial solve's iteration (solve_preconditioned) on this rank's rows, its sums over the ranks.
+  PreconditionedSystem system;
+  system.rows = n;
+  system.total_rows = s.num_vertices;
+  system.alpha = alpha;
+  system.area = area;
+  system.multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
+    return product(ops.L, s, Eigen::MatrixXd(inverse_mass.asDiagonal() * product(ops.L, s, X))) +
+           alpha * (mass.asDiagonal() * X);
   };
-  const auto relative = [&](const Eigen::MatrixXd& R) {
-    const Eigen::VectorXd rr = dots(R, R), bb = dots(rhs, rhs);
-    double worst = 0.0;
-    for (Eigen::Index c = 0; c < R.cols(); ++c)
-      worst = std::max(worst, std::sqrt(rr[c]) / std::max(std::sqrt(bb[c]), std::numeric_limits<double>::min()));
-    return worst;
+  // P^{-1} = B^{-1} M_l B^{-1}.
+  system.precondition = [&](const Eigen::MatrixXd& R) -> Eigen::MatrixXd {
+    return solver.solve_distributed(mass.asDiagonal() * solver.solve_distributed(R));
   };
-  constexpr double kBackwardTolerance = 1e-12;
-  Config cg_options;
-  cg_options.set("on_no_convergence", "warn");
-  // The serial default (2 n) from the whole surface's n, the same on every rank.
-  cg_options.set("max_iterations", double(std::min<std::int64_t>(2 * s.num_vertices, 1 << 30)));
-  SolverReport cg;
+  system.absolute_multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
+    return product(absL, s, Eigen::MatrixXd(inverse_mass.asDiagonal() * product(absL, s, X))) +
+           alpha * (mass.asDiagonal() * X);
+  };
+  system.sum_over_parts = [](Eigen::ArrayXd& sums) {
+    MPI_Allreduce(MPI_IN_PLACE, sums.data(), int(sums.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  };
+  system.max_over_parts = [](double x) { return global_max(x); };
+  SolverReport report;
   DistributedRegularization out;
-  // Not from p when no start is given: L p is the staircase's Laplacian, so |b - A p| is orders of
-  // magnitude above |b|.
-  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(n, 3), residual = rhs;
-  if (start) {
-    q = *start;
-    residual = rhs - multiply(q);
-  }
-  double normwise = 1.0, backward = 1.0, bound = std::numeric_limits<double>::infinity();
-  const auto at_rounding = [&] { return normwise <= 1e-10 || backward <= kBackwardTolerance; };
-  const auto done = [&] { return at_rounding() || (accuracy > 0.0 && bound <= accuracy); };
-  for (int pass = 0; pass < 3 && !done(); ++pass) {
-    if (accuracy > 0.0) {
-      cg_options.set("tolerance", 1e-10);
-      cg_options.set("preconditioned_tolerance", 0.5 * accuracy * std::sqrt(0.5 * alpha * area));
-    } else {
-      const double missing = pass == 0 ? 1e-8 : 0.1 * std::max(1e-10 / normwise, kBackwardTolerance / backward);
-      cg_options.set("tolerance", std::clamp(missing, 1e-10, 0.1));
-    }
-    const Eigen::MatrixXd step = conjugate_gradient(A, residual, cg_options, &cg);
-    out.iterations += cg.iterations;
-    q += step;
-    residual = rhs - multiply(q);
-    normwise = relative(residual);
-    if (accuracy > 0.0) bound = bound_of(residual);
-    backward =
-        accuracy > 0.0 && bound <= accuracy ? std::numeric_limits<double>::quiet_NaN() : backward_error(q, residual);
-  }
-  int finite = q.allFinite() ? 1 : 0;
-  MPI_Allreduce(MPI_IN_PLACE, &finite, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  if (!finite) throw NumericalError("regularization: the solver returned non-finite positions");
-  out.positions = q;
-  out.residual = normwise;
-  out.error_bound = accuracy > 0.0 ? bound : bound_of(residual);
-  if (!done())
-    throw SolverError(SolverStatus::NoConvergence, "regularization: relative residual " + std::to_string(normwise) +
-                                                       " after " + std::to_string(out.iterations) +
-                                                       " preconditioned CG iterations, error bound " +
-                                                       std::to_string(out.error_bound));
+  const Eigen::MatrixXd start_columns = start ? Eigen::MatrixXd(*start) : Eigen::MatrixXd();
+  out.positions = solve_preconditioned(system, rhs, start ? &start_columns : nullptr, accuracy, &report,
+                                       &out.error_bound);
+  out.iterations = report.iterations;
+  out.residual = report.residual;
   return out;
 }
 

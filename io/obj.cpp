@@ -3,6 +3,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/checked.hpp>
 #include <corrlap/io/detail/line_reader.hpp>
+#include <corrlap/io/detail/mesh_records.hpp>
 #include <corrlap/io/detail/text_writer.hpp>
 #include <corrlap/io/detail/tokens.hpp>
 #include <optional>
@@ -111,33 +112,31 @@ void write_obj(const std::string& path, const PolygonMesh& mesh, const std::vect
     for (int c = 0; c < 3; ++c)
       io_detail::require_finite(mesh.positions(v, c), path, "OBJ", "vertex", (long long)v + 1);
   io_detail::TextWriter out(path, "OBJ");
-  out.write("# corrlap mesh: ");
-  out.write_int(mesh.positions.rows());
-  out.write(" vertices, ");
-  out.write_int(mesh.faces.size());
-  out.write(" faces\n");
-  for (const std::string& c : comments) {
-    out.write("# ");
-    out.write(c);
-    out.write('\n');
-  }
-  for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v) {
-    out.write('v');
-    for (int c = 0; c < 3; ++c) {
-      out.write(' ');
-      out.write_double(mesh.positions(v, c));
-    }
-    out.write('\n');
-  }
-  for (const auto face : mesh.faces) {
-    out.write('f');
-    for (int id : face) {
-      out.write(' ');
-      out.write_int(id + 1);
-    }
-    out.write('\n');
-  }
+  out.write(io_detail::obj_header(mesh.positions.rows(), std::int64_t(mesh.faces.size()), comments));
+  for (Eigen::Index v = 0; v < mesh.positions.rows(); ++v)
+    io_detail::put_obj_vertex(out, mesh.positions(v, 0), mesh.positions(v, 1), mesh.positions(v, 2));
+  for (const auto face : mesh.faces) io_detail::put_obj_face(out, face);
   out.commit();
 }
+
+namespace io_detail {
+
+std::string obj_header(std::int64_t vertices, std::int64_t faces, const std::vector<std::string>& comments) {
+  std::string out;
+  StringSink sink(out);
+  sink.write("# corrlap mesh: ");
+  sink.write_int(vertices);
+  sink.write(" vertices, ");
+  sink.write_int(faces);
+  sink.write(" faces\n");
+  for (const std::string& c : comments) {
+    sink.write("# ");
+    sink.write(c);
+    sink.write('\n');
+  }
+  return out;
+}
+
+}  // namespace io_detail
 
 }  // namespace corrlap

@@ -9,6 +9,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/block_readers.hpp>
 #include <corrlap/io/detail/checked.hpp>
+#include <corrlap/io/detail/mesh_records.hpp>
 #include <corrlap/io/detail/corner_reserve.hpp>
 #include <corrlap/io/detail/line_reader.hpp>
 #include <corrlap/io/detail/text_writer.hpp>
@@ -647,8 +648,7 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   if (a.face_normals.rows() != 0) check_rows(a.face_normals.rows(), nf, "face normals");
   auto check_scalars = [&](const std::map<std::string, Eigen::VectorXd>& s, Eigen::Index expected, const char* kind) {
     for (const auto& [name, v] : s) {
-      if (!is_identifier(name) || name == "x" || name == "y" || name == "z" || name == "nx" || name == "ny" ||
-          name == "nz" || name == "vertex_indices" || name == "vertex_index")
+      if (!io_detail::ply_scalar_name_ok(name))
         fail(path, std::string(kind) + " scalar name '" + name + "' is not a valid, unreserved PLY property name");
       check_rows(v.size(), expected, std::string(kind) + " scalar '" + name + "'");
     }
@@ -664,23 +664,22 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   }
   const bool wide = max_degree > 255;
 
-  std::ostringstream h;
-  h << "ply\nformat binary_little_endian 1.0\ncomment written by corrlap\n";
+  io_detail::PlyHeader header;
+  header.vertices = nv;
+  header.faces = nf;
+  header.vertex_normals = a.vertex_normals.rows() > 0;
+  header.face_normals = a.face_normals.rows() > 0;
+  for (const auto& [name, v] : a.vertex_scalars) header.vertex_scalars.push_back(name);
+  for (const auto& [name, v] : a.face_scalars) header.face_scalars.push_back(name);
+  header.wide_faces = wide;
   for (const std::string& c : a.comments) {
     if (c.find_first_of("\r\n") != std::string::npos) fail(path, "a header comment holds a line break");
-    h << "comment " << c << "\n";
+    header.comments.push_back(c);
   }
-  h << "element vertex " << nv << "\nproperty double x\nproperty double y\nproperty double z\n";
-  if (a.vertex_normals.rows()) h << "property double nx\nproperty double ny\nproperty double nz\n";
-  for (const auto& [name, v] : a.vertex_scalars) h << "property double " << name << "\n";
-  h << "element face " << nf << "\nproperty list " << (wide ? "uint" : "uchar") << " int vertex_indices\n";
-  if (a.face_normals.rows()) h << "property double nx\nproperty double ny\nproperty double nz\n";
-  for (const auto& [name, v] : a.face_scalars) h << "property double " << name << "\n";
-  h << "end_header\n";
 
   // Streamed through the buffered writer: a temporary file that a non-finite value below removes.
   io_detail::TextWriter out(path, "PLY", /*binary=*/true);
-  out.write(h.str());
+  out.write(io_detail::ply_header(header));
   auto put = [&out](const auto& value) { out.write_bytes(&value, sizeof(value)); };
   // Positions, normals and scalars: no NaN or infinity reaches the file (the element is named).
   auto put_finite = [&](double value, const char* element, Eigen::Index index, const std::string* scalar = nullptr) {
@@ -697,16 +696,35 @@ void write_ply(const std::string& path, const PolygonMesh& mesh, const MeshAttri
   }
   for (Eigen::Index f = 0; f < nf; ++f) {
     const auto& face = mesh.faces[std::size_t(f)];
-    if (wide)
-      put(std::uint32_t(face.size()));
-    else
-      put(std::uint8_t(face.size()));
-    for (int id : face) put(std::int32_t(id));
+    io_detail::put_ply_face_list(out, face, face.size(), wide);
     if (a.face_normals.rows())
       for (int c = 0; c < 3; ++c) put_finite(double(a.face_normals(f, c)), "normal at face", f);
     for (const auto& [name, s] : a.face_scalars) put_finite(double(s[f]), "face", f, &name);
   }
   out.commit();
 }
+
+namespace io_detail {
+
+bool ply_scalar_name_ok(const std::string& name) {
+  return is_identifier(name) && name != "x" && name != "y" && name != "z" && name != "nx" && name != "ny" &&
+         name != "nz" && name != "vertex_indices" && name != "vertex_index";
+}
+
+std::string ply_header(const PlyHeader& h) {
+  std::ostringstream o;
+  o << "ply\nformat binary_little_endian 1.0\ncomment written by corrlap\n";
+  for (const std::string& c : h.comments) o << "comment " << c << "\n";
+  o << "element vertex " << h.vertices << "\nproperty double x\nproperty double y\nproperty double z\n";
+  if (h.vertex_normals) o << "property double nx\nproperty double ny\nproperty double nz\n";
+  for (const std::string& name : h.vertex_scalars) o << "property double " << name << "\n";
+  o << "element face " << h.faces << "\nproperty list " << (h.wide_faces ? "uint" : "uchar") << " int vertex_indices\n";
+  if (h.face_normals) o << "property double nx\nproperty double ny\nproperty double nz\n";
+  for (const std::string& name : h.face_scalars) o << "property double " << name << "\n";
+  o << "end_header\n";
+  return o.str();
+}
+
+}  // namespace io_detail
 
 }  // namespace corrlap

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <corrlap/backends/iterative.hpp>
+#include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -193,30 +195,67 @@ Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accura
   }
   solver_.factorize_owned(std::move(B));
   LinearSolver& solver = solver_;
-  const auto multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
+  Eigen::SparseMatrix<double> absL = L;  // a copy with its values replaced (faster than L.cwiseAbs())
+  absL.makeCompressed();
+  for (Eigen::Index i = 0; i < absL.nonZeros(); ++i) absL.valuePtr()[i] = std::abs(absL.valuePtr()[i]);
+  PreconditionedSystem system;
+  system.rows = p_.rows();
+  system.total_rows = p_.rows();
+  system.alpha = alpha;
+  system.area = mass.sum();
+  system.multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
     return L * (inverse_mass.asDiagonal() * (L * X)) + alpha * (mass.asDiagonal() * X);
   };
   // P^{-1} = B^{-1} M_l B^{-1}.
-  const auto precondition = [&](const Eigen::MatrixXd& R) -> Eigen::MatrixXd {
+  system.precondition = [&](const Eigen::MatrixXd& R) -> Eigen::MatrixXd {
     return solver.solve(mass.asDiagonal() * solver.solve(R));
   };
+  system.absolute_multiply = [&](const Eigen::MatrixXd& X) -> Eigen::MatrixXd {
+    return absL * (inverse_mass.asDiagonal() * (absL * X)) + alpha * (mass.asDiagonal() * X);
+  };
+  const Eigen::MatrixXd rhs_columns = rhs;
+  const Eigen::MatrixXd start_columns = start ? Eigen::MatrixXd(*start) : Eigen::MatrixXd();
+  return solve_preconditioned(system, rhs_columns, start ? &start_columns : nullptr, accuracy, report, error_bound);
+}
+
+Eigen::MatrixXd solve_preconditioned(const PreconditionedSystem& system, const Eigen::MatrixXd& rhs,
+                                     const Eigen::MatrixXd* start, double accuracy, SolverReport* report,
+                                     double* error_bound) {
+  const double alpha = system.alpha, area = system.area;
+  const auto sum_over_parts = [&](Eigen::ArrayXd& sums) {
+    if (system.sum_over_parts) system.sum_over_parts(sums);
+  };
+  const auto max_over_parts = [&](double x) { return system.max_over_parts ? system.max_over_parts(x) : x; };
+  // Column-wise inner products over every part.
+  const auto dots = [&](const Eigen::MatrixXd& X, const Eigen::MatrixXd& Y) {
+    Eigen::ArrayXd d = (X.array() * Y.array()).colwise().sum().transpose();
+    sum_over_parts(d);
+    return d;
+  };
   SymmetricOperator A;
-  A.rows = p_.rows();
+  A.rows = system.rows;
   // The CG blocks are transposed (k by n): multiply through plain n by k matrices.
   A.multiply_transposed = [&](const Eigen::MatrixXd& Xt, Eigen::MatrixXd& Yt) {
-    Yt = multiply(Xt.transpose()).transpose();
+    Yt = system.multiply(Xt.transpose()).transpose();
   };
   A.precondition_transposed = [&](const Eigen::MatrixXd& Rt, Eigen::MatrixXd& Zt) {
-    Zt = precondition(Rt.transpose()).transpose();
+    Zt = system.precondition(Rt.transpose()).transpose();
   };
+  A.sum_over_parts = system.sum_over_parts;
   // The header's bound on the RMS error of each coordinate, sqrt(2 r^T P^{-1} r / (alpha area)),
   // the worst column (one application of P^{-1}, the cost of a CG iteration).
-  const double area = mass.sum();
   const auto bound_of = [&](const Eigen::MatrixXd& R) {
-    const Eigen::MatrixXd Z = precondition(R);
+    const Eigen::ArrayXd rz = dots(R, system.precondition(R));
+    return std::sqrt(2.0 * std::max(rz.maxCoeff(), 0.0) / (alpha * area));
+  };
+  // max over the columns of |R_j| / |b_j|.
+  const Eigen::ArrayXd bb = dots(rhs, rhs);
+  const auto relative = [&](const Eigen::MatrixXd& R) {
+    const Eigen::ArrayXd rr = dots(R, R);
     double worst = 0.0;
-    for (Eigen::Index j = 0; j < R.cols(); ++j) worst = std::max(worst, R.col(j).dot(Z.col(j)));
-    return std::sqrt(2.0 * std::max(worst, 0.0) / (alpha * area));
+    for (Eigen::Index j = 0; j < R.cols(); ++j)
+      worst = std::max(worst, std::sqrt(rr[j]) / std::max(std::sqrt(bb[j]), std::numeric_limits<double>::min()));
+    return worst;
   };
   // Corrected weights grow like 1/(u.n) where normals are nearly tangent to the surfels; A's
   // entries then span many orders of magnitude and CG's recurrence drifts from the true residual.
@@ -226,28 +265,25 @@ Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accura
   // of A q is ~20 eps for rows of ~9 entries; one refinement pass reaches it, Skeel's result), or
   // until the error bound is below the accuracy asked.
   constexpr double kBackwardTolerance = 1e-12;
-  Config cg_options;
-  cg_options.set("on_no_convergence", "warn");
-  SolverReport local;
-  SolverReport& cg = report ? *report : local;
-  Eigen::SparseMatrix<double> absL = L;  // a copy with its values replaced (faster than L.cwiseAbs())
-  absL.makeCompressed();
-  for (Eigen::Index i = 0; i < absL.nonZeros(); ++i) absL.valuePtr()[i] = std::abs(absL.valuePtr()[i]);
   const auto backward_error = [&](const Eigen::MatrixXd& q, const Eigen::MatrixXd& R) {
-    const Eigen::MatrixXd absq = q.cwiseAbs();
-    const Eigen::MatrixXd scale = absL * (inverse_mass.asDiagonal() * (absL * absq)) +
-                                  alpha * (mass.asDiagonal() * absq) + Eigen::MatrixXd(rhs.cwiseAbs());
+    const Eigen::MatrixXd scale = system.absolute_multiply(q.cwiseAbs()) + Eigen::MatrixXd(rhs.cwiseAbs());
     double worst = 0.0;
     for (Eigen::Index j = 0; j < q.cols(); ++j)
       for (Eigen::Index i = 0; i < q.rows(); ++i)
         if (scale(i, j) > 0.0) worst = std::max(worst, std::abs(R(i, j)) / scale(i, j));
-    return worst;
+    return max_over_parts(worst);
   };
+  Config cg_options;
+  cg_options.set("on_no_convergence", "warn");
+  // 2 n of the whole system, the same on every part.
+  cg_options.set("max_iterations", double(std::min<std::int64_t>(2 * system.total_rows, 1 << 30)));
+  SolverReport local;
+  SolverReport& cg = report ? *report : local;
   // Not from p: L p is the staircase's Laplacian, so |b - A p| is orders of magnitude above |b|.
-  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p_.rows(), 3), residual = rhs;
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(system.rows, rhs.cols()), residual = rhs;
   if (start) {
     q = *start;
-    residual = rhs - multiply(q);
+    residual = rhs - system.multiply(q);
   }
   int iterations = 0;
   double normwise = 1.0, backward = 1.0, bound = std::numeric_limits<double>::infinity();
@@ -271,10 +307,13 @@ Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accura
     }
     const Eigen::MatrixXd step = conjugate_gradient(A, residual, cg_options, &cg);
     iterations += cg.iterations;
-    if (!step.allFinite()) throw NumericalError("regularization: the solver returned non-finite positions");
+    Eigen::ArrayXd non_finite(1);
+    non_finite[0] = step.allFinite() ? 0.0 : 1.0;
+    sum_over_parts(non_finite);
+    if (non_finite[0] > 0.0) throw NumericalError("regularization: the solver returned non-finite positions");
     q += step;
-    residual = rhs - multiply(q);
-    normwise = relative_residual(residual, rhs);
+    residual = rhs - system.multiply(q);
+    normwise = relative(residual);
     if (accuracy > 0.0) bound = bound_of(residual);
     // The backward error only decides when the bound does not.
     backward =

@@ -5,6 +5,8 @@
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <corrlap/core/linear_solver.hpp>
+#include <cstdint>
+#include <functional>
 
 namespace corrlap {
 
@@ -89,6 +91,34 @@ class PreconditionedRegularization {
   LinearSolver& solver_;
   bool analyzed_ = false;
 };
+
+/// The iteration of PreconditionedRegularization::solve on A q = b, A = L M_l^{-1} L + alpha M_l, for
+/// rows held in one place or split over parts (MPI ranks: distributed/distributed_regularization.hpp).
+/// The caller gives the products on its rows; the passes, tolerances and acceptance tests are
+/// this one function's, so that every part and the serial solve take the same steps.
+struct PreconditionedSystem {
+  Eigen::Index rows = 0;        ///< the rows held here
+  std::int64_t total_rows = 0;  ///< over all parts (CG's iteration limit is 2 n)
+  double alpha = 0.0;
+  double area = 0.0;  ///< the sum of M_l over all parts
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> multiply;      ///< A X (rows by k)
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> precondition;  ///< P^{-1} R, P = B M_l^{-1} B
+  /// |L| M_l^{-1} |L| X + alpha M_l X for X >= 0: the scale of A q's rounding (the backward error).
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> absolute_multiply;
+  /// Sums k per-column partial sums over the parts, in place; absent with one part.
+  std::function<void(Eigen::ArrayXd&)> sum_over_parts;
+  /// The largest of a value over the parts; absent with one part.
+  std::function<double(double)> max_over_parts;
+};
+
+/// q with A q = rhs (rows by k) as PreconditionedRegularization::solve stops (its `accuracy`),
+/// CG started from `start` when given, else from 0. `report`: the CG iterations, relative residual,
+/// status and message; `error_bound`: the bound reached (also with accuracy 0). Throws
+/// NumericalError on a non-finite iterate and SolverError NoConvergence after three passes short
+/// of the stopping rule, on every part alike.
+Eigen::MatrixXd solve_preconditioned(const PreconditionedSystem& system, const Eigen::MatrixXd& rhs,
+                                     const Eigen::MatrixXd* start, double accuracy, SolverReport* report,
+                                     double* error_bound);
 
 /// docs/math.md §9.3: the same energy without the attachment (alpha = 0, paper Fig. 11), whose
 /// minimizers solve L p' = g' (g = -2 M_l H n projected onto the range of L) and are unique up to a

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <cstdio>
+#include <span>
 #include <limits>
 #include <vector>
 
@@ -98,7 +99,7 @@ void draw_legend(Image& image, int left, const ColourScale& scale, const std::st
 
 }  // namespace
 
-ColourScale colour_scale(const ScalarField& field, const RenderOptions& options) {
+FieldPercentiles field_percentiles(const ScalarField& field) {
   if (field.values.size() == 0) throw InputError("render: scalar '" + field.name + "' has no value");
   for (Eigen::Index i = 0; i < field.values.size(); ++i)
     if (!std::isfinite(field.values[i]))
@@ -106,12 +107,20 @@ ColourScale colour_scale(const ScalarField& field, const RenderOptions& options)
                        (field.per_face ? "face " : "vertex ") + std::to_string(i));
   std::vector<double> sorted(field.values.data(), field.values.data() + field.values.size());
   std::sort(sorted.begin(), sorted.end());
-  double lo = quantile(sorted, 0.02), hi = quantile(sorted, 0.98);
+  FieldPercentiles p;
+  p.low = quantile(sorted, 0.02);
+  p.high = quantile(sorted, 0.98);
+  std::vector<double> magnitude(sorted.size());
+  std::transform(sorted.begin(), sorted.end(), magnitude.begin(), [](double v) { return std::abs(v); });
+  std::sort(magnitude.begin(), magnitude.end());
+  p.magnitude_high = quantile(magnitude, 0.98);
+  return p;
+}
+
+ColourScale colour_scale(const FieldPercentiles& p, const RenderOptions& options) {
+  double lo = p.low, hi = p.high;
   if (lo < 0.0 && hi > 0.0) {  // both signs: symmetric about 0
-    std::vector<double> magnitude(sorted.size());
-    std::transform(sorted.begin(), sorted.end(), magnitude.begin(), [](double v) { return std::abs(v); });
-    std::sort(magnitude.begin(), magnitude.end());
-    hi = quantile(magnitude, 0.98);
+    hi = p.magnitude_high;
     lo = -hi;
   }
   if (!(hi > lo)) {  // a constant field: a small range around it
@@ -129,21 +138,41 @@ ColourScale colour_scale(const ScalarField& field, const RenderOptions& options)
   return s;
 }
 
-Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const RenderOptions& options) {
+ColourScale colour_scale(const ScalarField& field, const RenderOptions& options) {
+  return colour_scale(field_percentiles(field), options);
+}
+
+void check_render_options(const RenderOptions& options) {
   check_size("width", options.width, 16, 8192);
   check_size("height", options.height, 16, 8192);
   check_size("supersampling", options.supersampling, 1, 4);
-  // 20 bytes per sample (depth and colour): 2^26 samples are 1.3 GB.
   const double samples = double(options.width) * options.height * options.supersampling * options.supersampling;
   if (samples > double(1 << 26))
     throw InputError("render: " + std::to_string(options.width) + " x " + std::to_string(options.height) +
                      " pixels with " + std::to_string(options.supersampling) + " x " +
                      std::to_string(options.supersampling) + " supersampling are " +
                      std::to_string(std::int64_t(samples)) +
-                     " samples, more than 67 M (1.3 GB); lower the size or the supersampling");
+                     " samples, more than 67 M (2 GB); lower the size or the supersampling");
+  (void)make_camera(options.view_direction, options.up);
+}
+
+ScreenExtent screen_extent(const Eigen::MatrixX3d& positions, const RenderOptions& options) {
+  const Camera cam = make_camera(options.view_direction, options.up);
+  ScreenExtent e;
+  if (positions.rows() == 0) return e;
+  const Eigen::VectorXd x = positions * cam.right, y = positions * cam.up;
+  e.lo_x = x.minCoeff();
+  e.hi_x = x.maxCoeff();
+  e.lo_y = y.minCoeff();
+  e.hi_y = y.maxCoeff();
+  return e;
+}
+
+RenderSamples render_samples(const PolygonMesh& mesh, const ScalarField* field, const std::optional<ColourScale>& scale,
+                             const ScreenExtent& extent, const RenderOptions& options,
+                             const std::vector<std::int64_t>& face_ids) {
+  check_render_options(options);
   const Eigen::Index nv = mesh.positions.rows();
-  if (nv == 0) throw InputError("render: the mesh has no vertex");
-  if (mesh.faces.empty()) throw InputError("render: the mesh has no face");
   if (!mesh.positions.allFinite()) throw InputError("render: the mesh has a non-finite vertex position");
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     if (mesh.faces[f].size() < 3) throw InputError("render: face " + std::to_string(f) + " has fewer than 3 vertices");
@@ -152,30 +181,34 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
         throw InputError("render: face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + " of " +
                          std::to_string(nv));
   }
-  std::optional<ColourScale> scale;
+  if (!face_ids.empty() && face_ids.size() != mesh.faces.size())
+    throw InputError("render: expected one face id per face");
   if (field) {
+    if (!scale) throw InputError("render: a coloured surface needs its colour scale");
     const Eigen::Index expected = field->per_face ? Eigen::Index(mesh.faces.size()) : nv;
     if (field->values.size() != expected)
       throw InputError("render: scalar '" + field->name + "' has " + std::to_string(field->values.size()) +
                        " values for " + std::to_string(expected) + (field->per_face ? " faces" : " vertices"));
-    scale = colour_scale(*field, options);
   }
 
   const Camera cam = make_camera(options.view_direction, options.up);
   const int s = options.supersampling;
-  const bool legend = options.legend && scale.has_value();
+  const bool legend = options.legend && field && scale.has_value();
   const int plot_width = legend ? options.width * 4 / 5 : options.width;
-  const int W = plot_width * s, H = options.height * s;  // supersampled plot area
+  RenderSamples out;
+  out.width = plot_width * s;
+  out.height = options.height * s;
+  const int W = out.width, H = out.height;  // supersampled plot area
 
   // Screen coordinates of the vertices, fitted into the plot area with a margin.
   Eigen::MatrixX3d screen(nv, 3);
   screen.col(0) = mesh.positions * cam.right;
   screen.col(1) = mesh.positions * cam.up;
   screen.col(2) = mesh.positions * cam.toward;
-  const Eigen::Vector3d lo = screen.colwise().minCoeff(), hi = screen.colwise().maxCoeff();
-  const double extent_x = std::max(hi[0] - lo[0], 1e-300), extent_y = std::max(hi[1] - lo[1], 1e-300);
+  const double extent_x = std::max(extent.hi_x - extent.lo_x, 1e-300),
+               extent_y = std::max(extent.hi_y - extent.lo_y, 1e-300);
   const double zoom = 0.92 * std::min(double(W) / extent_x, double(H) / extent_y);
-  const double mid_x = 0.5 * (lo[0] + hi[0]), mid_y = 0.5 * (lo[1] + hi[1]);
+  const double mid_x = 0.5 * (extent.lo_x + extent.hi_x), mid_y = 0.5 * (extent.lo_y + extent.hi_y);
   for (Eigen::Index v = 0; v < nv; ++v) {
     screen(v, 0) = 0.5 * W + (screen(v, 0) - mid_x) * zoom;
     screen(v, 1) = 0.5 * H - (screen(v, 1) - mid_y) * zoom;  // rows grow downwards
@@ -186,20 +219,23 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
   // (For the default view the three axis directions of a staircase get shades 0.36, 0.56, 0.82.)
   const Eigen::Vector3d light = (cam.toward + 1.2 * cam.up - 0.3 * cam.right).normalized();
   const Eigen::Vector3d grey(0.78, 0.78, 0.78);
-  std::vector<double> depth(std::size_t(W) * std::size_t(H), -std::numeric_limits<double>::infinity());
-  std::vector<float> colour(std::size_t(W) * std::size_t(H) * 3, 1.0f);  // white background
+  const std::size_t n = std::size_t(W) * std::size_t(H);
+  out.depth.assign(n, -std::numeric_limits<double>::infinity());
+  out.face.assign(n, RenderSamples::kNoFace);
+  out.colour.assign(3 * n, 1.0f);  // white background
 
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const std::span<const int> face = mesh.faces[f];
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();  // Newell's normal of the polygon
+    const std::int64_t id = face_ids.empty() ? std::int64_t(f) : face_ids[f];
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // Newell's normal of the polygon
     for (std::size_t k = 0; k < face.size(); ++k) {
       const Eigen::Vector3d a = mesh.positions.row(face[k]), b = mesh.positions.row(face[(k + 1) % face.size()]);
-      n += (a - b).cross(a + b);
+      normal += (a - b).cross(a + b);
     }
-    const double length = n.norm();
-    n = length > 0.0 ? Eigen::Vector3d(n / length) : cam.toward;
-    if (n.dot(cam.toward) < 0.0) n = -n;
-    const double shade = 0.2 + 0.5 * std::max(0.0, n.dot(light)) + 0.3 * n.dot(cam.toward);
+    const double length = normal.norm();
+    normal = length > 0.0 ? Eigen::Vector3d(normal / length) : cam.toward;
+    if (normal.dot(cam.toward) < 0.0) normal = -normal;
+    const double shade = 0.2 + 0.5 * std::max(0.0, normal.dot(light)) + 0.3 * normal.dot(cam.toward);
     const double face_t =
         field && field->per_face ? (field->values[Eigen::Index(f)] - scale->min) / (scale->max - scale->min) : 0.0;
     for (std::size_t k = 1; k + 1 < face.size(); ++k) {  // fan from the first corner
@@ -225,14 +261,43 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
           if (b0 < 0.0 || b1 < 0.0 || b2 < 0.0) continue;
           const double z = b0 * screen(ids[0], 2) + b1 * screen(ids[1], 2) + b2 * screen(ids[2], 2);
           const std::size_t at = std::size_t(py) * std::size_t(W) + std::size_t(px);
-          if (!(z > depth[at])) continue;  // ties keep the first face: the same image in any order of equal depths
-          depth[at] = z;
+          // Ties keep the lower face id (the first face drawn here): the same picture in any order of
+          // equal depths, and when pieces drawn apart are merged.
+          if (!(z > out.depth[at]) && !(z == out.depth[at] && id < out.face[at])) continue;
+          out.depth[at] = z;
+          out.face[at] = id;
           const Eigen::Vector3d base = field ? colormap_rgb(scale->map, b0 * t[0] + b1 * t[1] + b2 * t[2]) : grey;
-          for (int c = 0; c < 3; ++c) colour[3 * at + std::size_t(c)] = float(shade * base[c]);
+          for (int c = 0; c < 3; ++c) out.colour[3 * at + std::size_t(c)] = float(shade * base[c]);
         }
     }
   }
+  return out;
+}
 
+void merge_samples(RenderSamples& into, const RenderSamples& other, std::size_t first, std::size_t count) {
+  if (into.width != other.width || into.height != other.height)
+    throw InputError("render: samples of different sizes cannot be merged");
+  const std::size_t n = std::size_t(into.width) * std::size_t(into.height);
+  if (first > n || count > n - first) throw InputError("render: samples to merge beyond the picture");
+  for (std::size_t at = first; at < first + count; ++at) {
+    const double z = other.depth[at];
+    if (!(z > into.depth[at]) && !(z == into.depth[at] && other.face[at] < into.face[at])) continue;
+    into.depth[at] = z;
+    into.face[at] = other.face[at];
+    for (int c = 0; c < 3; ++c) into.colour[3 * at + std::size_t(c)] = other.colour[3 * at + std::size_t(c)];
+  }
+}
+
+Image render_picture(const RenderSamples& samples, const std::optional<ColourScale>& scale, const std::string& name,
+                     const RenderOptions& options) {
+  check_render_options(options);
+  const int s = options.supersampling;
+  const bool legend = options.legend && scale.has_value();
+  const int plot_width = legend ? options.width * 4 / 5 : options.width;
+  const int W = plot_width * s;
+  if (samples.width != W || samples.height != options.height * s ||
+      samples.colour.size() != 3 * std::size_t(W) * std::size_t(samples.height))
+    throw InputError("render: the samples do not match the picture's size");
   // Box filter of the s x s samples of each pixel.
   Image image(options.width, options.height);
   for (int y = 0; y < options.height; ++y)
@@ -241,13 +306,31 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
       for (int dy = 0; dy < s; ++dy)
         for (int dx = 0; dx < s; ++dx) {
           const std::size_t at = std::size_t(y * s + dy) * std::size_t(W) + std::size_t(x * s + dx);
-          for (int c = 0; c < 3; ++c) sum[c] += colour[3 * at + std::size_t(c)];
+          for (int c = 0; c < 3; ++c) sum[c] += samples.colour[3 * at + std::size_t(c)];
         }
       std::uint8_t* p = image.pixel(x, y);
       for (int c = 0; c < 3; ++c) p[c] = to_byte(sum[c] / double(s * s));
     }
-  if (legend) draw_legend(image, plot_width, *scale, field->name);
+  if (legend) draw_legend(image, plot_width, *scale, name);
   return image;
+}
+
+Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const RenderOptions& options) {
+  check_render_options(options);
+  if (mesh.positions.rows() == 0) throw InputError("render: the mesh has no vertex");
+  if (mesh.faces.empty()) throw InputError("render: the mesh has no face");
+  if (!mesh.positions.allFinite()) throw InputError("render: the mesh has a non-finite vertex position");
+  std::optional<ColourScale> scale;
+  if (field) {
+    const Eigen::Index expected = field->per_face ? Eigen::Index(mesh.faces.size()) : mesh.positions.rows();
+    if (field->values.size() != expected)
+      throw InputError("render: scalar '" + field->name + "' has " + std::to_string(field->values.size()) +
+                       " values for " + std::to_string(expected) + (field->per_face ? " faces" : " vertices"));
+    scale = colour_scale(*field, options);
+  }
+  const RenderSamples samples =
+      render_samples(mesh, field, scale, screen_extent(mesh.positions, options), options);
+  return render_picture(samples, scale, field ? field->name : std::string(), options);
 }
 
 }  // namespace corrlap

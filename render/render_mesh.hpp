@@ -6,7 +6,10 @@
 #include <Eigen/Core>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <optional>
+#include <cstdint>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "colormap.hpp"
 #include "image.hpp"
@@ -45,7 +48,57 @@ ColourScale colour_scale(const ScalarField& field, const RenderOptions& options)
 /// the picture. `field` (optional) colours it; without it the surface is light grey. Throws
 /// InputError on an empty mesh, non-finite positions, a face with a missing vertex, a scalar of the
 /// wrong size or with NaN, a zero view direction, sizes outside [16, 8192] pixels or more than 2^26
-/// samples (width x height x supersampling^2; 20 bytes each).
+/// samples (width x height x supersampling^2; 28 bytes each).
 Image render_mesh(const PolygonMesh& mesh, const ScalarField* field = nullptr, const RenderOptions& options = {});
+
+/// render_mesh in pieces, for a surface drawn by processes that each hold some of its faces
+/// (distributed/distributed_render.hpp): each draws its faces into samples in the frame of the whole
+/// surface, the samples are merged, and one process makes the picture. render_mesh is these pieces
+/// on the whole mesh, so merged pieces give its picture byte for byte.
+
+/// Where a surface lies on screen: its extent along the view's right and up axes. The picture is
+/// fitted to it. Pieces merge their extents by the smallest lo and the largest hi.
+struct ScreenExtent {
+  double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
+};
+ScreenExtent screen_extent(const Eigen::MatrixX3d& positions, const RenderOptions& options);
+
+/// What colour_scale reads from a field: the values at the 2nd and 98th percentiles, and the 98th
+/// percentile of the magnitudes (the q-th percentile of n values: the one of rank floor(q (n - 1))
+/// in increasing order, from 0). Throws InputError on no value or a NaN.
+struct FieldPercentiles {
+  double low = 0, high = 0, magnitude_high = 0;
+};
+FieldPercentiles field_percentiles(const ScalarField& field);
+/// colour_scale(field, options) from the field's percentiles.
+ColourScale colour_scale(const FieldPercentiles& percentiles, const RenderOptions& options);
+
+/// The supersamples of a picture's plot area (width x height, row-major): for each, the depth of the
+/// nearest face drawn (larger is nearer; -inf where none is), that face's id (kNoFace where none
+/// is) and its colour (3 floats; white where none is).
+struct RenderSamples {
+  static constexpr std::int64_t kNoFace = std::numeric_limits<std::int64_t>::max();
+  int width = 0, height = 0;
+  std::vector<double> depth;
+  std::vector<std::int64_t> face;
+  std::vector<float> colour;
+};
+
+/// Draws `mesh`'s faces, numbered `face_ids` (#F; empty: 0, 1, ...), into samples fitted to
+/// `extent` (the whole surface's), coloured by `field` in `scale` (both or neither). At equal depth
+/// the lower face id is kept. Throws InputError as render_mesh.
+RenderSamples render_samples(const PolygonMesh& mesh, const ScalarField* field, const std::optional<ColourScale>& scale,
+                             const ScreenExtent& extent, const RenderOptions& options,
+                             const std::vector<std::int64_t>& face_ids = {});
+
+/// Keeps in `into` the nearer of each pair of samples first .. first + count - 1 (at equal depth
+/// the lower face id): the samples of two pieces of one surface merged.
+void merge_samples(RenderSamples& into, const RenderSamples& other, std::size_t first, std::size_t count);
+
+/// The picture: each pixel the mean of its samples, and the colour bar of `scale` titled `name`
+/// (when a scale is given and options.legend).
+Image render_picture(const RenderSamples& samples, const std::optional<ColourScale>& scale, const std::string& name,
+                     const RenderOptions& options);
+
 
 }  // namespace corrlap

@@ -21,6 +21,7 @@
 #endif
 
 #include "command.hpp"
+#include "front_end_request.hpp"
 #include "operator_options.hpp"
 #include "solver_options.hpp"
 
@@ -38,16 +39,8 @@ struct EigsArgs {
 #if defined(CORRLAP_WITH_PETSC)
 // The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
 FrontEndRequest front_end_request(const EigsArgs& a) {
-  FrontEndRequest r;
-  r.task = FrontEndRequest::Task::Eigen;
-  r.implicit_shape = !a.options.source.shape.empty() || !a.options.source.polynomial.empty();
-  r.volume_file = !a.options.source.volume.empty();
-  r.normals = a.options.normals.source;
-  r.normals_from_file = !a.options.normals.face_file.empty() || !a.options.normals.vertex_file.empty();
-  r.method = a.options.method.method;
-  r.method_parameters = a.options.method.config();
-  r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
-  return r;
+  return cli::front_end_request(FrontEndRequest::Task::Eigen, a.options.source, a.options.normals, a.options.method,
+                                a.solver);
 }
 #endif
 

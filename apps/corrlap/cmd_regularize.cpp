@@ -33,6 +33,7 @@
 #endif
 
 #include "command.hpp"
+#include "front_end_request.hpp"
 #include "library_errors.hpp"
 #include "method_options.hpp"
 #include "normal_options.hpp"
@@ -296,15 +297,8 @@ std::string label_name(double label) {
 #if defined(CORRLAP_WITH_PETSC)
 // The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
 FrontEndRequest front_end_request(const RegularizeArgs& a, const RegularizationOptions& o) {
-  FrontEndRequest r;
-  r.task = FrontEndRequest::Task::Regularize;
-  r.implicit_shape = !a.source.shape.empty() || !a.source.polynomial.empty();
-  r.volume_file = !a.source.volume.empty();
-  r.normals = a.normals.source;
-  r.normals_from_file = !a.normals.face_file.empty() || !a.normals.vertex_file.empty();
-  r.method = a.method.method;
-  r.method_parameters = a.method.config();
-  r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
+  FrontEndRequest r =
+      cli::front_end_request(FrontEndRequest::Task::Regularize, a.source, a.normals, a.method, a.solver);
   r.serial_only_regularization = !a.baseline.empty() || a.source.all_labels() || o.k1_edit.active() ||
                                  o.k2_edit.active() || (!o.alpha0_auto && o.alpha0 == 0.0);
   return r;

@@ -27,6 +27,7 @@
 
 #include "command.hpp"
 #include "deprecated.hpp"
+#include "front_end_request.hpp"
 #include "method_options.hpp"
 #include "normal_options.hpp"
 #include "operator_options.hpp"
@@ -52,15 +53,9 @@ struct SolveArgs {
 #if defined(CORRLAP_WITH_PETSC)
 // The command in the terms of choose_front_end (pipeline/front_end.hpp), which decides.
 FrontEndRequest front_end_request(const SolveArgs& a) {
-  FrontEndRequest r;
-  r.task = a.system == "heat" ? FrontEndRequest::Task::Heat : FrontEndRequest::Task::Poisson;
-  r.implicit_shape = !a.source.shape.empty() || !a.source.polynomial.empty();
-  r.volume_file = !a.source.volume.empty();
-  r.normals = a.normals.source;
-  r.normals_from_file = !a.normals.face_file.empty() || !a.normals.vertex_file.empty();
-  r.method = a.method.method;
-  r.method_parameters = a.method.config();
-  r.solver = a.solver.config().get_string("solver", kDefaultLinearSolver);
+  FrontEndRequest r =
+      cli::front_end_request(a.system == "heat" ? FrontEndRequest::Task::Heat : FrontEndRequest::Task::Poisson,
+                             a.source, a.normals, a.method, a.solver);
   r.rhs_from_test_function = has_test_function(a.rhs);
   return r;
 }

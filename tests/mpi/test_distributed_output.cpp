@@ -1,0 +1,153 @@
+// Outputs of the distributed front end without a gather (distributed/distributed_mesh_output.hpp),
+// under mpirun with 1, 2 and 4 ranks: rows fetched from and summed at their owners, the result's
+// vertex normals, and mesh files written by every rank that equal write_mesh's of the whole
+// surface byte for byte.
+#include <doctest/doctest.h>
+#include <mpi.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <corrlap/core/error.hpp>
+#include <corrlap/distributed/distributed_mesh_output.hpp>
+#include <corrlap/distributed/distributed_surface.hpp>
+#include <corrlap/io/mesh_io.hpp>
+#include <corrlap/regularization/surface_quality.hpp>
+#include <corrlap/surface/extract_surface.hpp>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+
+using namespace corrlap;
+
+namespace {
+
+DigitizationParams params(double h, double bbox) {
+  DigitizationParams p;
+  p.h = h;
+  p.min_aabb = -bbox;
+  p.max_aabb = bbox;
+  return p;
+}
+
+// A smooth displacement of every vertex by its serial id: positions no rank could guess.
+Eigen::RowVector3d moved(const Eigen::RowVector3d& p, std::int64_t id, double h) {
+  const double t = double(id);
+  return p + 0.3 * h * Eigen::RowVector3d(std::sin(t), std::cos(1.7 * t), std::sin(0.3 * t + 1.0));
+}
+
+std::string shared_name(const std::string& name) {
+  long pid = long(::getpid());
+  MPI_Bcast(&pid, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+  return (std::filesystem::temp_directory_path() / ("corrlap_mesh_output_" + std::to_string(pid) + "_" + name))
+      .string();
+}
+
+std::string bytes_of(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+int world_rank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("distributed outputs: rows from their owners, sums at their owners, the result's normals") {
+  for (const auto& [shape_name, h, bbox] : {std::tuple{"torus", 0.35, 10.0}, std::tuple{"goursat", 0.3, 10.0}}) {
+    CAPTURE(shape_name);
+    const ImplicitShape shape = make_implicit_shape(shape_name);
+    const DistributedSurface s = distributed_surface(shape, params(h, bbox));
+    SurfelMesh serial = extract_surface(digitize(shape, params(h, bbox)));
+    for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
+      serial.positions.row(v) = moved(serial.positions.row(v), v, h);
+    Eigen::MatrixX3d owned(s.num_owned, 3);
+    for (int v = 0; v < s.num_owned; ++v) owned.row(v) = serial.positions.row(Eigen::Index(s.vertex_ids[std::size_t(v)]));
+
+    // Every local vertex gets its owner's row, bit for bit.
+    const Eigen::MatrixXd local = local_rows(s, owned);
+    REQUIRE(local.rows() == s.mesh.num_vertices());
+    for (Eigen::Index v = 0; v < local.rows(); ++v)
+      CHECK((local.row(v).array() == serial.positions.row(Eigen::Index(s.vertex_ids[std::size_t(v)])).array()).all());
+
+    // The owners sum every rank's rows: each vertex's face count is its valence on the whole surface.
+    Eigen::MatrixXd faces_here = Eigen::MatrixXd::Zero(s.mesh.num_vertices(), 1);
+    for (int f = 0; f < s.mesh.num_faces(); ++f)
+      for (int c = 0; c < 4; ++c) faces_here(s.mesh.faces(f, c), 0) += 1.0;
+    Eigen::VectorXd valence = Eigen::VectorXd::Zero(serial.num_vertices());
+    for (int f = 0; f < serial.num_faces(); ++f)
+      for (int c = 0; c < 4; ++c) valence[serial.faces(f, c)] += 1.0;
+    const Eigen::MatrixXd summed = sum_at_owners(s, faces_here);
+    for (int v = 0; v < s.num_owned; ++v) CHECK(summed(v, 0) == valence[Eigen::Index(s.vertex_ids[std::size_t(v)])]);
+
+    // The serial geometric normals up to the order of the sums (a few roundings of unit vectors).
+    const Eigen::MatrixX3d expected = geometric_vertex_normals(serial);
+    const Eigen::MatrixX3d normals = distributed_geometric_vertex_normals(s, owned);
+    double worst = 0.0;
+    for (int v = 0; v < s.num_owned; ++v)
+      worst = std::max(worst, (normals.row(v) - expected.row(Eigen::Index(s.vertex_ids[std::size_t(v)]))).norm());
+    CHECK(worst <= 1e-14);
+  }
+}
+
+TEST_CASE("distributed outputs: a mesh file written by every rank is write_mesh's of the whole surface") {
+  const double h = 0.3;
+  const ImplicitShape shape = make_implicit_shape("goursat");
+  const DistributedSurface s = distributed_surface(shape, params(h, 10.0));
+  SurfelMesh serial = extract_surface(digitize(shape, params(h, 10.0)));
+  for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
+    serial.positions.row(v) = moved(serial.positions.row(v), v, h);
+  MeshAttributes whole;
+  whole.vertex_normals = serial.positions.rowwise().normalized();
+  whole.vertex_scalars["H"] = serial.positions.col(0).array().sin();
+  whole.vertex_scalars["displacement"] = serial.positions.col(2);
+  whole.comments = {"SPACE=LPS"};
+  Eigen::MatrixX3d owned(s.num_owned, 3), owned_normals(s.num_owned, 3);
+  MeshAttributes mine;
+  mine.comments = whole.comments;
+  for (const auto& [name, v] : whole.vertex_scalars) mine.vertex_scalars[name].resize(s.num_owned);
+  for (int v = 0; v < s.num_owned; ++v) {
+    const Eigen::Index id = Eigen::Index(s.vertex_ids[std::size_t(v)]);
+    owned.row(v) = serial.positions.row(id);
+    owned_normals.row(v) = whole.vertex_normals.row(id);
+    for (auto& [name, values] : mine.vertex_scalars) values[v] = whole.vertex_scalars.at(name)[id];
+  }
+  mine.vertex_normals = owned_normals;
+  for (const std::string ext : {"ply", "obj"}) {
+    CAPTURE(ext);
+    const std::string parts = shared_name("parts." + ext), reference = shared_name("whole." + ext);
+    write_distributed_mesh(parts, s, owned, mine);
+    if (world_rank() == 0) {
+      write_mesh(reference, serial, whole);
+      const std::string expected = bytes_of(reference);
+      CHECK(expected.size() > 1000);
+      CHECK(bytes_of(parts) == expected);
+      CHECK(!std::filesystem::exists(parts + ".partial"));
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    if (world_rank() == 0) {
+      std::filesystem::remove(parts);
+      std::filesystem::remove(reference);
+    }
+  }
+
+  // A NaN on the last rank only: the same IoError on every rank, and no file.
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (world_rank() == ranks - 1 && s.num_owned > 0)
+    mine.vertex_scalars["H"][s.num_owned - 1] = std::numeric_limits<double>::quiet_NaN();
+  const std::string failed = shared_name("failed.ply");
+  bool thrown = false;
+  try {
+    write_distributed_mesh(failed, s, owned, mine);
+  } catch (const IoError& e) {
+    thrown = std::string(e.what()).find("not finite") != std::string::npos;
+  }
+  CHECK(thrown);
+  MPI_Barrier(MPI_COMM_WORLD);
+  CHECK(!std::filesystem::exists(failed));
+  CHECK(!std::filesystem::exists(failed + ".partial"));
+}
