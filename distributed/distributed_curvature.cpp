@@ -29,6 +29,8 @@ Eigen::VectorXd distributed_mean_curvature(const DistributedSurface& surface, co
   if (near.columns < needed)
     throw InputError("distributed curvature: the surface near the slab spans " + std::to_string(near.columns) +
                      " columns, the radius and spacing need " + std::to_string(needed));
+  // A slab the surface does not cross has no vertex to estimate (and the estimator no mesh).
+  if (surface.num_owned == 0) return Eigen::VectorXd();
   const CorrectedCurvature measures = CorrectedCurvature::interpolated(near.mesh, near.vertex_normals);
   const Eigen::VectorXd H = measures.mean_curvature_at_sites(r, spacing, near.owned_vertices).H;
   Eigen::VectorXd out(surface.num_owned);

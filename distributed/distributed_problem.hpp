@@ -38,6 +38,8 @@ class DistributedProblem {
   const DistributedFem& fem() const { return *fem_; }
   /// load_surface's frame for the same input: world -> voxel index -> physical coordinates.
   const VoxelFrame& frame() const { return frame_; }
+  /// Where the slabs' voxels come from (read again for halos).
+  const SlabSource& source() const { return source_; }
   /// The normals used: True or II (Auto resolved).
   NormalSource normals() const { return normals_; }
   /// The implicit shape, or null for a volume.

@@ -38,6 +38,11 @@ SolutionCheck check_solution(const SurfelMesh& input, const Eigen::MatrixX3d& re
   for (int k = 0; k < 3; ++k)
     if (side_before[k] > 0.0) c.extent_ratio = std::min(c.extent_ratio, side_after[k] / side_before[k]);
   if (!std::isfinite(c.extent_ratio)) c.extent_ratio = 1.0;  // a point: no extent to compare
+  return judge_solution(c, what);
+}
+
+SolutionCheck judge_solution(const SolutionCheck& c, const std::string& what) {
+  const std::optional<double>& residual = c.residual;
   const bool collapsed = c.area_ratio < kMinAreaRatio || c.extent_ratio < kMinExtentRatio;
   const bool blown_up = c.area_ratio > kMaxAreaRatio;
   const bool inaccurate = residual && !(*residual <= kMaxResidual);

@@ -29,6 +29,10 @@ struct SolutionCheck {
 SolutionCheck check_solution(const SurfelMesh& input, const Eigen::MatrixX3d& result, std::optional<double> residual,
                              const std::string& what);
 
+/// check_solution's judgement of measures taken elsewhere (the distributed front end sums them over
+/// its ranks): throws its NumericalError when they leave the bounds, returns them otherwise.
+SolutionCheck judge_solution(const SolutionCheck& measures, const std::string& what);
+
 /// The bounds of check_solution (bench/RESULTS.md, "regularization solution check": the margins
 /// measured over the paper's alpha0 range on sphere1).
 inline constexpr double kMinAreaRatio = 0.2, kMaxAreaRatio = 5.0, kMinExtentRatio = 0.5, kMaxResidual = 1e-3;

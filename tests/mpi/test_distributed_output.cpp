@@ -8,9 +8,15 @@
 
 #include <cmath>
 #include <corrlap/core/error.hpp>
+#include <corrlap/core/mesh_topology.hpp>
+#include <corrlap/distributed/distributed_halo.hpp>
 #include <corrlap/distributed/distributed_mesh_output.hpp>
+#include <corrlap/distributed/distributed_quality.hpp>
+#include <corrlap/distributed/distributed_render.hpp>
 #include <corrlap/distributed/distributed_surface.hpp>
+#include <corrlap/distributed/slab_source.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/render/render_mesh.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <filesystem>
@@ -150,4 +156,92 @@ TEST_CASE("distributed outputs: a mesh file written by every rank is write_mesh'
   MPI_Barrier(MPI_COMM_WORLD);
   CHECK(!std::filesystem::exists(failed));
   CHECK(!std::filesystem::exists(failed + ".partial"));
+}
+
+TEST_CASE("distributed outputs: a picture drawn by every rank is render_mesh's of the whole surface") {
+  const double h = 0.3;
+  const ImplicitShape shape = make_implicit_shape("goursat");
+  const DistributedSurface s = distributed_surface(shape, params(h, 10.0));
+  SurfelMesh serial = extract_surface(digitize(shape, params(h, 10.0)));
+  for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
+    serial.positions.row(v) = moved(serial.positions.row(v), v, h);
+  // Values of both signs, so that the scale reads all three percentiles.
+  const Eigen::VectorXd values = (serial.positions.col(0).array() * 0.7).sin() + 0.1;
+  Eigen::MatrixX3d owned(s.num_owned, 3);
+  Eigen::VectorXd owned_values(s.num_owned);
+  for (int v = 0; v < s.num_owned; ++v) {
+    const Eigen::Index id = Eigen::Index(s.vertex_ids[std::size_t(v)]);
+    owned.row(v) = serial.positions.row(id);
+    owned_values[v] = values[id];
+  }
+  const ScalarField field{"H", values, false};
+  const FieldPercentiles expected = field_percentiles(field);
+  const FieldPercentiles p = distributed_field_percentiles(s, "H", owned_values);
+  CHECK(p.low == expected.low);
+  CHECK(p.high == expected.high);
+  CHECK(p.magnitude_high == expected.magnitude_high);
+
+  RenderOptions options;
+  options.width = 240;
+  options.height = 200;
+  const ColourScale scale = colour_scale(p, options);
+  const Image coloured = distributed_render(s, owned, "H", owned_values, scale, options);
+  const Image grey = distributed_render(s, owned, "", Eigen::VectorXd(), std::nullopt, options);
+  if (world_rank() == 0) {
+    const Image want = render_mesh(to_polygon_mesh(serial), &field, options);
+    REQUIRE(coloured.width == want.width);
+    CHECK(coloured.rgb == want.rgb);
+    CHECK(grey.rgb == render_mesh(to_polygon_mesh(serial), nullptr, options).rgb);
+    CHECK(grey.rgb != coloured.rgb);
+  } else {
+    CHECK(coloured.rgb.empty());
+  }
+
+  // A NaN on one rank: the same InputError everywhere.
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (world_rank() == ranks - 1 && s.num_owned > 0) owned_values[0] = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(distributed_field_percentiles(s, "H", owned_values), InputError);
+}
+
+TEST_CASE("distributed outputs: areas, the solution check, components and the quality against the shape") {
+  // Two balls (two components) and goursat (one), with positions moved by up to 0.3 h * sqrt(3).
+  for (const auto& [name, h, bbox, r] : {std::tuple{"(x^2+y^2+z^2-4)*((x-5)^2+y^2+z^2-4)", 0.25, 8.0, 1.0},
+                                         std::tuple{"goursat", 0.3, 10.0, 1.2}}) {
+    CAPTURE(name);
+    const ImplicitShape shape = make_implicit_shape(name);
+    const DistributedSurface s = distributed_surface(shape, params(h, bbox));
+    const SurfelMesh staircase = extract_surface(digitize(shape, params(h, bbox)));
+    SurfelMesh serial = staircase;
+    for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
+      serial.positions.row(v) = moved(serial.positions.row(v), v, h);
+    Eigen::MatrixX3d before(s.num_owned, 3), after(s.num_owned, 3);
+    for (int v = 0; v < s.num_owned; ++v) {
+      const Eigen::Index id = Eigen::Index(s.vertex_ids[std::size_t(v)]);
+      before.row(v) = staircase.positions.row(id);
+      after.row(v) = serial.positions.row(id);
+    }
+    CHECK(distributed_components(s) == compute_mesh_info(serial).components);
+    CHECK(distributed_surface_area(s, after) == doctest::Approx(surface_area(serial)).epsilon(1e-13));
+    const SolutionCheck want = check_solution(staircase, serial.positions, 1e-9, "test");
+    const SolutionCheck got = distributed_check_solution(s, before, after, 1e-9, "test");
+    CHECK(got.area_ratio == doctest::Approx(want.area_ratio).epsilon(1e-13));
+    CHECK(got.extent_ratio == want.extent_ratio);
+
+    // The halo is read again from the shape; its width covers the balls about the moved vertices.
+    const double displacement = 0.3 * h * std::sqrt(3.0);
+    const DistributedHalo halo = distributed_halo(implicit_slab_source(shape, params(h, bbox)), s,
+                                                  quality_halo_columns(r, displacement, h));
+    for (const auto& [mesh, owned, moved_by] :
+         {std::tuple{&staircase, &before, 0.0}, std::tuple{static_cast<const SurfelMesh*>(&serial), &after, displacement}}) {
+      const SurfaceQuality expected = measure_against_shape(*mesh, shape, r);
+      const SurfaceQuality q = distributed_measure_against_shape(s, halo, *owned, moved_by, shape, r);
+      CHECK(q.distance_l1 == doctest::Approx(expected.distance_l1).epsilon(1e-12));
+      CHECK(q.normal_angle_deg == doctest::Approx(expected.normal_angle_deg).epsilon(1e-12));
+      CHECK(q.mean_curvature_error == doctest::Approx(expected.mean_curvature_error).epsilon(1e-10));
+    }
+    // A halo too narrow for the displacement is refused.
+    CHECK_THROWS_AS(distributed_measure_against_shape(s, halo, after, 4.0 * displacement + 2.0 * h, shape, r),
+                    InputError);
+  }
 }
