@@ -165,8 +165,11 @@ struct NormalsNearSlab {
   std::int64_t joined_balls = 0;
 };
 
+// `owned_face_normals` (#Fl, optional): the normals of the rank's owned faces, already estimated
+// (their serial bits); their balls are not run again.
 NormalsNearSlab ii_normals_near_slab(const SlabSource& source, const DistributedSurface& surface,
-                                     const IIParams& params, int columns) {
+                                     const IIParams& params, int columns,
+                                     const Eigen::MatrixX3d* owned_face_normals = nullptr) {
   if (columns < 1)
     throw InputError("distributed II normals: at least 1 column beyond the slab, got " + std::to_string(columns));
   // The checks of ii_face_normals, on the whole box and the whole surface (same on every rank).
@@ -256,15 +259,26 @@ NormalsNearSlab ii_normals_near_slab(const SlabSource& source, const Distributed
     trivial.row(i) = halo.mesh.surfels[std::size_t(needed[std::size_t(i)])].trivial_normal().transpose();
     if (shrink) around.row(i) = around_halo.row(needed[std::size_t(i)]);
   }
-  std::vector<std::size_t> all(needed.size());
-  std::iota(all.begin(), all.end(), std::size_t{0});
-  const std::vector<BallMoments> first = side_moments(rd, all, &out.joined_balls);
+  // The rows whose normal is known: the owned faces, when given (final normals, retries included).
+  std::vector<int> known_row(std::size_t(halo.mesh.num_faces()), -1);
+  if (owned_face_normals) {
+    if (owned_face_normals->rows() != surface.mesh.num_faces())
+      throw InputError("distributed II normals: expected one known normal per owned face");
+    for (int f = 0; f < surface.mesh.num_faces(); ++f) known_row[std::size_t(halo.owned_faces[std::size_t(f)])] = f;
+  }
+  std::vector<std::size_t> unknown;
+  for (std::size_t i = 0; i < needed.size(); ++i)
+    if (known_row[std::size_t(needed[i])] < 0) unknown.push_back(i);
+  const std::vector<BallMoments> first = side_moments(rd, unknown, &out.joined_balls);
   Eigen::MatrixX3d& normals = out.normals;
   normals.resize(rows, 3);
   std::vector<std::uint8_t> ambiguous(needed.size(), 0);
-  for (std::size_t i = 0; i < needed.size(); ++i) {
+  for (std::size_t i = 0; i < needed.size(); ++i)
+    if (const int f = known_row[std::size_t(needed[i])]; f >= 0) normals.row(Eigen::Index(i)) = owned_face_normals->row(f);
+  for (std::size_t k = 0; k < unknown.size(); ++k) {
+    const std::size_t i = unknown[k];
     const IIFaceEstimate e =
-        ii_estimate_from_moments(first[2 * i], first[2 * i + 1], trivial.row(Eigen::Index(i)).transpose(),
+        ii_estimate_from_moments(first[2 * k], first[2 * k + 1], trivial.row(Eigen::Index(i)).transpose(),
                                  around.row(Eigen::Index(i)).transpose());
     normals.row(Eigen::Index(i)) = e.normal.transpose();
     ambiguous[i] = e.ambiguous ? 1 : 0;
@@ -311,8 +325,9 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
 }
 
 NearSlabNormals distributed_ii_normals_near_slab(const SlabSource& source, const DistributedSurface& surface,
-                                                 const IIParams& params, int columns) {
-  const NormalsNearSlab near = ii_normals_near_slab(source, surface, params, columns);
+                                                 const IIParams& params, int columns,
+                                                 const Eigen::MatrixX3d* owned_face_normals) {
+  const NormalsNearSlab near = ii_normals_near_slab(source, surface, params, columns, owned_face_normals);
   const DistributedHalo& halo = near.halo;
   NearSlabNormals out;
   out.columns = columns;

@@ -47,9 +47,12 @@ DistributedNormals distributed_ii_normals(const SlabSource& source, const Distri
                                           const IIParams& params);
 
 /// The NearSlabNormals of `columns` >= 1 columns with II normals: the II balls
-/// run on a halo of ii_halo_width + columns - 1 columns. A collective call of every rank of
-/// MPI_COMM_WORLD; throws InputError as distributed_ii_normals, and for columns < 1.
+/// run on a halo of ii_halo_width + columns - 1 columns. `owned_face_normals` (#Fl, optional):
+/// distributed_ii_normals' normals of the owned faces, whose balls then are not run again. A
+/// collective call of every rank of MPI_COMM_WORLD; throws InputError as distributed_ii_normals,
+/// and for columns < 1.
 NearSlabNormals distributed_ii_normals_near_slab(const SlabSource& source, const DistributedSurface& surface,
-                                                 const IIParams& params, int columns);
+                                                 const IIParams& params, int columns,
+                                                 const Eigen::MatrixX3d* owned_face_normals = nullptr);
 
 }  // namespace corrlap

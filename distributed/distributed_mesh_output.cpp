@@ -186,15 +186,24 @@ Eigen::MatrixX3d distributed_geometric_vertex_normals(const DistributedSurface& 
 }
 
 void write_distributed_mesh(const std::string& path, const DistributedSurface& s, const Eigen::MatrixX3d& positions,
-                            const MeshAttributes& attributes) {
+                            const MeshAttributes& attributes, bool reverse_faces) {
   // Every rank formats its runs; a failure anywhere fails everywhere before the file exists.
+  // Whether the file has vertex normals: a rank without vertices has none to show it.
+  int normals = attributes.vertex_normals.rows() > 0 ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &normals, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MeshAttributes declared;  // what the layout reads: the same on every rank
+  declared.comments = attributes.comments;
+  if (normals) declared.vertex_normals = Eigen::MatrixX3d::Zero(1, 3);
+  for (const auto& [name, v] : attributes.vertex_scalars) declared.vertex_scalars[name] = Eigen::VectorXd();
+  declared.face_normals = attributes.face_normals;
+  declared.face_scalars = attributes.face_scalars;
   std::optional<std::string> failure;
   std::string header;
   std::vector<std::int64_t> keys;  // per run: section (0 vertices, 1 faces), first id, bytes
   std::vector<std::string> blocks;
   try {
     if (positions.rows() != s.num_owned) throw IoError("mesh file '" + path + "': expected one position per owned vertex");
-    const MeshFileLayout layout = mesh_file_layout(path, s.num_vertices, s.num_faces, attributes);
+    const MeshFileLayout layout = mesh_file_layout(path, s.num_vertices, s.num_faces, declared);
     header = mesh_file_header(layout);
     for (const Run& run : runs_of(s.vertex_ids, s.num_owned)) {
       MeshAttributes part;
@@ -215,7 +224,7 @@ void write_distributed_mesh(const std::string& path, const DistributedSurface& s
       QuadFaces faces(run.count, 4);
       for (Eigen::Index f = 0; f < run.count; ++f)
         for (int c = 0; c < 4; ++c)
-          faces(f, c) = s.vertex_ids[std::size_t(s.mesh.faces(run.begin + f, c))];
+          faces(f, c) = s.vertex_ids[std::size_t(s.mesh.faces(run.begin + f, reverse_faces ? 3 - c : c))];
       blocks.push_back(mesh_file_faces(layout, faces));
       keys.insert(keys.end(), {1, run.first, std::int64_t(blocks.back().size())});
     }

@@ -31,7 +31,8 @@ Eigen::MatrixX3d distributed_geometric_vertex_normals(const DistributedSurface& 
 /// on every rank and on a file system they all see. The file appears whole or not at all: IoError
 /// on every rank when any rank's part fails (a non-finite value) or the file cannot be written.
 /// Collective.
+/// `reverse_faces`: each face's corners in reverse order (a mirroring map of the positions).
 void write_distributed_mesh(const std::string& path, const DistributedSurface& s, const Eigen::MatrixX3d& positions,
-                            const MeshAttributes& attributes);
+                            const MeshAttributes& attributes, bool reverse_faces = false);
 
 }  // namespace corrlap

@@ -99,27 +99,4 @@ Eigen::VectorXd gather_on_rank0(const DistributedSurface& s, const Eigen::Vector
   return whole;
 }
 
-Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> gather_faces_on_rank0(const DistributedSurface& s) {
-  // Five numbers per face: its serial id and its corners' serial ids.
-  const int F = s.mesh.num_faces();
-  std::vector<std::int64_t> mine(5 * std::size_t(F));
-  for (int f = 0; f < F; ++f) {
-    mine[5 * std::size_t(f)] = s.face_ids[std::size_t(f)];
-    for (int c = 0; c < 4; ++c)
-      mine[5 * std::size_t(f) + 1 + std::size_t(c)] = s.vertex_ids[std::size_t(s.mesh.faces(f, c))];
-  }
-  const int count = int(mine.size());
-  std::vector<int> counts(std::size_t(s.ranks)), offsets(std::size_t(s.ranks), 0);
-  MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
-  for (int r = 1; r < s.ranks; ++r) offsets[std::size_t(r)] = offsets[std::size_t(r - 1)] + counts[std::size_t(r - 1)];
-  const bool root = s.rank == 0;
-  std::vector<std::int64_t> all(root ? 5 * std::size_t(s.num_faces) : 0);
-  MPI_Gatherv(mine.data(), count, MPI_INT64_T, all.data(), counts.data(), offsets.data(), MPI_INT64_T, 0,
-              MPI_COMM_WORLD);
-  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> faces(root ? Eigen::Index(s.num_faces) : 0, 4);
-  for (std::size_t k = 0; k + 4 < all.size(); k += 5)
-    for (int c = 0; c < 4; ++c) faces(Eigen::Index(all[k]), c) = int(all[k + 1 + std::size_t(c)]);
-  return faces;
-}
-
 }  // namespace corrlap

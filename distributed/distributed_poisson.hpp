@@ -32,9 +32,4 @@ DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& sur
 /// (#V); empty on the other ranks. Collective. For outputs written by rank 0.
 Eigen::VectorXd gather_on_rank0(const DistributedSurface& surface, const Eigen::VectorXd& owned_values);
 
-/// The faces of every rank, on rank 0 in serial face order (#F by 4 serial vertex ids); empty on
-/// the other ranks. Collective. With gather_on_rank0, the whole surface for outputs that rank 0
-/// writes (it then holds the mesh, not the operators).
-Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> gather_faces_on_rank0(const DistributedSurface& surface);
-
 }  // namespace corrlap

@@ -81,11 +81,12 @@ DistributedProblem::DistributedProblem(const SurfaceInput& input, const NormalRe
   DistributedNormals n = distributed_ii_normals(source_, surface_, ii_);
   fem_ = std::make_unique<DistributedFem>(surface_, n.face_normals);
   vertex_normals_ = std::move(n.vertex_normals);
+  face_normals_ = std::move(n.face_normals);
 }
 
 NearSlabNormals DistributedProblem::near_slab(int columns) const {
   if (normals_ == NormalSource::True) return true_normals_near_slab(*shape_, source_, surface_, columns);
-  return distributed_ii_normals_near_slab(source_, surface_, ii_, columns);
+  return distributed_ii_normals_near_slab(source_, surface_, ii_, columns, &face_normals_);
 }
 
 DistributedProblem::~DistributedProblem() = default;

@@ -58,6 +58,7 @@ class DistributedProblem {
   NormalSource normals_ = NormalSource::True;
   IIParams ii_;  // with II normals
   Eigen::MatrixX3d vertex_normals_;
+  Eigen::MatrixX3d face_normals_;  // II: the owned faces' (the near-slab pieces reuse them)
   DistributedSurface surface_;
   std::unique_ptr<DistributedFem> fem_;
 };

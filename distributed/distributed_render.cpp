@@ -92,9 +92,10 @@ Image distributed_render(const DistributedSurface& s, const Eigen::MatrixX3d& po
                          const Eigen::VectorXd& values, const std::optional<ColourScale>& scale,
                          const RenderOptions& options) {
   if (positions.rows() != s.num_owned) throw InputError("render: expected one position per owned vertex");
-  const bool coloured = values.size() > 0;
-  if (coloured && (values.size() != s.num_owned || !scale))
-    throw InputError("render: a coloured surface needs one value per owned vertex and its colour scale");
+  // Coloured by the scale's presence: a rank without vertices has no value to show it.
+  const bool coloured = scale.has_value();
+  if (coloured && values.size() != s.num_owned)
+    throw InputError("render: a coloured surface needs one value per owned vertex");
   int finite = positions.allFinite() ? 1 : 0;
   MPI_Allreduce(MPI_IN_PLACE, &finite, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
   if (!finite) throw InputError("render: the mesh has a non-finite vertex position");
@@ -150,7 +151,7 @@ Image distributed_render(const DistributedSurface& s, const Eigen::MatrixX3d& po
   MPI_Op_free(&op);
   MPI_Type_free(&type);
   if (s.rank != 0) return Image();
-  return render_picture(samples, coloured ? scale : std::nullopt, name, options);
+  return render_picture(samples, scale, name, options);
 }
 
 }  // namespace corrlap

@@ -20,8 +20,9 @@ FieldPercentiles distributed_field_percentiles(const DistributedSurface& s, cons
                                                const Eigen::VectorXd& owned_values);
 
 /// render_mesh of the whole surface with its owned vertices at `positions` (#owned by 3), coloured
-/// by `values` at the owned vertices (#owned; empty: not coloured) in `scale` under the title
-/// `name`. The picture on rank 0, an empty Image on the others. Collective.
+/// by `values` at the owned vertices (#owned) in `scale` under the title `name`, or grey without a
+/// scale (the same on every rank; `values` then unread). The picture on rank 0, an empty Image on
+/// the others. Collective.
 Image distributed_render(const DistributedSurface& s, const Eigen::MatrixX3d& positions, const std::string& name,
                          const Eigen::VectorXd& values, const std::optional<ColourScale>& scale,
                          const RenderOptions& options);

@@ -26,9 +26,15 @@
 
 #if defined(CORRLAP_WITH_PETSC)
 #include <corrlap/backends/petsc.hpp>
-#include <corrlap/distributed/distributed_poisson.hpp>
+#include <corrlap/distributed/collectives.hpp>
+#include <corrlap/distributed/distributed_halo.hpp>
+#include <corrlap/distributed/distributed_mesh_output.hpp>
 #include <corrlap/distributed/distributed_problem.hpp>
+#include <corrlap/distributed/distributed_quality.hpp>
 #include <corrlap/distributed/distributed_regularize_surface.hpp>
+#include <corrlap/distributed/distributed_render.hpp>
+#include <corrlap/render/image.hpp>
+#include <corrlap/render/render_mesh.hpp>
 #include <variant>
 #endif
 
@@ -69,27 +75,44 @@ struct RegularizeArgs {
   CLI::Option* clamp_option = nullptr;
 };
 
-// The geometry part of metrics.json, the same for both regularizations: the largest move, the
-// areas and, for implicit shapes, the quality before and after (docs/regularization.md).
-// The displacement and areas describe the meshes written: in their units; the rest is measured in
-// the computation's world units against the shape.
-void add_geometry_metrics(nlohmann::json& m, const LoadedSurface& surface, const SurfelMesh& result,
-                          double curvature_radius, const OutputUnits& units) {
+// The geometry part of metrics.json, the same for both regularizations and both front ends: the
+// largest move, the areas and, for implicit shapes, the quality before and after
+// (docs/regularization.md). Lengths in the computation's world units.
+struct GeometryMetrics {
+  int components = 0;
+  double displacement_max = 0.0, area_before = 0.0, area_after = 0.0;
+  std::optional<SurfaceQuality> before, after;  // against the implicit shape
+};
+
+GeometryMetrics geometry_metrics(const LoadedSurface& surface, const SurfelMesh& result, double curvature_radius) {
   const SurfelMesh& mesh = surface.mesh;
+  GeometryMetrics g;
+  g.components = surface.components;
+  g.displacement_max = (result.positions - mesh.positions).rowwise().norm().maxCoeff();
+  g.area_before = surface_area(mesh);
+  g.area_after = surface_area(result);
+  if (surface.shape) {
+    g.before = measure_against_shape(mesh, *surface.shape, curvature_radius);
+    g.after = measure_against_shape(result, *surface.shape, curvature_radius);
+  }
+  return g;
+}
+
+// The displacement and areas describe the meshes written: in their units; the quality is measured
+// in the computation's world units against the shape.
+void add_geometry_metrics(nlohmann::json& m, const GeometryMetrics& g, const OutputUnits& units) {
   const double scale = units.length_scale();
-  m["components"] = surface.components;
-  m["displacement_max"] = (result.positions - mesh.positions).rowwise().norm().maxCoeff() * scale;
-  m["area_before"] = surface_area(mesh) * scale * scale;
-  m["area_after"] = surface_area(result) * scale * scale;
-  if (!surface.shape) return;
-  const SurfaceQuality qb = measure_against_shape(mesh, *surface.shape, curvature_radius);
-  const SurfaceQuality qa = measure_against_shape(result, *surface.shape, curvature_radius);
-  m["distance_l1_before"] = qb.distance_l1;
-  m["distance_l1_after"] = qa.distance_l1;
-  m["normal_angle_deg_before"] = qb.normal_angle_deg;
-  m["normal_angle_deg_after"] = qa.normal_angle_deg;
-  m["mean_curvature_error_before"] = qb.mean_curvature_error;
-  m["mean_curvature_error_after"] = qa.mean_curvature_error;
+  m["components"] = g.components;
+  m["displacement_max"] = g.displacement_max * scale;
+  m["area_before"] = g.area_before * scale * scale;
+  m["area_after"] = g.area_after * scale * scale;
+  if (!g.before || !g.after) return;
+  m["distance_l1_before"] = g.before->distance_l1;
+  m["distance_l1_after"] = g.after->distance_l1;
+  m["normal_angle_deg_before"] = g.before->normal_angle_deg;
+  m["normal_angle_deg_after"] = g.after->normal_angle_deg;
+  m["mean_curvature_error_before"] = g.before->mean_curvature_error;
+  m["mean_curvature_error_after"] = g.after->mean_curvature_error;
 }
 
 // DIR/input.ply, regularized.ply (its geometric normals, the displacement and `scalars`),
@@ -172,7 +195,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   m["energy_final"] = r.energy_final;
   m["time_s"] = stages;
   // Measured with the default curvature radius of the paper's regularization.
-  add_geometry_metrics(m, surface, result, default_curvature_radius(surface), units);
+  add_geometry_metrics(m, geometry_metrics(surface, result, default_curvature_radius(surface)), units);
   write_metrics(dir, m);
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << shown
@@ -183,7 +206,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
 void write_regularization(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
                           const Eigen::MatrixX3d& input_normals, const RegularizedSurface& r,
                           const std::string& description, const std::string& dir, const std::string& shown,
-                          FrontEnd front_end, nlohmann::json& stages, Stopwatch& t);
+                          nlohmann::json& stages, Stopwatch& t);
 
 // One surface regularized into `dir` (`shown`: the folder as the user names it).
 void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const LoadedSurface& surface,
@@ -211,32 +234,22 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   stages["solve_s"] = r.solve_seconds;
   t.restart();
   if (!is_output_rank()) return;  // under mpirun rank 0 writes (every rank computed the same result)
-  write_regularization(a, o, surface, normals.vertex, r, description, dir, shown, FrontEnd::Serial, stages, t);
+  write_regularization(a, o, surface, normals.vertex, r, description, dir, shown, stages, t);
 }
 
-// The outputs of the paper's regularization in `dir`: the surfaces, pictures and metrics.json.
-void write_regularization(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
-                          const Eigen::MatrixX3d& input_normals, const RegularizedSurface& r,
-                          const std::string& description, const std::string& dir, const std::string& shown,
-                          FrontEnd front_end, nlohmann::json& stages, Stopwatch& t) {
-  const SurfelMesh& mesh = surface.mesh;
-  MeshAttributes input_attr;
-  input_attr.vertex_normals = input_normals;
-  input_attr.vertex_scalars = {{"H", r.H}};
-  const OutputUnits units = a.output.parse(surface);
-  write_surfaces(dir, mesh, input_attr, r.mesh, {{"H", r.H}}, units);
-  stages["write_s"] = t.lap();
-  if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, r.mesh, "H", r.H, r.H);
-  t.restart();
-
+// metrics.json of the paper's regularization but its geometry part, the same for both front ends.
+nlohmann::json regularization_metrics(const RegularizeArgs& a, const RegularizationOptions& o,
+                                      const RegularizedSurface& r, std::int64_t vertices, std::int64_t faces,
+                                      const std::string& description, const std::string& normals,
+                                      const OutputUnits& units, FrontEnd front_end, const nlohmann::json& stages) {
   nlohmann::json m;
   m["surface"] = description;
   m["front_end"] = to_string(front_end);
-  m["vertices"] = mesh.num_vertices();
-  m["faces"] = mesh.num_faces();
+  m["vertices"] = vertices;
+  m["faces"] = faces;
   m["h"] = r.h;
   m["method"] = a.method.method;
-  m["normals"] = a.normals.describe(surface);
+  m["normals"] = normals;
   m["size"] = r.size;
   m["curvature_radius"] = r.curvature_radius;
   m["alpha0"] = r.alpha0;
@@ -274,15 +287,40 @@ void write_regularization(const RegularizeArgs& a, const RegularizationOptions& 
   m["time_s"] = stages;
   m["energy_initial"] = r.energy_before.laplacian;  // the attachment term is 0 at the input
   m["energy_final"] = r.energy_after.laplacian + r.alpha * r.energy_after.attachment;
-  add_geometry_metrics(m, surface, r.mesh, r.curvature_radius, units);
-  write_metrics(dir, m);
+  return m;
+}
+
+// The summary on stderr, the same for both front ends.
+void report_regularization(const RegularizeArgs& a, const RegularizedSurface& r, const nlohmann::json& m,
+                           const std::string& shown) {
   std::cerr << "regularize: " << a.method.method << ", alpha = " << r.alpha0 << " / (h size)^2 = " << r.alpha << ", "
             << r.solver << ": max displacement " << m["displacement_max"].get<double>();
-  if (surface.shape)
+  if (m.contains("distance_l1_before"))
     std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
               << m["distance_l1_after"].get<double>();
   std::cerr << "\n  wrote " << shown << "/regularized.ply, regularized.obj, input.ply, metrics.json"
             << (a.no_render ? "" : ", before.png, after.png") << "\n";
+}
+
+// The outputs of the paper's regularization in `dir`: the surfaces, pictures and metrics.json.
+void write_regularization(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
+                          const Eigen::MatrixX3d& input_normals, const RegularizedSurface& r,
+                          const std::string& description, const std::string& dir, const std::string& shown,
+                          nlohmann::json& stages, Stopwatch& t) {
+  const SurfelMesh& mesh = surface.mesh;
+  MeshAttributes input_attr;
+  input_attr.vertex_normals = input_normals;
+  input_attr.vertex_scalars = {{"H", r.H}};
+  const OutputUnits units = a.output.parse(surface);
+  write_surfaces(dir, mesh, input_attr, r.mesh, {{"H", r.H}}, units);
+  stages["write_s"] = t.lap();
+  if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, r.mesh, "H", r.H, r.H);
+  t.restart();
+  nlohmann::json m = regularization_metrics(a, o, r, mesh.num_vertices(), mesh.num_faces(), description,
+                                            a.normals.describe(surface), units, FrontEnd::Serial, stages);
+  add_geometry_metrics(m, geometry_metrics(surface, r.mesh, r.curvature_radius), units);
+  write_metrics(dir, m);
+  report_regularization(a, r, m, shown);
 }
 
 // "3" for an integer label, else its shortest exact decimal.
@@ -304,19 +342,19 @@ FrontEndRequest front_end_request(const RegularizeArgs& a, const RegularizationO
   return r;
 }
 
-// The columns of X (#owned x 3) of every rank, on rank 0 in serial vertex order (#V x 3).
-Eigen::MatrixX3d gather_rows_on_rank0(const DistributedSurface& s, const Eigen::MatrixX3d& X) {
-  Eigen::MatrixX3d whole(s.rank == 0 ? Eigen::Index(s.num_vertices) : 0, 3);
-  for (int c = 0; c < 3; ++c) {
-    const Eigen::VectorXd column = gather_on_rank0(s, X.col(c));
-    if (s.rank == 0) whole.col(c) = column;
-  }
-  return whole;
+// Positions in the output units (faces keep the caller's orientation: OutputUnits::mirrors).
+Eigen::MatrixX3d positions_in(const OutputUnits& units, const Eigen::MatrixX3d& positions, double h) {
+  SurfelMesh m;
+  m.positions = positions;
+  m.h = h;
+  return units.mesh(m).positions;
 }
 
 // False when the distributed front end refused the input (distributed_problem.hpp): its refusals
 // are collective, so every rank then takes the serial front end. The ranks regularize their
-// slabs; rank 0 gathers the surface and its result (the mesh, not the operators) and writes.
+// slabs and write the outputs together: each its own vertices and faces of the meshes and samples
+// of the pictures, and the measures summed over the ranks; no rank gathers the surface
+// (docs/distributed.md, "Writing the outputs").
 bool run_distributed(const RegularizeArgs& a, const RegularizationOptions& o) {
   PetscLinearSolver solver;
   solver.configure(a.solver.config());  // a bad option fails before the surface, on every rank
@@ -341,29 +379,10 @@ bool run_distributed(const RegularizeArgs& a, const RegularizationOptions& o) {
   stages["curvature_s"] = d.curvature_seconds;
   stages["solve_s"] = d.solve_seconds;
   t.restart();
-  const Eigen::MatrixX3d staircase = gather_rows_on_rank0(s, s.mesh.positions.topRows(s.num_owned));
-  const Eigen::MatrixX3d result = gather_rows_on_rank0(s, d.positions);
-  const Eigen::MatrixX3d normals = gather_rows_on_rank0(s, problem->vertex_normals());
-  const Eigen::VectorXd H = gather_on_rank0(s, d.H);
-  const auto faces = gather_faces_on_rank0(s);
-  stages["gather_s"] = t.lap();
-  if (!is_output_rank()) return true;
 
-  LoadedSurface surface;
-  surface.mesh.positions = staircase;
-  surface.mesh.faces = faces;
-  surface.mesh.h = s.mesh.h;
-  if (problem->shape()) surface.shape = *problem->shape();
-  surface.h = s.mesh.h;
-  surface.frame = problem->frame();
-  surface.components = compute_mesh_info(surface.mesh).components;
-  surface.description = a.source.describe();
-  RegularizedSurface r;
+  const Eigen::MatrixX3d before = s.mesh.positions.topRows(s.num_owned);
+  RegularizedSurface r;  // what metrics.json reports (no mesh: the ranks hold it)
   r.h = s.mesh.h;
-  r.mesh = surface.mesh;
-  r.mesh.positions = result;
-  r.H = H;
-  r.normals = normals;
   r.size = d.size;
   r.curvature_radius = d.curvature_radius;
   r.alpha0 = d.alpha0;
@@ -379,11 +398,64 @@ bool run_distributed(const RegularizeArgs& a, const RegularizationOptions& o) {
   r.energy_before = d.energy_before;
   r.energy_after = d.energy_after;
   // As regularize_surface: a solve stopped at a proven accuracy is checked without its residual.
-  r.check = check_solution(surface.mesh, result,
-                           o.solve_accuracy > 0.0 ? std::nullopt : std::optional<double>(d.solve_residual),
-                           "regularization (fem)");
-  write_regularization(a, o, surface, normals, r, a.source.describe(), out->path(), a.out, FrontEnd::Distributed,
-                       stages, t);
+  r.check = distributed_check_solution(
+      s, before, d.positions, o.solve_accuracy > 0.0 ? std::nullopt : std::optional<double>(d.solve_residual),
+      "regularization (fem)");
+
+  // The surfaces, every rank writing its part into rank 0's folder.
+  const std::string dir = text_of_rank0(out ? out->path() : std::string());
+  const OutputUnits units = a.output.parse(problem->frame());
+  const bool mirrors = units.mirrors();
+  MeshAttributes input_attr;
+  input_attr.vertex_normals = units.normals(problem->vertex_normals());
+  input_attr.vertex_scalars = {{"H", units.curvatures(d.H)}};
+  input_attr.comments = units.comments();
+  write_distributed_mesh(dir + "/input.ply", s, positions_in(units, before, r.h), input_attr, mirrors);
+  const Eigen::MatrixX3d after = positions_in(units, d.positions, r.h);
+  MeshAttributes result_attr;
+  result_attr.comments = units.comments();
+  result_attr.vertex_scalars = {{"H", units.curvatures(d.H)},
+                                {"displacement", units.lengths((d.positions - before).rowwise().norm())}};
+  // The normals of the faces as written: reversed faces turn them.
+  result_attr.vertex_normals = distributed_geometric_vertex_normals(s, after) * (mirrors ? -1.0 : 1.0);
+  write_distributed_mesh(dir + "/regularized.ply", s, after, result_attr, mirrors);
+  MeshAttributes obj_attr;  // OBJ writes the comments only
+  obj_attr.comments = units.comments();
+  write_distributed_mesh(dir + "/regularized.obj", s, after, obj_attr, mirrors);
+  stages["write_s"] = t.lap();
+  if (!a.no_render) {
+    // As render_before_after: both pictures in the range of H after.
+    const RenderOptions options;
+    const ColourScale scale = colour_scale(distributed_field_percentiles(s, "H", d.H), options);
+    const Image picture_before = distributed_render(s, before, "H", d.H, scale, options);
+    const Image picture_after = distributed_render(s, d.positions, "H", d.H, scale, options);
+    if (is_output_rank()) {
+      write_png(dir + "/before.png", picture_before);
+      write_png(dir + "/after.png", picture_after);
+    }
+    stages["render_s"] = t.lap();
+  }
+  t.restart();
+
+  GeometryMetrics g;
+  g.components = distributed_components(s);
+  double displacement = s.num_owned > 0 ? (d.positions - before).rowwise().norm().maxCoeff() : 0.0;
+  displacement = max_over_ranks(displacement);
+  g.displacement_max = displacement;
+  g.area_before = distributed_surface_area(s, before);
+  g.area_after = distributed_surface_area(s, d.positions);
+  if (const ImplicitShape* shape_of = problem->shape()) {
+    const DistributedHalo halo =
+        distributed_halo(problem->source(), s, quality_halo_columns(r.curvature_radius, displacement, r.h));
+    g.before = distributed_measure_against_shape(s, halo, before, 0.0, *shape_of, r.curvature_radius);
+    g.after = distributed_measure_against_shape(s, halo, d.positions, displacement, *shape_of, r.curvature_radius);
+  }
+  nlohmann::json m = regularization_metrics(a, o, r, s.num_vertices, s.num_faces, a.source.describe(),
+                                            to_string(problem->normals()), units, FrontEnd::Distributed, stages);
+  add_geometry_metrics(m, g, units);
+  if (!is_output_rank()) return true;
+  write_metrics(dir, m);
+  report_regularization(a, r, m, a.out);
   out->commit();
   return true;
 }

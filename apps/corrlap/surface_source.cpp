@@ -191,10 +191,13 @@ SurfelMesh OutputUnits::mesh(const SurfelMesh& m) const {
   SurfelMesh out = m;
   out.positions = kind == Kind::Voxels ? frame.to_index(m.positions) : frame.to_physical(m.positions) * flip;
   if (out.h > 0) out.h = m.h * length_scale();
-  // flip is diagonal (its own transpose); it mirrors when it flips one axis (RAS <-> LAS).
-  const bool mirrors = kind == Kind::Physical && frame.mirrors() != (flip.determinant() < 0.0);
-  if (mirrors) out.faces = out.faces.rowwise().reverse().eval();
+  if (mirrors()) out.faces = out.faces.rowwise().reverse().eval();
   return out;
+}
+
+bool OutputUnits::mirrors() const {
+  // flip is diagonal (its own transpose); it mirrors when it flips one axis (RAS <-> LAS).
+  return kind == Kind::Physical && frame.mirrors() != (flip.determinant() < 0.0);
 }
 
 namespace {

@@ -61,6 +61,8 @@ struct OutputUnits {
   std::vector<std::string> scalar_comments(const std::string& what, int power) const;
   /// Positions (and h) in these units; faces reversed where the map mirrors, to keep facing outwards.
   SurfelMesh mesh(const SurfelMesh& m) const;
+  /// Whether the map into these units mirrors (mesh() then reverses the faces).
+  bool mirrors() const;
   /// One world length in these units.
   double length_scale() const;
   Eigen::VectorXd lengths(const Eigen::VectorXd& v) const { return v * length_scale(); }

@@ -383,6 +383,11 @@ void check_curvature(const SlabSource& source, const DistributedSurface& d, cons
   const double h = grid.h();
   const int columns = curvature_halo_columns(r, spacing, h);
   const NearSlabNormals near = distributed_ii_normals_near_slab(source, d, params, columns);
+  // With the owned faces' normals given, their balls are skipped and nothing changes.
+  const Eigen::MatrixX3d owned = distributed_ii_normals(source, d, params).face_normals;
+  const NearSlabNormals reused = distributed_ii_normals_near_slab(source, d, params, columns, &owned);
+  CHECK((reused.face_normals.array() == near.face_normals.array()).all());
+  CHECK((reused.vertex_normals.array() == near.vertex_normals.array()).all());
   const Eigen::MatrixX3d face = ii_face_normals(grid, serial, params);
   const Eigen::MatrixX3d vertex = ii_vertex_normals(grid, serial, params);
   REQUIRE(near.face_ids.size() == std::size_t(near.mesh.num_faces()));

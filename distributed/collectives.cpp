@@ -1,0 +1,21 @@
+#include "collectives.hpp"
+
+#include <mpi.h>
+
+namespace corrlap {
+
+std::string text_of_rank0(const std::string& text) {
+  int length = int(text.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  std::string out = text;
+  out.resize(std::size_t(length));
+  MPI_Bcast(out.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  return out;
+}
+
+double max_over_ranks(double x) {
+  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return x;
+}
+
+}  // namespace corrlap
