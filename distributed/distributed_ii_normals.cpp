@@ -274,7 +274,8 @@ NormalsNearSlab ii_normals_near_slab(const SlabSource& source, const Distributed
   normals.resize(rows, 3);
   std::vector<std::uint8_t> ambiguous(needed.size(), 0);
   for (std::size_t i = 0; i < needed.size(); ++i)
-    if (const int f = known_row[std::size_t(needed[i])]; f >= 0) normals.row(Eigen::Index(i)) = owned_face_normals->row(f);
+    if (const int f = known_row[std::size_t(needed[i])]; f >= 0)
+      normals.row(Eigen::Index(i)) = owned_face_normals->row(f);
   for (std::size_t k = 0; k < unknown.size(); ++k) {
     const std::size_t i = unknown[k];
     const IIFaceEstimate e =

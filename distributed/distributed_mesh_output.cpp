@@ -38,7 +38,8 @@ std::vector<int> displacements(const std::vector<int>& counts) {
 }
 
 // Every rank sends to_rank[r] (int64 values) to rank r and gets what each rank sent it, in rank order.
-std::vector<std::int64_t> all_to_all(const std::vector<std::vector<std::int64_t>>& to_rank, std::vector<int>& from_counts) {
+std::vector<std::int64_t> all_to_all(const std::vector<std::vector<std::int64_t>>& to_rank,
+                                     std::vector<int>& from_counts) {
   const std::size_t P = to_rank.size();
   std::vector<int> counts(P);
   std::vector<std::int64_t> out;
@@ -130,7 +131,8 @@ Eigen::MatrixXd local_rows(const DistributedSurface& s, const Eigen::MatrixXd& o
   const std::vector<std::int64_t> asked = all_to_all(asks, asked_counts);
   std::vector<double> answers(asked.size() * std::size_t(k));
   for (std::size_t i = 0; i < asked.size(); ++i)
-    for (Eigen::Index c = 0; c < k; ++c) answers[i * std::size_t(k) + std::size_t(c)] = owned(asked[i] - s.row_begin, c);
+    for (Eigen::Index c = 0; c < k; ++c)
+      answers[i * std::size_t(k) + std::size_t(c)] = owned(asked[i] - s.row_begin, c);
   std::vector<int> answer_counts(asked_counts), reply_counts(ask_counts);
   for (int& c : answer_counts) c *= int(k);
   for (int& c : reply_counts) c *= int(k);
@@ -202,7 +204,8 @@ void write_distributed_mesh(const std::string& path, const DistributedSurface& s
   std::vector<std::int64_t> keys;  // per run: section (0 vertices, 1 faces), first id, bytes
   std::vector<std::string> blocks;
   try {
-    if (positions.rows() != s.num_owned) throw IoError("mesh file '" + path + "': expected one position per owned vertex");
+    if (positions.rows() != s.num_owned)
+      throw IoError("mesh file '" + path + "': expected one position per owned vertex");
     const MeshFileLayout layout = mesh_file_layout(path, s.num_vertices, s.num_faces, declared);
     header = mesh_file_header(layout);
     for (const Run& run : runs_of(s.vertex_ids, s.num_owned)) {
@@ -238,8 +241,8 @@ void write_distributed_mesh(const std::string& path, const DistributedSurface& s
   std::vector<int> counts(std::size_t(s.ranks));
   MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
   std::vector<std::int64_t> all(std::size_t(std::accumulate(counts.begin(), counts.end(), 0)));
-  MPI_Allgatherv(keys.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(),
-                 MPI_INT64_T, MPI_COMM_WORLD);
+  MPI_Allgatherv(keys.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
+                 MPI_COMM_WORLD);
   std::vector<std::size_t> order(all.size() / 3);
   std::iota(order.begin(), order.end(), std::size_t(0));
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -256,9 +259,8 @@ void write_distributed_mesh(const std::string& path, const DistributedSurface& s
   // Written into a temporary name beside the file, renamed by rank 0 once every rank has closed it.
   const std::string temporary = path + ".partial";
   MPI_File file;
-  const bool opened =
-      MPI_File_open(MPI_COMM_WORLD, temporary.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY, MPI_INFO_NULL, &file) ==
-      MPI_SUCCESS;
+  const bool opened = MPI_File_open(MPI_COMM_WORLD, temporary.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY, MPI_INFO_NULL,
+                                    &file) == MPI_SUCCESS;
   int ok = opened ? 1 : 0;
   MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
   if (!ok) {
@@ -277,8 +279,9 @@ void write_distributed_mesh(const std::string& path, const DistributedSurface& s
   int renamed = written && !error ? 1 : 0;
   MPI_Bcast(&renamed, 1, MPI_INT, 0, MPI_COMM_WORLD);
   if (!renamed)
-    throw IoError("mesh file '" + path + "': " + (written ? "cannot rename '" + temporary + "' to it: " + error.message()
-                                                          : std::string("a rank could not write its part")));
+    throw IoError("mesh file '" + path + "': " +
+                  (written ? "cannot rename '" + temporary + "' to it: " + error.message()
+                           : std::string("a rank could not write its part")));
 }
 
 }  // namespace corrlap

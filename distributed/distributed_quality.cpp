@@ -40,8 +40,8 @@ std::vector<std::int64_t> gather_everywhere(const std::vector<std::int64_t>& min
   counts.assign(std::size_t(ranks), 0);
   MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
   std::vector<std::int64_t> all(std::size_t(std::accumulate(counts.begin(), counts.end(), 0)));
-  MPI_Allgatherv(mine.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(),
-                 MPI_INT64_T, MPI_COMM_WORLD);
+  MPI_Allgatherv(mine.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
+                 MPI_COMM_WORLD);
   return all;
 }
 
@@ -208,8 +208,8 @@ int distributed_components(const DistributedSurface& s) {
   std::vector<int> counts(std::size_t(s.ranks));
   MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
   std::vector<std::int64_t> all(s.rank == 0 ? std::size_t(std::accumulate(counts.begin(), counts.end(), 0)) : 0);
-  MPI_Gatherv(shared.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(),
-              MPI_INT64_T, 0, MPI_COMM_WORLD);
+  MPI_Gatherv(shared.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
+              0, MPI_COMM_WORLD);
   std::int64_t components = 0;
   if (s.rank == 0) {
     std::vector<std::int64_t> up(static_cast<std::size_t>(total));
@@ -260,7 +260,8 @@ SurfaceQuality distributed_measure_against_shape(const DistributedSurface& s, co
   for (int f = 0; f < near.mesh.num_faces(); ++f)
     for (int c = 0; c < 4; ++c)
       for (int k = 0; k < 3; ++k)
-        near.mesh.positions(near.mesh.faces(f, c), k) = corners[12 * std::size_t(f) + 3 * std::size_t(c) + std::size_t(k)];
+        near.mesh.positions(near.mesh.faces(f, c), k) =
+            corners[12 * std::size_t(f) + 3 * std::size_t(c) + std::size_t(k)];
   near.face_normals = near.mesh.face_normals_from_positions();
   set_vertex_normals_from_faces(near);
   std::unordered_map<std::int64_t, int> here;  // serial id -> halo vertex

@@ -125,8 +125,8 @@ DistributedRegularization distributed_regularize_positions(const DistributedSurf
   SolverReport report;
   DistributedRegularization out;
   const Eigen::MatrixXd start_columns = start ? Eigen::MatrixXd(*start) : Eigen::MatrixXd();
-  out.positions = solve_preconditioned(system, rhs, start ? &start_columns : nullptr, accuracy, &report,
-                                       &out.error_bound);
+  out.positions =
+      solve_preconditioned(system, rhs, start ? &start_columns : nullptr, accuracy, &report, &out.error_bound);
   out.iterations = report.iterations;
   out.residual = report.residual;
   return out;

@@ -23,9 +23,7 @@ std::uint64_t ordered(double x) {
   const auto bits = std::bit_cast<std::uint64_t>(x);
   return (bits >> 63) ? ~bits : bits | (std::uint64_t(1) << 63);
 }
-double from_ordered(std::uint64_t u) {
-  return std::bit_cast<double>((u >> 63) ? u & ~(std::uint64_t(1) << 63) : ~u);
-}
+double from_ordered(std::uint64_t u) { return std::bit_cast<double>((u >> 63) ? u & ~(std::uint64_t(1) << 63) : ~u); }
 
 // The value of rank k (from 0) in increasing order among every rank's `sorted` values: the smallest
 // x with at least k + 1 values <= x over the ranks, bisected on the ordered bits (at most 64 rounds).

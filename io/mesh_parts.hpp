@@ -15,11 +15,11 @@ namespace corrlap {
 
 /// What every piece of one file agrees on.
 struct MeshFileLayout {
-  std::string path;                       ///< its extension chooses the format: .ply or .obj
-  std::int64_t vertices = 0, faces = 0;   ///< of the whole mesh
-  bool vertex_normals = false;            ///< PLY: nx ny nz per vertex
+  std::string path;                         ///< its extension chooses the format: .ply or .obj
+  std::int64_t vertices = 0, faces = 0;     ///< of the whole mesh
+  bool vertex_normals = false;              ///< PLY: nx ny nz per vertex
   std::vector<std::string> vertex_scalars;  ///< PLY: the names, in MeshAttributes' (sorted) order
-  std::vector<std::string> comments;      ///< header lines, without line breaks
+  std::vector<std::string> comments;        ///< header lines, without line breaks
 };
 
 /// The layout of `path` for a mesh of `vertices` and `faces` with `attributes`' vertex normals,

@@ -9,9 +9,9 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/detail/block_readers.hpp>
 #include <corrlap/io/detail/checked.hpp>
-#include <corrlap/io/detail/mesh_records.hpp>
 #include <corrlap/io/detail/corner_reserve.hpp>
 #include <corrlap/io/detail/line_reader.hpp>
+#include <corrlap/io/detail/mesh_records.hpp>
 #include <corrlap/io/detail/text_writer.hpp>
 #include <corrlap/io/detail/tokens.hpp>
 #include <cstdint>

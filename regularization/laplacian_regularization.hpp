@@ -100,7 +100,7 @@ struct PreconditionedSystem {
   Eigen::Index rows = 0;        ///< the rows held here
   std::int64_t total_rows = 0;  ///< over all parts (CG's iteration limit is 2 n)
   double alpha = 0.0;
-  double area = 0.0;  ///< the sum of M_l over all parts
+  double area = 0.0;                                                    ///< the sum of M_l over all parts
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> multiply;      ///< A X (rows by k)
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> precondition;  ///< P^{-1} R, P = B M_l^{-1} B
   /// |L| M_l^{-1} |L| X + alpha M_l X for X >= 0: the scale of A q's rounding (the backward error).

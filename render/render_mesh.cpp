@@ -4,8 +4,8 @@
 #include <cmath>
 #include <corrlap/core/error.hpp>
 #include <cstdio>
-#include <span>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "detail/bitmap_font.hpp"
@@ -148,11 +148,10 @@ void check_render_options(const RenderOptions& options) {
   check_size("supersampling", options.supersampling, 1, 4);
   const double samples = double(options.width) * options.height * options.supersampling * options.supersampling;
   if (samples > double(1 << 26))
-    throw InputError("render: " + std::to_string(options.width) + " x " + std::to_string(options.height) +
-                     " pixels with " + std::to_string(options.supersampling) + " x " +
-                     std::to_string(options.supersampling) + " supersampling are " +
-                     std::to_string(std::int64_t(samples)) +
-                     " samples, more than 67 M (2 GB); lower the size or the supersampling");
+    throw InputError(
+        "render: " + std::to_string(options.width) + " x " + std::to_string(options.height) + " pixels with " +
+        std::to_string(options.supersampling) + " x " + std::to_string(options.supersampling) + " supersampling are " +
+        std::to_string(std::int64_t(samples)) + " samples, more than 67 M (2 GB); lower the size or the supersampling");
   (void)make_camera(options.view_direction, options.up);
 }
 
@@ -328,8 +327,7 @@ Image render_mesh(const PolygonMesh& mesh, const ScalarField* field, const Rende
                        " values for " + std::to_string(expected) + (field->per_face ? " faces" : " vertices"));
     scale = colour_scale(*field, options);
   }
-  const RenderSamples samples =
-      render_samples(mesh, field, scale, screen_extent(mesh.positions, options), options);
+  const RenderSamples samples = render_samples(mesh, field, scale, screen_extent(mesh.positions, options), options);
   return render_picture(samples, scale, field ? field->name : std::string(), options);
 }
 

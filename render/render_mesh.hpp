@@ -5,9 +5,9 @@
 // no threads, no GPU (speed: bench/RESULTS.md, "bench_render").
 #include <Eigen/Core>
 #include <corrlap/core/polygon_mesh.hpp>
-#include <optional>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -99,6 +99,5 @@ void merge_samples(RenderSamples& into, const RenderSamples& other, std::size_t 
 /// (when a scale is given and options.legend).
 Image render_picture(const RenderSamples& samples, const std::optional<ColourScale>& scale, const std::string& name,
                      const RenderOptions& options);
-
 
 }  // namespace corrlap

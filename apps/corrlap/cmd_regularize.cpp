@@ -398,9 +398,9 @@ bool run_distributed(const RegularizeArgs& a, const RegularizationOptions& o) {
   r.energy_before = d.energy_before;
   r.energy_after = d.energy_after;
   // As regularize_surface: a solve stopped at a proven accuracy is checked without its residual.
-  r.check = distributed_check_solution(
-      s, before, d.positions, o.solve_accuracy > 0.0 ? std::nullopt : std::optional<double>(d.solve_residual),
-      "regularization (fem)");
+  r.check = distributed_check_solution(s, before, d.positions,
+                                       o.solve_accuracy > 0.0 ? std::nullopt : std::optional<double>(d.solve_residual),
+                                       "regularization (fem)");
 
   // The surfaces, every rank writing its part into rank 0's folder.
   const std::string dir = text_of_rank0(out ? out->path() : std::string());

@@ -4,9 +4,8 @@
 
 namespace corrlap::cli {
 
-FrontEndRequest front_end_request(FrontEndRequest::Task task, const SurfaceSource& source,
-                                  const NormalOptions& normals, const MethodOptions& method,
-                                  const SolverOptions& solver) {
+FrontEndRequest front_end_request(FrontEndRequest::Task task, const SurfaceSource& source, const NormalOptions& normals,
+                                  const MethodOptions& method, const SolverOptions& solver) {
   FrontEndRequest r;
   r.task = task;
   r.implicit_shape = !source.shape.empty() || !source.polynomial.empty();

@@ -2,10 +2,10 @@
 // the pieces; its checks are write_mesh's.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/mesh_parts.hpp>
-#include <array>
 #include <limits>
 #include <map>
 #include <random>
