@@ -45,6 +45,33 @@ Eigen::RowVector3d moved(const Eigen::RowVector3d& p, std::int64_t id, double h)
   return p + 0.3 * h * Eigen::RowVector3d(std::sin(t), std::cos(1.7 * t), std::sin(0.3 * t + 1.0));
 }
 
+// A shape's distributed surface, and its serial surface moved by `moved`: the whole, and the rows
+// of the rank's owned vertices.
+struct MovedSurface {
+  ImplicitShape shape;
+  DistributedSurface s;
+  SurfelMesh staircase, serial;
+  Eigen::MatrixX3d owned;  // serial's positions at the owned vertices
+};
+
+// The rows of `whole` (one per serial vertex) at the owned vertices.
+Eigen::MatrixXd owned_rows(const DistributedSurface& s, const Eigen::MatrixXd& whole) {
+  Eigen::MatrixXd out(s.num_owned, whole.cols());
+  for (int v = 0; v < s.num_owned; ++v) out.row(v) = whole.row(Eigen::Index(s.vertex_ids[std::size_t(v)]));
+  return out;
+}
+
+MovedSurface moved_surface(const std::string& name, double h, double bbox) {
+  MovedSurface m{make_implicit_shape(name), {}, {}, {}, {}};
+  m.s = distributed_surface(m.shape, params(h, bbox));
+  m.staircase = extract_surface(digitize(m.shape, params(h, bbox)));
+  m.serial = m.staircase;
+  for (Eigen::Index v = 0; v < m.serial.positions.rows(); ++v)
+    m.serial.positions.row(v) = moved(m.serial.positions.row(v), v, h);
+  m.owned = owned_rows(m.s, m.serial.positions);
+  return m;
+}
+
 std::string shared_name(const std::string& name) {
   long pid = long(::getpid());
   MPI_Bcast(&pid, 1, MPI_LONG, 0, MPI_COMM_WORLD);
@@ -68,14 +95,10 @@ int world_rank() {
 TEST_CASE("distributed outputs: rows from their owners, sums at their owners, the result's normals") {
   for (const auto& [shape_name, h, bbox] : {std::tuple{"torus", 0.35, 10.0}, std::tuple{"goursat", 0.3, 10.0}}) {
     CAPTURE(shape_name);
-    const ImplicitShape shape = make_implicit_shape(shape_name);
-    const DistributedSurface s = distributed_surface(shape, params(h, bbox));
-    SurfelMesh serial = extract_surface(digitize(shape, params(h, bbox)));
-    for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
-      serial.positions.row(v) = moved(serial.positions.row(v), v, h);
-    Eigen::MatrixX3d owned(s.num_owned, 3);
-    for (int v = 0; v < s.num_owned; ++v)
-      owned.row(v) = serial.positions.row(Eigen::Index(s.vertex_ids[std::size_t(v)]));
+    const MovedSurface m = moved_surface(shape_name, h, bbox);
+    const DistributedSurface& s = m.s;
+    const SurfelMesh& serial = m.serial;
+    const Eigen::MatrixX3d& owned = m.owned;
 
     // Every local vertex gets its owner's row, bit for bit.
     const Eigen::MatrixXd local = local_rows(s, owned);
@@ -110,27 +133,19 @@ const std::vector<std::tuple<std::string, double, double>> kOutputCases = {
 TEST_CASE("distributed outputs: a mesh file written by every rank is write_mesh's of the whole surface") {
   for (const auto& [shape_name, h, bbox] : kOutputCases) {
     CAPTURE(shape_name);
-    const ImplicitShape shape = make_implicit_shape(shape_name);
-    const DistributedSurface s = distributed_surface(shape, params(h, bbox));
-    SurfelMesh serial = extract_surface(digitize(shape, params(h, bbox)));
-    for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
-      serial.positions.row(v) = moved(serial.positions.row(v), v, h);
+    const MovedSurface m = moved_surface(shape_name, h, bbox);
+    const DistributedSurface& s = m.s;
+    const SurfelMesh& serial = m.serial;
     MeshAttributes whole;
     whole.vertex_normals = serial.positions.rowwise().normalized();
     whole.vertex_scalars["H"] = serial.positions.col(0).array().sin();
     whole.vertex_scalars["displacement"] = serial.positions.col(2);
     whole.comments = {"SPACE=LPS"};
-    Eigen::MatrixX3d owned(s.num_owned, 3), owned_normals(s.num_owned, 3);
+    const Eigen::MatrixX3d& owned = m.owned;
     MeshAttributes mine;
     mine.comments = whole.comments;
-    for (const auto& [name, v] : whole.vertex_scalars) mine.vertex_scalars[name].resize(s.num_owned);
-    for (int v = 0; v < s.num_owned; ++v) {
-      const Eigen::Index id = Eigen::Index(s.vertex_ids[std::size_t(v)]);
-      owned.row(v) = serial.positions.row(id);
-      owned_normals.row(v) = whole.vertex_normals.row(id);
-      for (auto& [name, values] : mine.vertex_scalars) values[v] = whole.vertex_scalars.at(name)[id];
-    }
-    mine.vertex_normals = owned_normals;
+    for (const auto& [name, v] : whole.vertex_scalars) mine.vertex_scalars[name] = owned_rows(s, v);
+    mine.vertex_normals = owned_rows(s, whole.vertex_normals);
     for (const auto& [ext, reversed] : {std::pair{"ply", false}, std::pair{"obj", false}, std::pair{"ply", true}}) {
       CAPTURE(ext);
       CAPTURE(reversed);
@@ -175,20 +190,13 @@ TEST_CASE("distributed outputs: a mesh file written by every rank is write_mesh'
 TEST_CASE("distributed outputs: a picture drawn by every rank is render_mesh's of the whole surface") {
   for (const auto& [shape_name, h, bbox] : kOutputCases) {
     CAPTURE(shape_name);
-    const ImplicitShape shape = make_implicit_shape(shape_name);
-    const DistributedSurface s = distributed_surface(shape, params(h, bbox));
-    SurfelMesh serial = extract_surface(digitize(shape, params(h, bbox)));
-    for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
-      serial.positions.row(v) = moved(serial.positions.row(v), v, h);
+    const MovedSurface m = moved_surface(shape_name, h, bbox);
+    const DistributedSurface& s = m.s;
+    const SurfelMesh& serial = m.serial;
     // Values of both signs, so that the scale reads all three percentiles.
     const Eigen::VectorXd values = (serial.positions.col(0).array() * 0.7).sin() + 0.1;
-    Eigen::MatrixX3d owned(s.num_owned, 3);
-    Eigen::VectorXd owned_values(s.num_owned);
-    for (int v = 0; v < s.num_owned; ++v) {
-      const Eigen::Index id = Eigen::Index(s.vertex_ids[std::size_t(v)]);
-      owned.row(v) = serial.positions.row(id);
-      owned_values[v] = values[id];
-    }
+    const Eigen::MatrixX3d& owned = m.owned;
+    Eigen::VectorXd owned_values = owned_rows(s, values);
     const ScalarField field{"H", values, false};
     const FieldPercentiles expected = field_percentiles(field);
     const FieldPercentiles p = distributed_field_percentiles(s, "H", owned_values);
@@ -225,18 +233,11 @@ TEST_CASE("distributed outputs: areas, the solution check, components and the qu
   for (const auto& [name, h, bbox, r] :
        {std::tuple{"(x^2+y^2+z^2-4)*((x-5)^2+y^2+z^2-4)", 0.25, 8.0, 1.0}, std::tuple{"goursat", 0.3, 10.0, 1.2}}) {
     CAPTURE(name);
-    const ImplicitShape shape = make_implicit_shape(name);
-    const DistributedSurface s = distributed_surface(shape, params(h, bbox));
-    const SurfelMesh staircase = extract_surface(digitize(shape, params(h, bbox)));
-    SurfelMesh serial = staircase;
-    for (Eigen::Index v = 0; v < serial.positions.rows(); ++v)
-      serial.positions.row(v) = moved(serial.positions.row(v), v, h);
-    Eigen::MatrixX3d before(s.num_owned, 3), after(s.num_owned, 3);
-    for (int v = 0; v < s.num_owned; ++v) {
-      const Eigen::Index id = Eigen::Index(s.vertex_ids[std::size_t(v)]);
-      before.row(v) = staircase.positions.row(id);
-      after.row(v) = serial.positions.row(id);
-    }
+    const MovedSurface m = moved_surface(name, h, bbox);
+    const ImplicitShape& shape = m.shape;
+    const DistributedSurface& s = m.s;
+    const SurfelMesh &staircase = m.staircase, &serial = m.serial;
+    const Eigen::MatrixX3d before = owned_rows(s, staircase.positions), after = m.owned;
     CHECK(distributed_components(s) == compute_mesh_info(serial).components);
     CHECK(distributed_surface_area(s, after) == doctest::Approx(surface_area(serial)).epsilon(1e-13));
     const SolutionCheck want = check_solution(staircase, serial.positions, 1e-9, "test");
