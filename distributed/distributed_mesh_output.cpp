@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/mesh_parts.hpp>
+#include <corrlap/io/text_io.hpp>
 #include <cstdint>
 #include <filesystem>
 #include <numeric>
@@ -109,6 +110,60 @@ bool write_at(MPI_File file, std::int64_t offset, const std::string& bytes) {
       return false;
   }
   return true;
+}
+
+// Writes `header` (rank 0's) and every rank's `blocks` into one file at `path`: block b has the keys
+// (section, first id, bytes) at 3 b in `keys`; the file is the header, then the blocks in the
+// order of their keys over all ranks. Written into a temporary name beside the file and renamed by
+// rank 0 once every rank has written. Collective.
+void write_runs(const std::string& path, const DistributedSurface& s, const std::string& header,
+                const std::vector<std::int64_t>& keys, const std::vector<std::string>& blocks) {
+  // Every block's place: after the header, in the order of the keys.
+  int count = int(keys.size());
+  std::vector<int> counts(std::size_t(s.ranks));
+  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  std::vector<std::int64_t> all(std::size_t(std::accumulate(counts.begin(), counts.end(), 0)));
+  MPI_Allgatherv(keys.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
+                 MPI_COMM_WORLD);
+  std::vector<std::size_t> order(all.size() / 3);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return std::make_pair(all[3 * a], all[3 * a + 1]) < std::make_pair(all[3 * b], all[3 * b + 1]);
+  });
+  std::vector<std::int64_t> offset_of(order.size());  // by index into `all`
+  std::int64_t at = std::int64_t(header.size());
+  for (std::size_t i : order) {
+    offset_of[i] = at;
+    at += all[3 * i + 2];
+  }
+  const std::int64_t mine = std::accumulate(counts.begin(), counts.begin() + s.rank, 0) / 3;
+
+  // Written into a temporary name beside the file, renamed by rank 0 once every rank has closed it.
+  const std::string temporary = path + ".partial";
+  MPI_File file;
+  const bool opened = MPI_File_open(MPI_COMM_WORLD, temporary.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY, MPI_INFO_NULL,
+                                    &file) == MPI_SUCCESS;
+  int ok = opened ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  if (!ok) {
+    if (opened) MPI_File_close(&file);
+    throw IoError("mesh file '" + path + "': cannot create '" + temporary + "' on every rank");
+  }
+  int written = MPI_File_set_size(file, MPI_Offset(at)) == MPI_SUCCESS ? 1 : 0;
+  if (s.rank == 0) written = written && write_at(file, 0, header);
+  for (std::size_t b = 0; b < blocks.size(); ++b)
+    written = written && write_at(file, offset_of[std::size_t(mine) + b], blocks[b]);
+  written = (MPI_File_close(&file) == MPI_SUCCESS) && written;
+  MPI_Allreduce(MPI_IN_PLACE, &written, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  std::error_code error;
+  if (written && s.rank == 0) std::filesystem::rename(temporary, path, error);
+  if (!written && s.rank == 0) std::filesystem::remove(temporary, error);
+  int renamed = written && !error ? 1 : 0;
+  MPI_Bcast(&renamed, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (!renamed)
+    throw IoError("mesh file '" + path + "': " +
+                  (written ? "cannot rename '" + temporary + "' to it: " + error.message()
+                           : std::string("a rank could not write its part")));
 }
 
 }  // namespace
@@ -235,53 +290,25 @@ void write_distributed_mesh(const std::string& path, const DistributedSurface& s
     failure = e.what();
   }
   rethrow_everywhere(failure);
+  write_runs(path, s, header, keys, blocks);
+}
 
-  // Every run's place: the header, then the vertex runs, then the face runs, each by first id.
-  int count = int(keys.size());
-  std::vector<int> counts(std::size_t(s.ranks));
-  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<std::int64_t> all(std::size_t(std::accumulate(counts.begin(), counts.end(), 0)));
-  MPI_Allgatherv(keys.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
-                 MPI_COMM_WORLD);
-  std::vector<std::size_t> order(all.size() / 3);
-  std::iota(order.begin(), order.end(), std::size_t(0));
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return std::make_pair(all[3 * a], all[3 * a + 1]) < std::make_pair(all[3 * b], all[3 * b + 1]);
-  });
-  std::vector<std::int64_t> offset_of(order.size());  // by index into `all`
-  std::int64_t at = std::int64_t(header.size());
-  for (std::size_t i : order) {
-    offset_of[i] = at;
-    at += all[3 * i + 2];
+void write_distributed_scalars(const std::string& path, const DistributedSurface& s, const Eigen::VectorXd& values,
+                               const std::vector<std::string>& comments) {
+  std::optional<std::string> failure;
+  std::vector<std::int64_t> keys;
+  std::vector<std::string> blocks;
+  try {
+    if (values.size() != s.num_owned) throw IoError("scalars file '" + path + "': expected one value per owned vertex");
+    for (const Run& run : runs_of(s.vertex_ids, s.num_owned)) {
+      blocks.push_back(scalars_file_rows(path, values.segment(run.begin, run.count), run.first));
+      keys.insert(keys.end(), {0, run.first, std::int64_t(blocks.back().size())});
+    }
+  } catch (const Error& e) {
+    failure = e.what();
   }
-  const std::int64_t mine = std::accumulate(counts.begin(), counts.begin() + s.rank, 0) / 3;
-
-  // Written into a temporary name beside the file, renamed by rank 0 once every rank has closed it.
-  const std::string temporary = path + ".partial";
-  MPI_File file;
-  const bool opened = MPI_File_open(MPI_COMM_WORLD, temporary.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY, MPI_INFO_NULL,
-                                    &file) == MPI_SUCCESS;
-  int ok = opened ? 1 : 0;
-  MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  if (!ok) {
-    if (opened) MPI_File_close(&file);
-    throw IoError("mesh file '" + path + "': cannot create '" + temporary + "' on every rank");
-  }
-  int written = MPI_File_set_size(file, MPI_Offset(at)) == MPI_SUCCESS ? 1 : 0;
-  if (s.rank == 0) written = written && write_at(file, 0, header);
-  for (std::size_t b = 0; b < blocks.size(); ++b)
-    written = written && write_at(file, offset_of[std::size_t(mine) + b], blocks[b]);
-  written = (MPI_File_close(&file) == MPI_SUCCESS) && written;
-  MPI_Allreduce(MPI_IN_PLACE, &written, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  std::error_code error;
-  if (written && s.rank == 0) std::filesystem::rename(temporary, path, error);
-  if (!written && s.rank == 0) std::filesystem::remove(temporary, error);
-  int renamed = written && !error ? 1 : 0;
-  MPI_Bcast(&renamed, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (!renamed)
-    throw IoError("mesh file '" + path + "': " +
-                  (written ? "cannot rename '" + temporary + "' to it: " + error.message()
-                           : std::string("a rank could not write its part")));
+  rethrow_everywhere(failure);
+  write_runs(path, s, scalars_file_header(comments), keys, blocks);
 }
 
 }  // namespace corrlap

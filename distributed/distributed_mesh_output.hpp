@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <corrlap/io/mesh_io.hpp>
 #include <string>
+#include <vector>
 
 #include "distributed_surface.hpp"
 
@@ -34,5 +35,11 @@ Eigen::MatrixX3d distributed_geometric_vertex_normals(const DistributedSurface& 
 /// `reverse_faces`: each face's corners in reverse order (a mirroring map of the positions).
 void write_distributed_mesh(const std::string& path, const DistributedSurface& s, const Eigen::MatrixX3d& positions,
                             const MeshAttributes& attributes, bool reverse_faces = false);
+
+/// write_scalars(path, values, comments) of one value per vertex of the whole surface, in serial
+/// vertex order, from `values` at the owned vertices (#owned), written by every rank into one file
+/// as write_distributed_mesh writes. Collective.
+void write_distributed_scalars(const std::string& path, const DistributedSurface& s, const Eigen::VectorXd& values,
+                               const std::vector<std::string>& comments = {});
 
 }  // namespace corrlap

@@ -29,7 +29,8 @@ DistributedPoissonResult distributed_solve_poisson(const DistributedSurface& sur
                                                    const Eigen::Vector3d& center = Eigen::Vector3d::Zero());
 
 /// The values of the owned vertices of every rank (#owned each), on rank 0 in serial vertex order
-/// (#V); empty on the other ranks. Collective. For outputs written by rank 0.
+/// (#V); empty on the other ranks. Collective. For checks on small surfaces: the commands write
+/// per rank (distributed_mesh_output.hpp).
 Eigen::VectorXd gather_on_rank0(const DistributedSurface& surface, const Eigen::VectorXd& owned_values);
 
 }  // namespace corrlap

@@ -9,6 +9,7 @@
 #include <corrlap/io/detail/block_readers.hpp>
 #include <corrlap/io/detail/checked.hpp>
 #include <corrlap/io/detail/line_reader.hpp>
+#include <corrlap/io/detail/mesh_records.hpp>
 #include <corrlap/io/detail/text_writer.hpp>
 #include <corrlap/io/detail/tokens.hpp>
 #include <cstdio>
@@ -162,16 +163,34 @@ void write_scalars(const std::string& path, const Eigen::VectorXd& values, const
   for (Eigen::Index i = 0; i < values.size(); ++i)
     io_detail::require_finite(values[i], path, "scalars", "row", (long long)i + 1);
   io_detail::TextWriter out(path, "scalars");
-  for (const std::string& c : comments) {
-    out.write("# ");
-    for (const char ch : c) out.write(ch == '\n' || ch == '\r' ? ' ' : ch);  // one line each
-    out.write('\n');
-  }
+  out.write(scalars_file_header(comments));
   for (Eigen::Index i = 0; i < values.size(); ++i) {
     out.write_double(values[i]);
     out.write('\n');
   }
   out.commit();
+}
+
+std::string scalars_file_header(const std::vector<std::string>& comments) {
+  std::string out;
+  for (const std::string& c : comments) {
+    out += "# ";
+    for (const char ch : c) out += ch == '\n' || ch == '\r' ? ' ' : ch;  // one line each
+    out += '\n';
+  }
+  return out;
+}
+
+std::string scalars_file_rows(const std::string& path, const Eigen::VectorXd& values, std::int64_t first) {
+  for (Eigen::Index i = 0; i < values.size(); ++i)
+    io_detail::require_finite(values[i], path, "scalars", "row", (long long)(first + i) + 1);
+  std::string out;
+  io_detail::StringSink sink(out);
+  for (Eigen::Index i = 0; i < values.size(); ++i) {
+    sink.write_double(values[i]);
+    sink.write('\n');
+  }
+  return out;
 }
 
 void write_matrix_market(const std::string& path, const Eigen::SparseMatrix<double>& A) {

@@ -20,6 +20,8 @@
 
 #if defined(CORRLAP_WITH_PETSC)
 #include <corrlap/backends/petsc.hpp>
+#include <corrlap/distributed/collectives.hpp>
+#include <corrlap/distributed/distributed_mesh_output.hpp>
 #include <corrlap/distributed/distributed_poisson.hpp>
 #include <corrlap/distributed/distributed_problem.hpp>
 #include <variant>
@@ -86,14 +88,12 @@ bool run_distributed(const SolveArgs& a) {
   // The serial front end's centre of the projections onto the unit sphere (docs/math.md §10.1).
   const Eigen::Vector3d c(a.source.center[0], a.source.center[1], a.source.center[2]);
   const DistributedPoissonResult r = distributed_solve_poisson(surface, fem, function, solver, c);
-  const Eigen::VectorXd g = gather_on_rank0(surface, r.g);
+  // Every rank writes its vertices' values into rank 0's staged file (no gather).
+  if (!a.out.empty()) write_distributed_scalars(text_of_rank0(out ? out->path() : std::string()), surface, r.g);
   if (!is_output_rank()) return true;
   const OutputUnits units = a.output.parse(problem->frame());
   const std::string normals = to_string(problem->normals());
-  if (out) {
-    write_scalars(out->path(), g);
-    out->commit();
-  }
+  if (out) out->commit();
   // The analytic solution is known on the unit sphere only (docs/math.md §10.2).
   const bool unit_sphere = problem->shape() && std::abs(problem->shape()->sphere_radius() - 1.0) < 1e-12;
   if (a.json) {

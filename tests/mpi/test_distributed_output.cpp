@@ -16,6 +16,7 @@
 #include <corrlap/distributed/distributed_surface.hpp>
 #include <corrlap/distributed/slab_source.hpp>
 #include <corrlap/io/mesh_io.hpp>
+#include <corrlap/io/text_io.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 #include <corrlap/render/render_mesh.hpp>
 #include <corrlap/surface/extract_surface.hpp>
@@ -166,6 +167,16 @@ TEST_CASE("distributed outputs: a mesh file written by every rank is write_mesh'
         std::filesystem::remove(parts);
         std::filesystem::remove(reference);
       }
+    }
+
+    // A value per vertex: write_scalars' file.
+    const std::string scalars = shared_name("values.txt"), scalars_reference = shared_name("values_whole.txt");
+    write_distributed_scalars(scalars, s, mine.vertex_scalars.at("H"), {"H: test values"});
+    if (world_rank() == 0) {
+      write_scalars(scalars_reference, whole.vertex_scalars.at("H"), {"H: test values"});
+      CHECK(bytes_of(scalars) == bytes_of(scalars_reference));
+      std::filesystem::remove(scalars);
+      std::filesystem::remove(scalars_reference);
     }
 
     // A NaN on the last rank only: the same IoError on every rank, and no file.
