@@ -147,7 +147,7 @@ void write_runs(const std::string& path, const DistributedSurface& s, const std:
   MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
   if (!ok) {
     if (opened) MPI_File_close(&file);
-    throw IoError("mesh file '" + path + "': cannot create '" + temporary + "' on every rank");
+    throw IoError("output file '" + path + "': cannot create '" + temporary + "' on every rank");
   }
   int written = MPI_File_set_size(file, MPI_Offset(at)) == MPI_SUCCESS ? 1 : 0;
   if (s.rank == 0) written = written && write_at(file, 0, header);
@@ -161,7 +161,7 @@ void write_runs(const std::string& path, const DistributedSurface& s, const std:
   int renamed = written && !error ? 1 : 0;
   MPI_Bcast(&renamed, 1, MPI_INT, 0, MPI_COMM_WORLD);
   if (!renamed)
-    throw IoError("mesh file '" + path + "': " +
+    throw IoError("output file '" + path + "': " +
                   (written ? "cannot rename '" + temporary + "' to it: " + error.message()
                            : std::string("a rank could not write its part")));
 }
@@ -174,13 +174,14 @@ Eigen::MatrixXd local_rows(const DistributedSurface& s, const Eigen::MatrixXd& o
   const RowOwners owners(s);
   // Ask each owner for the rows of this rank's other vertices.
   std::vector<std::vector<std::int64_t>> asks(std::size_t(s.ranks));
-  std::vector<Eigen::Index> asked_for;  // the local vertex of each ask, in send order
-  for (int r = 0; r < s.ranks; ++r)
-    for (Eigen::Index v = s.num_owned; v < nl; ++v)
-      if (owners.owner(s.rows[std::size_t(v)]) == r) {
-        asks[std::size_t(r)].push_back(s.rows[std::size_t(v)]);
-        asked_for.push_back(v);
-      }
+  std::vector<std::vector<Eigen::Index>> asked_by(std::size_t(s.ranks));  // the local vertex of each ask
+  for (Eigen::Index v = s.num_owned; v < nl; ++v) {
+    const auto r = std::size_t(owners.owner(s.rows[std::size_t(v)]));
+    asks[r].push_back(s.rows[std::size_t(v)]);
+    asked_by[r].push_back(v);
+  }
+  std::vector<Eigen::Index> asked_for;  // in send order: owner after owner
+  for (const auto& vertices : asked_by) asked_for.insert(asked_for.end(), vertices.begin(), vertices.end());
   std::vector<int> ask_counts(std::size_t(s.ranks)), asked_counts;
   for (int r = 0; r < s.ranks; ++r) ask_counts[std::size_t(r)] = int(asks[std::size_t(r)].size());
   const std::vector<std::int64_t> asked = all_to_all(asks, asked_counts);
