@@ -2,6 +2,8 @@
 
 #include <mpi.h>
 
+#include "detail/owned_vectors.hpp"
+
 namespace corrlap {
 
 std::string text_of_rank0(const std::string& text) {
@@ -13,9 +15,6 @@ std::string text_of_rank0(const std::string& text) {
   return out;
 }
 
-double max_over_ranks(double x) {
-  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return x;
-}
+double max_over_ranks(double x) { return detail::global_max(x); }
 
 }  // namespace corrlap

@@ -12,9 +12,13 @@
 #include <optional>
 #include <vector>
 
+#include "detail/exchange.hpp"
+
 namespace corrlap {
 
 namespace {
+
+using detail::all_to_all;
 
 // The rank that owns each row: the first rows of every rank, gathered.
 class RowOwners {
@@ -30,40 +34,6 @@ class RowOwners {
  private:
   std::vector<std::int64_t> begins_;
 };
-
-// Displacements of per-rank counts.
-std::vector<int> displacements(const std::vector<int>& counts) {
-  std::vector<int> d(counts.size(), 0);
-  for (std::size_t r = 1; r < counts.size(); ++r) d[r] = d[r - 1] + counts[r - 1];
-  return d;
-}
-
-// Every rank sends to_rank[r] (int64 values) to rank r and gets what each rank sent it, in rank order.
-std::vector<std::int64_t> all_to_all(const std::vector<std::vector<std::int64_t>>& to_rank,
-                                     std::vector<int>& from_counts) {
-  const std::size_t P = to_rank.size();
-  std::vector<int> counts(P);
-  std::vector<std::int64_t> out;
-  for (std::size_t r = 0; r < P; ++r) {
-    counts[r] = int(to_rank[r].size());
-    out.insert(out.end(), to_rank[r].begin(), to_rank[r].end());
-  }
-  from_counts.assign(P, 0);
-  MPI_Alltoall(counts.data(), 1, MPI_INT, from_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<std::int64_t> in(std::size_t(std::accumulate(from_counts.begin(), from_counts.end(), 0)));
-  MPI_Alltoallv(out.data(), counts.data(), displacements(counts).data(), MPI_INT64_T, in.data(), from_counts.data(),
-                displacements(from_counts).data(), MPI_INT64_T, MPI_COMM_WORLD);
-  return in;
-}
-
-// The same for doubles, with the counts known on both sides.
-std::vector<double> all_to_all(const std::vector<double>& out, const std::vector<int>& counts,
-                               const std::vector<int>& from_counts) {
-  std::vector<double> in(std::size_t(std::accumulate(from_counts.begin(), from_counts.end(), 0)));
-  MPI_Alltoallv(out.data(), counts.data(), displacements(counts).data(), MPI_DOUBLE, in.data(), from_counts.data(),
-                displacements(from_counts).data(), MPI_DOUBLE, MPI_COMM_WORLD);
-  return in;
-}
 
 // The same IoError on every rank when any rank failed (the lowest failing rank's message).
 void rethrow_everywhere(const std::optional<std::string>& failure) {
@@ -119,12 +89,8 @@ bool write_at(MPI_File file, std::int64_t offset, const std::string& bytes) {
 void write_runs(const std::string& path, const DistributedSurface& s, const std::string& header,
                 const std::vector<std::int64_t>& keys, const std::vector<std::string>& blocks) {
   // Every block's place: after the header, in the order of the keys.
-  int count = int(keys.size());
-  std::vector<int> counts(std::size_t(s.ranks));
-  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<std::int64_t> all(std::size_t(std::accumulate(counts.begin(), counts.end(), 0)));
-  MPI_Allgatherv(keys.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
-                 MPI_COMM_WORLD);
+  std::vector<int> counts;
+  const std::vector<std::int64_t> all = detail::gather_everywhere(keys, counts);
   std::vector<std::size_t> order(all.size() / 3);
   std::iota(order.begin(), order.end(), std::size_t(0));
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {

@@ -13,6 +13,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "detail/exchange.hpp"
+#include "detail/owned_vectors.hpp"
 #include "distributed_curvature.hpp"
 #include "distributed_mesh_output.hpp"
 #include "near_slab.hpp"
@@ -21,29 +23,10 @@ namespace corrlap {
 
 namespace {
 
-double sum_over_ranks(double x) {
-  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  return x;
-}
-
-std::vector<int> displacements(const std::vector<int>& counts) {
-  std::vector<int> d(counts.size(), 0);
-  for (std::size_t r = 1; r < counts.size(); ++r) d[r] = d[r - 1] + counts[r - 1];
-  return d;
-}
-
-// Every rank's items gathered on every rank (small lists only), with each item's rank.
-std::vector<std::int64_t> gather_everywhere(const std::vector<std::int64_t>& mine, std::vector<int>& counts) {
-  int count = int(mine.size());
-  int ranks = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-  counts.assign(std::size_t(ranks), 0);
-  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<std::int64_t> all(std::size_t(std::accumulate(counts.begin(), counts.end(), 0)));
-  MPI_Allgatherv(mine.data(), count, MPI_INT64_T, all.data(), counts.data(), displacements(counts).data(), MPI_INT64_T,
-                 MPI_COMM_WORLD);
-  return all;
-}
+using detail::all_to_all;
+using detail::displacements;
+using detail::gather_everywhere;
+using detail::global_sum;
 
 // The positions of the corners of the faces `wanted` (serial face ids), from the ranks that own
 // those faces: 12 values per face (corner by corner, x y z).
@@ -77,23 +60,17 @@ std::vector<double> face_corners(const DistributedSurface& s, const Eigen::Matri
 
   // Ask the owners, face by face in the order wanted.
   std::vector<std::vector<std::int64_t>> asks(std::size_t(s.ranks));
-  std::vector<std::size_t> order;
-  for (int r = 0; r < s.ranks; ++r)
-    for (std::size_t i = 0; i < wanted.size(); ++i)
-      if (owner(wanted[i]) == r) {
-        asks[std::size_t(r)].push_back(wanted[i]);
-        order.push_back(i);
-      }
-  std::vector<int> ask_counts(std::size_t(s.ranks)), asked_counts(std::size_t(s.ranks));
-  std::vector<std::int64_t> flat;
-  for (int r = 0; r < s.ranks; ++r) {
-    ask_counts[std::size_t(r)] = int(asks[std::size_t(r)].size());
-    flat.insert(flat.end(), asks[std::size_t(r)].begin(), asks[std::size_t(r)].end());
+  std::vector<std::vector<std::size_t>> asked_by(std::size_t(s.ranks));  // the index in `wanted` of each ask
+  for (std::size_t i = 0; i < wanted.size(); ++i) {
+    const auto r = std::size_t(owner(wanted[i]));
+    asks[r].push_back(wanted[i]);
+    asked_by[r].push_back(i);
   }
-  MPI_Alltoall(ask_counts.data(), 1, MPI_INT, asked_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<std::int64_t> asked(std::size_t(std::accumulate(asked_counts.begin(), asked_counts.end(), 0)));
-  MPI_Alltoallv(flat.data(), ask_counts.data(), displacements(ask_counts).data(), MPI_INT64_T, asked.data(),
-                asked_counts.data(), displacements(asked_counts).data(), MPI_INT64_T, MPI_COMM_WORLD);
+  std::vector<std::size_t> order;  // in send order: owner after owner
+  for (const auto& indices : asked_by) order.insert(order.end(), indices.begin(), indices.end());
+  std::vector<int> ask_counts(std::size_t(s.ranks)), asked_counts;
+  for (int r = 0; r < s.ranks; ++r) ask_counts[std::size_t(r)] = int(asks[std::size_t(r)].size());
+  const std::vector<std::int64_t> asked = all_to_all(asks, asked_counts);
   const Eigen::MatrixXd local = local_rows(s, positions);
   std::vector<double> answers;
   answers.reserve(12 * asked.size());
@@ -106,9 +83,7 @@ std::vector<double> face_corners(const DistributedSurface& s, const Eigen::Matri
   std::vector<int> answer_counts(asked_counts), reply_counts(ask_counts);
   for (int& c : answer_counts) c *= 12;
   for (int& c : reply_counts) c *= 12;
-  std::vector<double> replies(std::size_t(std::accumulate(reply_counts.begin(), reply_counts.end(), 0)));
-  MPI_Alltoallv(answers.data(), answer_counts.data(), displacements(answer_counts).data(), MPI_DOUBLE, replies.data(),
-                reply_counts.data(), displacements(reply_counts).data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  const std::vector<double> replies = all_to_all(answers, answer_counts, reply_counts);
   std::vector<double> corners(12 * wanted.size());
   for (std::size_t k = 0; k < order.size(); ++k)
     std::copy_n(replies.begin() + std::ptrdiff_t(12 * k), 12, corners.begin() + std::ptrdiff_t(12 * order[k]));
@@ -125,7 +100,7 @@ double distributed_surface_area(const DistributedSurface& s, const Eigen::Matrix
   SurfelMesh mesh;
   mesh.faces = s.mesh.faces;
   mesh.positions = local_rows(s, positions);
-  return sum_over_ranks(surface_area(mesh));
+  return global_sum(surface_area(mesh));
 }
 
 SolutionCheck distributed_check_solution(const DistributedSurface& s, const Eigen::MatrixX3d& before,
@@ -280,9 +255,9 @@ SurfaceQuality distributed_measure_against_shape(const DistributedSurface& s, co
   for (int v = 0; v < s.num_owned; ++v) angles += std::acos(std::clamp(normals.row(v).dot(truth.row(v)), -1.0, 1.0));
   const double n = double(std::max<std::int64_t>(s.num_vertices, 1));
   SurfaceQuality q;
-  q.distance_l1 = sum_over_ranks(distances_to_surface(shape, positions).sum()) / n;
-  q.normal_angle_deg = sum_over_ranks(angles) / n * 180.0 / std::numbers::pi;
-  q.mean_curvature_error = sum_over_ranks((H - true_mean_curvatures(shape, positions)).cwiseAbs().sum()) / n;
+  q.distance_l1 = global_sum(distances_to_surface(shape, positions).sum()) / n;
+  q.normal_angle_deg = global_sum(angles) / n * 180.0 / std::numbers::pi;
+  q.mean_curvature_error = global_sum((H - true_mean_curvatures(shape, positions)).cwiseAbs().sum()) / n;
   return q;
 }
 
