@@ -18,6 +18,7 @@
 #include <corrlap/render/render_mesh.hpp>
 #include <corrlap/studies/regularization_study.hpp>
 #include <corrlap/studies/study.hpp>
+#include <corrlap/studies/study_index.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <corrlap/surface/implicit_shape.hpp>
@@ -211,6 +212,7 @@ void regularization_study_section() {
   std::printf("   table: %s/regularization.csv\n", dir.c_str());
   std::fflush(stdout);
   run_plot_script(dir);
+  write_study_index(dir, "corrlap demo: regularization");
 }
 
 void run_demo() {

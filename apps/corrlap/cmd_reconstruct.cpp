@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "command.hpp"
+#include "render_output.hpp"
 #include "method_options.hpp"
 #include "solver_options.hpp"
 #include "surface_source.hpp"
@@ -36,7 +37,7 @@ struct ReconstructArgs {
   std::string methods = "fem,polydec";
   std::optional<double> curvature_radius, h_clamp;
   double alpha0 = 10.0;
-  bool no_render = false;
+  bool no_render = false, no_view = false;
   bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
 };
 
@@ -147,11 +148,29 @@ void run(const ReconstructArgs& a) {
               << " (max " << before.max << " -> " << after.max << "), normal angle to the map " << angle_before
               << " -> " << angle_after << " deg, " << seconds << " s\n";
   }
+  // The page: the first method's result shown, the others, the staircase and the fine mesh a
+  // click away.
+  if (!a.no_view && can_write_view(out.file("view.html"))) {
+    Stopwatch view_time;
+    std::vector<ViewSurface> surfaces;
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+      surfaces.push_back(read_view_surface(out.file("reconstructed_" + methods[i] + ".ply"), methods[i]));
+      surfaces.back().visible = i == 0;
+    }
+    surfaces.push_back(read_view_surface(out.file("input.ply"), "staircase"));
+    surfaces.back().visible = false;
+    surfaces.push_back({"fine mesh", fine, {}, false});
+    ViewOptions view_options;
+    view_options.title = "reconstruct: " + a.mesh_file;
+    write_view_page(out.file("view.html"), surfaces, view_options);
+    stages["view_s"] = view_time.lap();
+  }
   m["time_s"] = stages;
   std::ofstream(out.file("metrics.json")) << m.dump(2) << "\n";
   out.commit();
   std::cerr << "  wrote " << a.out << "/input.ply, reconstructed_<method>.ply, metrics.json"
-            << (a.no_render ? "" : ", fine.png, before.png, after_<method>.png") << "\n";
+            << (a.no_render ? "" : ", fine.png, before.png, after_<method>.png") << (a.no_view ? "" : ", view.html")
+            << "\n";
 }
 
 RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
@@ -183,6 +202,7 @@ RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
   args->solver.add_options(*cmd, std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
   cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold, kAllowNonmanifoldNote);
   cmd->add_flag("--no-render", args->no_render, "do not draw the pictures");
+  cmd->add_flag("--no-view", args->no_view, "do not write view.html (the page to turn the surfaces around in a browser)");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->callback([args] { run(*args); });
 });

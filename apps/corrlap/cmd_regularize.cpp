@@ -70,6 +70,7 @@ struct RegularizeArgs {
   bool clamp = false;
   bool allow_nonmanifold = false;  // accepted and ignored (kAllowNonmanifoldNote)
   bool no_render = false;          // before.png / after.png are drawn unless --no-render
+  bool no_view = false;            // view.html is written unless --no-view
   // Options of the paper's regularization only: given with --baseline they would be ignored.
   std::vector<CLI::Option*> laplacian_only;
   CLI::Option* clamp_option = nullptr;
@@ -149,6 +150,21 @@ void write_metrics(const std::string& dir, const nlohmann::json& m) {
   std::ofstream(dir + "/metrics.json") << m.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
 }
 
+// DIR/view.html: the staircase and the result as written (input.ply, regularized.ply), H in the
+// range of the pictures (H after). Returns the seconds spent.
+double write_regularization_view(const std::string& dir, const std::string& description) {
+  Stopwatch t;
+  if (!can_write_view(dir + "/view.html")) return 0.0;
+  const std::vector<ViewSurface> surfaces{read_view_surface(dir + "/input.ply", "staircase"),
+                                          read_view_surface(dir + "/regularized.ply", "regularized")};
+  ViewOptions o;
+  o.title = "regularize: " + description;
+  for (const ScalarField& f : surfaces[1].fields)
+    if (f.name == "H" && f.values.allFinite()) o.scales["H"] = colour_scale(f, RenderOptions{});
+  write_view_page(dir + "/view.html", surfaces, o);
+  return t.lap();
+}
+
 // docs/math.md §9.1: the reference's alignment regularization (the paper's baseline [17]) with the
 // face normals of --normals (the reference's test uses --normals convolved).
 void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surface, const std::string& dir,
@@ -176,6 +192,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   write_surfaces(dir, mesh, input_attr, result, {}, units);
   stages["write_s"] = t.lap();
   if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, result, "", {}, {});
+  if (!a.no_view) stages["view_s"] = write_regularization_view(dir, description);
   t.restart();
   nlohmann::json m;
   m["surface"] = description;
@@ -200,7 +217,7 @@ void run_alignment_baseline(const RegularizeArgs& a, const LoadedSurface& surfac
   std::cerr << "regularize --baseline " << a.baseline << ": energy " << r.energy_initial << " -> " << r.energy_final
             << " in " << r.iterations << " iterations\n  wrote " << shown
             << "/regularized.ply, regularized.obj, input.ply, metrics.json"
-            << (a.no_render ? "" : ", before.png, after.png") << "\n";
+            << (a.no_render ? "" : ", before.png, after.png") << (a.no_view ? "" : ", view.html") << "\n";
 }
 
 void write_regularization(const RegularizeArgs& a, const RegularizationOptions& o, const LoadedSurface& surface,
@@ -299,7 +316,7 @@ void report_regularization(const RegularizeArgs& a, const RegularizedSurface& r,
     std::cerr << ", mean distance to the surface " << m["distance_l1_before"].get<double>() << " -> "
               << m["distance_l1_after"].get<double>();
   std::cerr << "\n  wrote " << shown << "/regularized.ply, regularized.obj, input.ply, metrics.json"
-            << (a.no_render ? "" : ", before.png, after.png") << "\n";
+            << (a.no_render ? "" : ", before.png, after.png") << (a.no_view ? "" : ", view.html") << "\n";
 }
 
 // The outputs of the paper's regularization in `dir`: the surfaces, pictures and metrics.json.
@@ -315,6 +332,7 @@ void write_regularization(const RegularizeArgs& a, const RegularizationOptions& 
   write_surfaces(dir, mesh, input_attr, r.mesh, {{"H", r.H}}, units);
   stages["write_s"] = t.lap();
   if (!a.no_render) stages["render_s"] = render_before_after(dir, mesh, r.mesh, "H", r.H, r.H);
+  if (!a.no_view) stages["view_s"] = write_regularization_view(dir, description);
   t.restart();
   nlohmann::json m = regularization_metrics(a, o, r, mesh.num_vertices(), mesh.num_faces(), description,
                                             a.normals.describe(surface), units, FrontEnd::Serial, stages);
@@ -455,7 +473,14 @@ bool run_distributed(const RegularizeArgs& a, const RegularizationOptions& o) {
   add_geometry_metrics(m, g, units);
   if (!is_output_rank()) return true;
   write_metrics(dir, m);
-  report_regularization(a, r, m, a.out);
+  // The page holds the whole surface in one process, which the ranks never gather.
+  RegularizeArgs reported = a;
+  reported.no_view = true;
+  report_regularization(reported, r, m, a.out);
+  if (!a.no_view)
+    std::cerr << "note: view.html is not written under mpirun (it would hold the whole surface in one process); "
+                 "write it with: corrlap view "
+              << a.out << "/input.ply " << a.out << "/regularized.ply --out " << a.out << "/view.html\n";
   out->commit();
   return true;
 }
@@ -627,9 +652,10 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");
+  cmd->add_flag("--no-view", args->no_view, "do not write view.html (the page to turn the surfaces around in a browser)");
   args->output.add_options(*cmd);
   cmd->add_option("--out", args->out,
-                  "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png)")
+                  "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png, view.html)")
       ->required();
   cmd->callback([args] { run(*args); });
 });

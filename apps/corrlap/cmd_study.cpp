@@ -10,6 +10,7 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/studies/regularization_study.hpp>
+#include <corrlap/studies/study_index.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <cstdio>
@@ -180,6 +181,7 @@ void run_regularization(const StudyArgs& a) {
         std::cerr << "  elapsed " << format_seconds(elapsed) << "\n";
       });
   if (!a.no_plots) run_plot_script(out.path());
+  write_study_index(out.path(), "corrlap study regularization: " + a.out);
   out.commit();
   std::cout << "study: " << table << "\n";
   for (const RegularizationStudyRow& r : rows)
@@ -370,8 +372,9 @@ void finish_study(const std::string& out, const std::string& shown, bool eigen, 
                                         : " [" + std::to_string(r.low) + ", " + std::to_string(r.high) + "]")
                   << "\n";
   }
-  if (!plots) return;
-  run_plot_script(out);
+  if (plots) run_plot_script(out);
+  write_study_index(out, "corrlap study: " + shown);
+  std::cout << "study: " << (shown_dir / "index.html").string() << " (the plots and tables; open it in a browser)\n";
 }
 
 void run_plot_script(const std::string& out) {

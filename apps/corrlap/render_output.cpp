@@ -3,6 +3,7 @@
 #include <chrono>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
+#include <iostream>
 
 namespace corrlap::cli {
 
@@ -43,6 +44,22 @@ double render_before_after(const std::string& dir, const SurfelMesh& before, con
   write_png(dir + "/before.png", render_mesh(to_polygon_mesh(before), b ? &*b : nullptr, o));
   write_png(dir + "/after.png", render_mesh(to_polygon_mesh(after), a ? &*a : nullptr, o));
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+ViewSurface read_view_surface(const std::string& file, const std::string& name) {
+  MeshAttributes attributes;
+  ViewSurface s;
+  s.name = name;
+  s.mesh = read_mesh(file, &attributes);
+  for (auto& [n, v] : attributes.vertex_scalars) s.fields.push_back({n, std::move(v), false});
+  for (auto& [n, v] : attributes.face_scalars) s.fields.push_back({n, std::move(v), true});
+  return s;
+}
+
+bool can_write_view(const std::string& file) {
+  if (has_viewer()) return true;
+  std::cerr << "note: " << file << " not written: this build has no viewer (it needs node and npm at build time)\n";
+  return false;
 }
 
 }  // namespace corrlap::cli

@@ -4,6 +4,7 @@
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/render/render_mesh.hpp>
+#include <corrlap/render/view_page.hpp>
 #include <optional>
 #include <string>
 
@@ -21,5 +22,12 @@ std::optional<ScalarField> select_scalar(const MeshAttributes& attributes, const
 double render_before_after(const std::string& dir, const SurfelMesh& before, const SurfelMesh& after,
                            const std::string& name, const Eigen::VectorXd& scalar_before,
                            const Eigen::VectorXd& scalar_after);
+
+/// A mesh file as a surface of a page (render/view_page.hpp): its PLY scalars become its fields.
+ViewSurface read_view_surface(const std::string& file, const std::string& name);
+
+/// Whether the page `file` (view.html beside a command's pictures) can be written: in a build
+/// without the viewer, false and a note on stderr; the command's other outputs stand.
+bool can_write_view(const std::string& file);
 
 }  // namespace corrlap::cli

@@ -32,7 +32,7 @@ from . import _core
 __all__ = [
     "digitize", "digitize_volume", "read_volume", "write_volume", "regularize_volume", "read_mesh", "write_mesh", "true_normals", "ii_normals", "curvature",
     "laplacian", "solve", "eigs", "regularize", "set_threads", "get_threads", "set_max_memory", "get_max_memory",
-    "methods", "backends",
+    "methods", "backends", "view", "ViewPage",
 ]
 
 def _csc(parts):
@@ -462,6 +462,74 @@ def _integer_bytes(value):
     except TypeError:
         raise TypeError(f"size: expected bytes (an int) or a text such as '8G', got {type(value).__name__} "
                         f"{value!r}") from None
+
+
+class ViewPage:
+    """The page corrlap.view made: ``path`` (None when not written), ``html`` (the page's text).
+    Shown inline by Jupyter (an iframe holding the page)."""
+
+    def __init__(self, html, path):
+        self.html = html
+        self.path = path
+
+    def _repr_html_(self):
+        import html as _html
+        return (f'<iframe srcdoc="{_html.escape(self.html, quote=True)}" '
+                'style="width: 100%; height: 600px; border: 1px solid #ccc"></iframe>')
+
+    def __repr__(self):
+        where = f" at {self.path}" if self.path else ""
+        return f"<corrlap.ViewPage{where}, {len(self.html) >> 10} KB>"
+
+
+def _view_surface(V, F, name, scalars, face_scalars, visible):
+    V = _np.asarray(V)
+    F = _np.asarray(F)
+    vertex, face = {}, dict(face_scalars or {})
+    for key, values in dict(scalars or {}).items():
+        n = _np.shape(values)[0] if _np.ndim(values) == 1 else -1
+        if n == V.shape[0] or V.ndim != 2:
+            vertex[key] = values  # a vertex scalar when the length is ambiguous (#V == #F)
+        elif F.ndim == 2 and n == F.shape[0]:
+            face[key] = values
+        else:
+            raise ValueError(f"scalars['{key}']: expected {V.shape[0]} values (one per vertex) or "
+                             f"{F.shape[0] if F.ndim == 2 else '?'} (one per face), got shape {_np.shape(values)}")
+    return {"name": str(name), "V": V, "F": F, "vertex_scalars": vertex, "face_scalars": face,
+            "visible": bool(visible)}
+
+
+def view(V, F, scalars=None, path=None, name="surface", title=None, field="auto", face_scalars=None, others=(),
+         layout=None):
+    """An interactive page of the surface V (#V, 3), F (#F, d), 3 <= d <= 255 corners per face: one
+    self-contained HTML file (no server, no network) to turn around, zoom and colour by a scalar in
+    a browser, with the maps and ranges of the PNG pictures (docs/viewer.md).
+
+    scalars       {name: (#V,) or (#F,) values}: per vertex or per face by their length (per vertex
+                  when #V == #F; face_scalars then names the per-face ones)
+    path          where to write the page (None: not written, only returned)
+    field         the scalar shown first: a name, "auto" (H if present, else the first) or "none"
+    others        more surfaces on the same page, each a dict with V, F and optionally name,
+                  scalars, face_scalars, visible (e.g. the staircase beside the regularized surface)
+    layout        "side" (side by side) or "overlay" (where they are); None: the library's, side
+
+    Returns a ViewPage (.html, .path), which Jupyter shows inline.
+    """
+    surfaces = [_view_surface(V, F, name, scalars, face_scalars, True)]
+    for i, o in enumerate(others):
+        if not isinstance(o, dict) or "V" not in o or "F" not in o:
+            raise ValueError(f"others[{i}]: expected a dict with V and F")
+        surfaces.append(_view_surface(o["V"], o["F"], o.get("name", f"surface {i + 2}"), o.get("scalars"),
+                                      o.get("face_scalars"), o.get("visible", True)))
+    page = _core.view_page(surfaces, str(title) if title is not None else f"corrlap view: {name}", str(field),
+                           layout)
+    if path is not None:
+        import os
+        partial = str(path) + ".partial"
+        with open(partial, "wb") as f:
+            f.write(page)
+        os.replace(partial, str(path))
+    return ViewPage(page.decode("utf-8"), None if path is None else str(path))
 
 
 def methods():

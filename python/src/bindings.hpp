@@ -18,6 +18,7 @@ void bind_normals(py::module_& m);
 void bind_operators(py::module_& m);
 void bind_solvers(py::module_& m);
 void bind_regularization(py::module_& m);
+void bind_view(py::module_& m);
 
 /// Voxels of an implicit shape (a name of `corrlap digitize --shape`, or a polynomial) digitized as
 /// the CLI does (docs/math.md §1.2).

@@ -27,6 +27,7 @@ PYBIND11_MODULE(_core, m) {
   bind_operators(m);
   bind_solvers(m);
   bind_regularization(m);
+  bind_view(m);
   m.def("set_threads", &corrlap::set_thread_count, py::arg("n"));
   m.def("get_threads", &corrlap::thread_count);
   // The memory budget every allocation sized by the input is checked against (core/memory_budget.hpp):

@@ -63,6 +63,7 @@ const std::map<std::string, OutputCommand>& output_commands() {
       {"solve", {"solve --method polydec --shape sphere1 --h 0.5 --bbox -1.5 1.5 --rhs x2", false, ".txt"}},
       {"eigs", {"eigs --method polydec --shape sphere1 --h 0.5 --bbox -1.5 1.5 -k 3", false, ".txt"}},
       {"render", {"render {D}/s.obj --size 64", false, ".png"}},
+      {"view", {"view {D}/s.obj", false, ".html"}},
       {"regularize", {"regularize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --no-render", true, ""}},
       {"reconstruct", {"reconstruct --mesh-file {D}/ico.obj --resolution 8 --subdivide 0 --no-render", true, ""}},
       {"study", {"study backward --h 0.5 --methods polydec --functions x2 --no-plots", true, ""}},
