@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <corrlap/core/error.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <corrlap/core/error.hpp>
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -118,7 +118,8 @@ void check_surface(const ViewSurface& s) {
     if (field.values.size() != expected)
       throw InputError("view: " + name + ", field '" + field.name + "' has " + std::to_string(field.values.size()) +
                        " values for " + std::to_string(expected) + (field.per_face ? " faces" : " vertices"));
-    if (!names.insert(field.name).second) throw InputError("view: " + name + " has two fields named '" + field.name + "'");
+    if (!names.insert(field.name).second)
+      throw InputError("view: " + name + " has two fields named '" + field.name + "'");
   }
 }
 
@@ -146,10 +147,8 @@ Json colormap_stops(Colormap map) {
 }
 
 Json encode_surface(const ViewSurface& s, Buffer& buffer) {
-  Json m{{"name", s.name},
-         {"vertices", s.mesh.positions.rows()},
-         {"faces", s.mesh.faces.size()},
-         {"visible", s.visible}};
+  Json m{
+      {"name", s.name}, {"vertices", s.mesh.positions.rows()}, {"faces", s.mesh.faces.size()}, {"visible", s.visible}};
   std::vector<float> positions(std::size_t(s.mesh.positions.rows()) * 3);
   for (Eigen::Index v = 0; v < s.mesh.positions.rows(); ++v)
     for (int c = 0; c < 3; ++c) positions[std::size_t(v) * 3 + std::size_t(c)] = float(s.mesh.positions(v, c));
@@ -290,17 +289,17 @@ std::string view_page(const std::vector<ViewSurface>& surfaces, const ViewOption
                      std::to_string(kMaxEncodedBytes >> 20) + " MB); show fewer or coarser surfaces");
 
   const Eigen::Vector3d d = options.view_direction.normalized(), u = options.up.normalized();
-  const Json scene{{"format", "corrlap-view 1"},
-                   {"title", options.title},
-                   {"data", {{"encoding", encoding}, {"bytes", buffer.bytes().size()}}},
-                   {"view", {{"direction", {d.x(), d.y(), d.z()}}, {"up", {u.x(), u.y(), u.z()}}}},
-                   {"colormaps",
-                    {{"sequential", colormap_stops(Colormap::Sequential)},
-                     {"diverging", colormap_stops(Colormap::Diverging)}}},
-                   {"fields", fields},
-                   {"initial_field", first.empty() ? Json(nullptr) : Json(first)},
-                   {"layout", options.layout},
-                   {"meshes", meshes}};
+  const Json scene{
+      {"format", "corrlap-view 1"},
+      {"title", options.title},
+      {"data", {{"encoding", encoding}, {"bytes", buffer.bytes().size()}}},
+      {"view", {{"direction", {d.x(), d.y(), d.z()}}, {"up", {u.x(), u.y(), u.z()}}}},
+      {"colormaps",
+       {{"sequential", colormap_stops(Colormap::Sequential)}, {"diverging", colormap_stops(Colormap::Diverging)}}},
+      {"fields", fields},
+      {"initial_field", first.empty() ? Json(nullptr) : Json(first)},
+      {"layout", options.layout},
+      {"meshes", meshes}};
   // Invalid UTF-8 in a name (a file name) becomes U+FFFD rather than an error. '<' only occurs
   // inside JSON strings, where \u003c means the same and cannot close the <script> element.
   std::string scene_text = scene.dump(-1, ' ', false, Json::error_handler_t::replace);

@@ -7,6 +7,10 @@
 # `make test` does not need them (their test skips with a message).
 # --petsc also installs PETSc, SLEPc and Open MPI (the petsc/slepc backends, -DCORRLAP_WITH_PETSC=ON;
 # docs/backends.md).
+# --chromium also installs Chromium, which the browser test of the HTML viewer (ctest viewer_browser)
+# drives; without it that test skips with a message. CI asks for it.
+# node and npm (Debian's nodejs, npm) are installed unless an npm is already on the PATH: the build
+# bundles the HTML viewer's script with them (viewer/README.md).
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config python3
           libeigen3-dev libsuitesparse-dev libopenblas-dev libspectra-dev libtbb-dev
@@ -19,9 +23,13 @@ for arg in "$@"; do
     --vtk) packages+=(python3-vtk9) ;;
     --bench) packages+=(python3-vtk9 python3-skimage python3-open3d time) ;;
     --petsc) packages+=(libpetsc-real-dev libslepc-real-dev openmpi-bin libopenmpi-dev) ;;
-    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk, --bench, --petsc)" >&2; exit 2 ;;
+    --chromium) packages+=(chromium) ;;
+    *) echo "install_deps.sh: unknown option '$arg' (known: --vtk, --bench, --petsc, --chromium)" >&2; exit 2 ;;
   esac
 done
+if ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -17,11 +17,20 @@ std::string escape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -62,7 +71,8 @@ void write_table(std::ostream& page, const fs::path& csv, int max_rows) {
       continue;
     }
     page << "<tr>";
-    for (const std::string& f : split(line)) page << (header ? "<th>" : "<td>") << escape(f) << (header ? "</th>" : "</td>");
+    for (const std::string& f : split(line))
+      page << (header ? "<th>" : "<td>") << escape(f) << (header ? "</th>" : "</td>");
     page << "</tr>\n";
     rows += header ? 0 : 1;
     header = false;
@@ -101,8 +111,8 @@ void write_study_index(const std::string& dir, const std::string& title, int max
     page << "<h2>Plots</h2>\n";
     for (const fs::path& p : shown) {
       const std::string rel = "plots/" + p.filename().string();
-      page << "<a href=\"" << escape(rel) << "\"><img src=\"" << escape(rel) << "\" alt=\""
-           << escape(p.stem().string()) << "\"></a>\n";
+      page << "<a href=\"" << escape(rel) << "\"><img src=\"" << escape(rel) << "\" alt=\"" << escape(p.stem().string())
+           << "\"></a>\n";
     }
   } else {
     page << "<p class=\"note\">No plots in this folder (they need python3-matplotlib).</p>\n";

@@ -20,8 +20,8 @@
 #include <sstream>
 
 #include "command.hpp"
-#include "render_output.hpp"
 #include "method_options.hpp"
+#include "render_output.hpp"
 #include "solver_options.hpp"
 #include "surface_source.hpp"
 #include "validators.hpp"
@@ -202,7 +202,8 @@ RegisterCommand reg(42, "reconstruct", [](CLI::App& app) {
   args->solver.add_options(*cmd, std::string("linear solver backend (default ") + kDefaultLinearSolver + ")");
   cmd->add_flag("--allow-nonmanifold", args->allow_nonmanifold, kAllowNonmanifoldNote);
   cmd->add_flag("--no-render", args->no_render, "do not draw the pictures");
-  cmd->add_flag("--no-view", args->no_view, "do not write view.html (the page to turn the surfaces around in a browser)");
+  cmd->add_flag("--no-view", args->no_view,
+                "do not write view.html (the page to turn the surfaces around in a browser)");
   cmd->add_option("--out", args->out, "output directory")->required();
   cmd->callback([args] { run(*args); });
 });

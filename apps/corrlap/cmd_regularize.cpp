@@ -652,7 +652,8 @@ RegisterCommand reg(42, "regularize", [](CLI::App& app) {
   args->clamp_option =
       cmd->add_flag("--clamp", args->clamp, "with --baseline alignment: keep every pointel within 0.5 voxel");
   cmd->add_flag("--no-render", args->no_render, "do not draw before.png and after.png");
-  cmd->add_flag("--no-view", args->no_view, "do not write view.html (the page to turn the surfaces around in a browser)");
+  cmd->add_flag("--no-view", args->no_view,
+                "do not write view.html (the page to turn the surfaces around in a browser)");
   args->output.add_options(*cmd);
   cmd->add_option("--out", args->out,
                   "output directory (regularized.ply/.obj, input.ply, metrics.json, before.png, after.png, view.html)")

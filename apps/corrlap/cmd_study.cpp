@@ -10,8 +10,8 @@
 #include <corrlap/core/error.hpp>
 #include <corrlap/io/output_folder.hpp>
 #include <corrlap/studies/regularization_study.hpp>
-#include <corrlap/studies/study_index.hpp>
 #include <corrlap/studies/study.hpp>
+#include <corrlap/studies/study_index.hpp>
 #include <corrlap/studies/study_tables.hpp>
 #include <cstdio>
 #include <cstdlib>

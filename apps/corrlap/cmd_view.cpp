@@ -52,8 +52,8 @@ void run(const ViewArgs& a) {
   out.commit();
   std::cerr << "view: " << surfaces.size() << (surfaces.size() == 1 ? " surface, " : " surfaces, ") << faces
             << " faces in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count()
-            << " s (read " << std::chrono::duration<double>(t1 - t0).count() << " s)\n  wrote " << a.out
-            << " (" << (std::filesystem::file_size(a.out) >> 10) << " KB; open it in a browser)\n";
+            << " s (read " << std::chrono::duration<double>(t1 - t0).count() << " s)\n  wrote " << a.out << " ("
+            << (std::filesystem::file_size(a.out) >> 10) << " KB; open it in a browser)\n";
 }
 
 RegisterCommand reg(43, "view", [](CLI::App& app) {

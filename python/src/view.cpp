@@ -42,10 +42,10 @@ ViewSurface surface_arg(const py::dict& s, std::size_t index) {
   out.mesh.faces = polygons_arg(s["F"], what + ": F", out.mesh.positions.rows());
   out.visible = py::bool_(s["visible"]);
   for (const auto& [name, values] : py::dict(s["vertex_scalars"]))
-    out.fields.push_back({py::str(name),
-                          vector_arg(values, what + ": scalars['" + std::string(py::str(name)) + "']",
-                                     out.mesh.positions.rows()),
-                          false});
+    out.fields.push_back(
+        {py::str(name),
+         vector_arg(values, what + ": scalars['" + std::string(py::str(name)) + "']", out.mesh.positions.rows()),
+         false});
   for (const auto& [name, values] : py::dict(s["face_scalars"]))
     out.fields.push_back({py::str(name),
                           vector_arg(values, what + ": face_scalars['" + std::string(py::str(name)) + "']",

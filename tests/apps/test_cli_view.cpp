@@ -51,7 +51,8 @@ TEST_CASE("corrlap view: the meshes named by their files, their PLY scalars as f
     MESSAGE("skipped: this build has no viewer");
     return;
   }
-  REQUIRE(run_cli("regularize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --normals true --no-render --no-view --out " + dir + "/r") == 0);
+  REQUIRE(run_cli("regularize --shape sphere1 --h 0.5 --bbox -1.5 1.5 --normals true --no-render --no-view --out " +
+                  dir + "/r") == 0);
   CHECK(!fs::exists(dir + "/r/view.html"));
   std::string err;
   REQUIRE(run_cli("view " + dir + "/r/input.ply " + dir + "/r/regularized.obj --scalar H --layout overlay --out " +
@@ -118,7 +119,8 @@ TEST_CASE("regularize and reconstruct write view.html; a study folder gets index
   CHECK(fs::exists(dir + "/rec2/before.png"));
 
   std::string out;
-  REQUIRE(run_cli("study backward --h 0.5 --methods polydec --functions x2 --no-plots --out " + dir + "/st", &out) == 0);
+  REQUIRE(run_cli("study backward --h 0.5 --methods polydec --functions x2 --no-plots --out " + dir + "/st", &out) ==
+          0);
   CHECK(out.find(dir + "/st/index.html") != std::string::npos);
   const std::string index = read_text(dir + "/st/index.html");
   CHECK(index.find("<h2>results.csv</h2>") != std::string::npos);

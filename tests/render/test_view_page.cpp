@@ -180,7 +180,8 @@ TEST_CASE("view_page: the colour maps and the common range are the PNG renderer'
     const Json& stops = p.scene["colormaps"][name];
     REQUIRE(stops.size() == 5);
     for (int i = 0; i < 5; ++i)
-      for (int k = 0; k < 3; ++k) CHECK(stops[std::size_t(i)][std::size_t(k)].get<double>() == colormap_rgb(map, i / 4.0)[k]);
+      for (int k = 0; k < 3; ++k)
+        CHECK(stops[std::size_t(i)][std::size_t(k)].get<double>() == colormap_rgb(map, i / 4.0)[k]);
   }
   // H on both surfaces: one range, that of their values together, as colour_scale computes it.
   Eigen::VectorXd all(17);
@@ -220,7 +221,8 @@ TEST_CASE("view_page: compressed pages carry the same scene and are smaller; wri
   for (int j = 0; j <= 60; ++j)
     for (int i = 0; i <= 60; ++i) big.mesh.positions.row(j * 61 + i) << i * 0.1, j * 0.1, std::sin(i * 0.1);
   for (int j = 0; j < 60; ++j)
-    for (int i = 0; i < 60; ++i) big.mesh.faces.push_back({j * 61 + i, j * 61 + i + 1, (j + 1) * 61 + i + 1, (j + 1) * 61 + i});
+    for (int i = 0; i < 60; ++i)
+      big.mesh.faces.push_back({j * 61 + i, j * 61 + i + 1, (j + 1) * 61 + i + 1, (j + 1) * 61 + i});
   big.fields = {{"H", big.mesh.positions.col(2), false}};
   ViewOptions plain;
   plain.compress = false;
