@@ -16,6 +16,7 @@
 #include <corrlap/regularization/regularize_surface.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 #include <corrlap/render/render_mesh.hpp>
+#include <corrlap/render/view_page.hpp>
 #include <corrlap/studies/regularization_study.hpp>
 #include <corrlap/studies/study.hpp>
 #include <corrlap/studies/study_index.hpp>
@@ -162,6 +163,7 @@ void regularization_section(const ImplicitShape& sphere) {
   std::printf("   surface, II normals and mean curvature (shared by the methods): %.3f s\n", since(t0));
   std::printf("%18s %7s %12s %12s %14s %14s %10s\n", "method", "h", "dist before", "dist after", "angle before",
               "angle after", "time_s");
+  std::vector<ViewSurface> surfaces;  // the page: the staircase beside each result
   for (const char* method : {"fem", "polydec"}) {
     t0 = Clock::now();
     o.method = method;
@@ -177,7 +179,11 @@ void regularization_section(const ImplicitShape& sphere) {
     RenderOptions view;
     view.range_min = 0.5;
     view.range_max = 1.5;
-    if (std::string(method) == "fem") write_png(dir + "/before.png", render_mesh(to_polygon_mesh(mesh), &H, view));
+    if (std::string(method) == "fem") {
+      write_png(dir + "/before.png", render_mesh(to_polygon_mesh(mesh), &H, view));
+      surfaces.push_back({"staircase", to_polygon_mesh(mesh), {H}});
+    }
+    surfaces.push_back({method, to_polygon_mesh(r.mesh), {H}});
     write_png(dir + "/after_" + std::string(method) + ".png", render_mesh(to_polygon_mesh(r.mesh), &H, view));
     std::printf("%18s %7.3f %12.3e %12.3e %10.2f deg %10.2f deg %10.3f  -> %s\n", method, h, before.distance_l1,
                 after.distance_l1, before.normal_angle_deg, after.normal_angle_deg, since(t0), out.c_str());
@@ -185,6 +191,13 @@ void regularization_section(const ImplicitShape& sphere) {
   std::printf("   (mean distance of the vertices to the sphere, mean angle of the surface's own normals)\n");
   std::printf("   pictures: %s/before.png (the staircase), %s/after_fem.png, %s/after_polydec.png\n", dir.c_str(),
               dir.c_str(), dir.c_str());
+  if (has_viewer()) {
+    ViewOptions page;
+    page.title = "corrlap demo: the unit sphere's staircase, regularized";
+    page.scales["H"] = ColourScale{0.5, 1.5, Colormap::Sequential};  // the pictures' range
+    write_view_page(dir + "/view.html", surfaces, page);
+    std::printf("   to turn them around in a browser: %s/view.html\n", dir.c_str());
+  }
   std::fflush(stdout);
 }
 

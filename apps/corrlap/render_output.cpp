@@ -52,7 +52,10 @@ ViewSurface read_view_surface(const std::string& file, const std::string& name) 
   s.name = name;
   s.mesh = read_mesh(file, &attributes);
   for (auto& [n, v] : attributes.vertex_scalars) s.fields.push_back({n, std::move(v), false});
-  for (auto& [n, v] : attributes.face_scalars) s.fields.push_back({n, std::move(v), true});
+  // A file may have a vertex and a face scalar of one name (corrlap curvature writes H at both): the
+  // face one is told apart.
+  for (auto& [n, v] : attributes.face_scalars)
+    s.fields.push_back({attributes.vertex_scalars.count(n) ? n + " (faces)" : n, std::move(v), true});
   return s;
 }
 

@@ -74,6 +74,13 @@ TEST_CASE("corrlap view: the meshes named by their files, their PLY scalars as f
   CHECK(mesh_names(scene_of(dir + "/w.html")) ==
         std::vector<std::string>{dir + "/r/regularized.ply", dir + "/r/regularized.obj"});
 
+  // corrlap curvature writes H at the vertices and at the faces: both shown, the face one told apart.
+  REQUIRE(run_cli("curvature --shape sphere1 --h 0.5 --bbox -1.5 1.5 --normals true --out " + dir + "/c") == 0);
+  REQUIRE(run_cli("view " + dir + "/c/curvature.ply --out " + dir + "/c.html") == 0);
+  const nlohmann::json c = scene_of(dir + "/c.html");
+  CHECK(c["meshes"][0]["vertex_fields"].contains("H"));
+  CHECK(c["meshes"][0]["face_fields"].contains("H (faces)"));
+
   CHECK(run_cli("view " + dir + "/r/regularized.obj --scalar K --out " + dir + "/x.html", nullptr, &err) == 1);
   CHECK(err.find("no surface has a field 'K' (they have none)") != std::string::npos);
   CHECK(run_cli("view " + dir + "/r/input.ply --scalar K --out " + dir + "/x.html", nullptr, &err) == 1);
