@@ -166,7 +166,7 @@ def run_corrlap(cli, volume, name, flags, workdir):
     out = os.path.join(workdir, "corrlap_" + name)
     # --allow-nonmanifold: a voxelized model can touch itself along an edge; it permits such a
     # surface and changes no parameter.
-    cmd = [cli, "regularize", "--volume", volume, "--threshold", "0", "--allow-nonmanifold", "--no-render",
+    cmd = [cli, "regularize", "--volume", volume, "--threshold", "0", "--allow-nonmanifold", "--no-render", "--no-view",
            "--out", out] + flags
     rc, so, se, wall, mb = run_tool(cmd)
     if rc != 0:

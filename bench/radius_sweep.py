@@ -28,7 +28,7 @@ RADII = ["2", "3", "4", "6", "8", "12", "paper"]
 
 def run(cli, args, out):
     t0 = time.time()
-    p = subprocess.run([cli, "regularize", *args, "--no-render", "--out", out], capture_output=True, text=True)
+    p = subprocess.run([cli, "regularize", *args, "--no-render", "--no-view", "--out", out], capture_output=True, text=True)
     seconds = time.time() - t0
     if p.returncode != 0:
         lines = [l for l in p.stderr.splitlines() if l.strip()]

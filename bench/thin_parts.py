@@ -78,7 +78,7 @@ def main():
                 ii = ["--ii-radius", "3", "--ii-alpha", "0.33"] if r == "paper" else ["--ii-radius", r, "--ii-alpha", "1"]
                 out = os.path.join(tmp, "out")
                 t0 = time.time()
-                p = subprocess.run([args.cli, "regularize", "--volume", vol, "--threshold", "127", *ii, "--output-units", "voxels", "--no-render", "--out", out],
+                p = subprocess.run([args.cli, "regularize", "--volume", vol, "--threshold", "127", *ii, "--output-units", "voxels", "--no-render", "--no-view", "--out", out],
                                    capture_output=True, text=True)
                 seconds = time.time() - t0
                 if p.returncode != 0:

@@ -28,7 +28,7 @@ mkdir -p "$OUT"
 # side spans 2) for the outputs, the units the edits and the colour range are given in: in the
 # volume's own units (voxels) H would be 128 times smaller.
 common=(--volume "$OUT/bunny.vol" --threshold 127 --allow-nonmanifold --ii-radius 1 --alpha0 "$ALPHA0"
-  --output-units world --no-render)
+  --output-units world --no-render --no-view)
 edits=("plain:" "h_scale_2:--h-scale 2" "h_clamp_5:--h-clamp 5" "k2_scale_2:--k2 scale:2" "k1_set_0:--k1 set:0")
 for entry in "${edits[@]}"; do
   name=${entry%%:*}

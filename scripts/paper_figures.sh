@@ -97,7 +97,7 @@ for shape in ("sphere1", "torus", "goursat"):
 PY
   # The torus (R = 6, r = 2, about the z axis) at 64 voxels across, coloured by the signed distance.
   for a in 0 10; do
-    "$CORRLAP" regularize --shape torus --h 0.25 --bbox -10 10 --alpha0 "$a" --no-render --out "$dir/torus_$a" \
+    "$CORRLAP" regularize --shape torus --h 0.25 --bbox -10 10 --alpha0 "$a" --no-render --no-view --out "$dir/torus_$a" \
       >/dev/null 2>"$dir/torus_$a.log"
   done
   /usr/bin/python3 - "$dir" <<'PY'
@@ -137,7 +137,7 @@ fig12() {
   for entry in "${runs[@]}"; do
     local name=${entry%%:*} flags=${entry#*:}
     # shellcheck disable=SC2086  # the run's flags are words
-    "$CORRLAP" regularize --volume "$dir/bunny256.vol" --threshold 127 $flags --no-render --output-units world \
+    "$CORRLAP" regularize --volume "$dir/bunny256.vol" --threshold 127 $flags --no-render --no-view --output-units world \
       --out "$dir/$name" >/dev/null 2>"$dir/$name.log"
   done
   local view=(--view 0.4,0.3,1 --up 0,1,0 --size 500 --scalar none --no-legend)
@@ -183,11 +183,11 @@ fig16() {
   for setting in 64:3 128:2; do
     n=${setting%%:*}
     k=${setting#*:}
-    "$CORRLAP" reconstruct --mesh-file "$OUT/bunny.obj" --resolution "$n" --subdivide "$k" --no-render \
+    "$CORRLAP" reconstruct --mesh-file "$OUT/bunny.obj" --resolution "$n" --subdivide "$k" --no-render --no-view \
       --out "$dir/r${n}_default" >/dev/null 2>"$dir/r${n}_default.log"
     size=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['size'])" \
       "$dir/r${n}_default/metrics.json")
-    "$CORRLAP" reconstruct --mesh-file "$OUT/bunny.obj" --resolution "$n" --subdivide "$k" --no-render \
+    "$CORRLAP" reconstruct --mesh-file "$OUT/bunny.obj" --resolution "$n" --subdivide "$k" --no-render --no-view \
       --curvature-radius "$(/usr/bin/python3 -c "print(0.2 * $size)")" --out "$dir/r${n}_paper" >/dev/null \
       2>"$dir/r${n}_paper.log"
   done
@@ -261,7 +261,7 @@ PY
   local view=(--view 1,-1.4,0.9 --size 500 --scalar none --no-legend)
   for a in 0.1 1000; do
     for m in fem polydec; do
-      "$CORRLAP" regularize --shape goursat --h 0.4 --bbox -10 10 --method "$m" --alpha0 "$a" --no-render \
+      "$CORRLAP" regularize --shape goursat --h 0.4 --bbox -10 10 --method "$m" --alpha0 "$a" --no-render --no-view \
         --out "$dir/goursat_${m}_$a" >/dev/null 2>"$dir/goursat_${m}_$a.log"
       "$CORRLAP" render "$dir/goursat_${m}_$a/regularized.ply" "${view[@]}" --out "$dir/goursat_${m}_$a.png" \
         >/dev/null 2>>"$dir/render.log"
@@ -287,7 +287,7 @@ fig14() {
   local dir="$OUT/fig14"
   mkdir -p "$dir"
   /usr/bin/python3 scripts/cad_part.py write "$dir/part.obj"
-  local common=(--mesh-file "$dir/part.obj" --resolution 256 --no-render)
+  local common=(--mesh-file "$dir/part.obj" --resolution 256 --no-render --no-view)
   # The paper's protocol: alpha0 = 10; fem_auto is regularize's default, alpha0 chosen from the data.
   "$CORRLAP" regularize "${common[@]}" --method fem --alpha0 10 --out "$dir/fem" >/dev/null 2>"$dir/fem.log"
   local h r4

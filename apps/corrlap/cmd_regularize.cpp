@@ -578,6 +578,19 @@ void run(const RegularizeArgs& a) {
   }
   if (out) {
     std::ofstream(out->file("labels.json")) << index.dump(2) << "\n";
+    // Every label's result on one page, where they lie in the volume.
+    if (!a.no_view && can_write_view(out->file("view.html"))) {
+      std::vector<ViewSurface> surfaces;
+      for (const auto& entry : index)
+        if (entry.contains("folder")) {
+          const std::string folder = entry["folder"];
+          surfaces.push_back(read_view_surface(out->file(folder + "/regularized.ply"), folder));
+        }
+      ViewOptions view;
+      view.title = "regularize: " + a.source.volume + ", every label";
+      view.layout = "overlay";
+      write_view_page(out->file("view.html"), surfaces, view);
+    }
     out->commit();
   }
   if (failures.empty()) return;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/io/volume_io.hpp>
+#include <corrlap/render/view_page.hpp>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -218,6 +219,14 @@ TEST_CASE("volume flags: --label, --labels all writes one folder per label, --th
   CHECK(fs::exists(dir + "/all/label-3/regularized.obj"));
   CHECK(fs::exists(dir + "/all/label-7/regularized.obj"));
   CHECK(fs::exists(dir + "/all/labels.json"));
+  // One page per label, and every label on one page (the build has a viewer).
+  CHECK(fs::exists(dir + "/all/label-3/view.html") == corrlap::has_viewer());
+  if (corrlap::has_viewer()) {
+    const std::string page = corrlap::test::read_text(dir + "/all/view.html");
+    CHECK(page.find("\"name\":\"label-3\"") != std::string::npos);
+    CHECK(page.find("\"name\":\"label-7\"") != std::string::npos);
+    CHECK(page.find("\"layout\":\"overlay\"") != std::string::npos);
+  }
   // Label 7 alone: its box in voxel indices (physical for a .vol), x in [12.5, 20.5].
   const corrlap::PolygonMesh seven = corrlap::read_mesh(dir + "/all/label-7/input.ply");
   CHECK(seven.positions.col(0).minCoeff() == doctest::Approx(12.5));

@@ -137,7 +137,7 @@ def test_cli_and_python_take_the_default_curvature_radius_from_the_library(tmp_p
     ball = ((x[:, None, None] ** 2 + x[None, :, None] ** 2 + x[None, None, :] ** 2) <= 16).astype(np.uint8)
     path = tmp_path / "ball.nrrd"
     corrlap.write_volume(path, ball)
-    run_cli("regularize", "--volume", path, "--no-render", "--out", tmp_path / "cli")
+    run_cli("regularize", "--volume", path, "--no-render", "--no-view", "--out", tmp_path / "cli")
     metrics = json.loads((tmp_path / "cli" / "metrics.json").read_text())
     floor = corrlap._core.VOXEL_MIN_CURVATURE_RADIUS * metrics["h"]
     assert metrics["curvature_radius"] == floor
@@ -160,7 +160,7 @@ def test_cli_and_python_take_the_default_curvature_radius_from_the_library(tmp_p
 def test_cli_and_python_keep_the_papers_curvature_radius_on_a_shape(tmp_path):
     # sphere1 at h = 0.2: 0.1 size is half a voxel, below the volumes' floor, and kept for a shape.
     shape = ["--shape", "sphere1", "--h", "0.2", "--bbox", "-1.5", "1.5"]
-    run_cli("regularize", *shape, "--normals", "true", "--no-render", "--out", tmp_path / "r")
+    run_cli("regularize", *shape, "--normals", "true", "--no-render", "--no-view", "--out", tmp_path / "r")
     metrics = json.loads((tmp_path / "r" / "metrics.json").read_text())
     assert metrics["curvature_radius"] == corrlap._core.CURVATURE_RADIUS_FRACTION * metrics["size"]
     assert metrics["curvature_radius"] < corrlap._core.VOXEL_MIN_CURVATURE_RADIUS * metrics["h"]
