@@ -1,7 +1,6 @@
 // Size and load time of the page `corrlap view` writes (viewer/README.md), for meshes of about 100K
 // and 1M faces: the unit sphere digitized by the CLI, without a field (`digitize`) and with the
-// four vertex fields of `curvature` (G, H, k1, k2; H shown; its face fields, of the same names, are
-// left out of the PLY given to `view`, which refuses two fields of one name). Load time: navigation
+// eight fields of `curvature` (G, H, k1, k2 per vertex and per face; H shown). Load time: navigation
 // start to `corrlapView.ready` (the first frame drawn) in headless Chromium, WebGL on SwiftShader
 // (the CPU; a GPU is faster), median of --repeat fresh pages. Results in bench/RESULTS.md ("Viewer").
 //
@@ -11,7 +10,7 @@
 // folder, removed at the end.
 // Chromium: $CHROMIUM, else /usr/bin/chromium (scripts/install_deps.sh --chromium).
 import { execFileSync } from "node:child_process";
-import { closeSync, mkdirSync, mkdtempSync, openSync, readFileSync, readSync, rmSync, statSync, writeFileSync } from "node:fs";
+import { closeSync, mkdirSync, mkdtempSync, openSync, readSync, rmSync, statSync } from "node:fs";
 import { createRequire } from "node:module";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
@@ -51,39 +50,6 @@ function headerOf(ply) {
   closeSync(fd);
   return head.subarray(0, n).toString("latin1");
 }
-// A binary little-endian PLY without the properties of its faces but their corners.
-const SIZES = { char: 1, uchar: 1, int8: 1, uint8: 1, short: 2, ushort: 2, int16: 2, uint16: 2, int: 4, uint: 4,
-  int32: 4, uint32: 4, float: 4, float32: 4, double: 8, float64: 8 };
-function withoutFaceFields(input, output) {
-  const data = readFileSync(input);
-  const end = data.indexOf("end_header\n") + "end_header\n".length;
-  const header = data.subarray(0, end).toString("latin1").split("\n");
-  let element = null, vertexBytes = 0, vertices = 0, faces = 0, list = null, faceProps = 0;
-  const kept = [];
-  for (const line of header) {
-    const w = line.split(" ");
-    if (w[0] === "element") {
-      element = w[1];
-      if (element === "vertex") vertices = Number(w[2]);
-      else if (element === "face") faces = Number(w[2]);
-      else throw new Error(`${input}: unexpected element ${element}`);
-    }
-    if (w[0] === "property" && element === "vertex") vertexBytes += SIZES[w[1]];
-    if (w[0] === "property" && element === "face") {
-      if (w[1] === "list") list = [SIZES[w[2]], SIZES[w[3]]];
-      else { faceProps += SIZES[w[1]]; continue; }
-    }
-    kept.push(line);
-  }
-  if (!list || !data.subarray(0, end).includes("binary_little_endian") || list[0] !== 1) throw new Error(`${input}: unexpected PLY`);
-  const parts = [Buffer.from(kept.join("\n"), "latin1"), data.subarray(end, end + vertices * vertexBytes)];
-  for (let f = 0, at = end + vertices * vertexBytes; f < faces; f++) {
-    const n = data[at];
-    parts.push(data.subarray(at, at + 1 + n * list[1]));
-    at += 1 + n * list[1] + faceProps;
-  }
-  writeFileSync(output, Buffer.concat(parts));
-}
 const median = (a) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
 const mb = (bytes) => (bytes / 1e6).toFixed(1);
 
@@ -96,9 +62,8 @@ for (const size of sizes) {
   const bare = join(dir, "digitized.ply");
   run(["digitize", "--shape", "sphere1", "--h", h, "--out", bare]);
   run(["curvature", "--shape", "sphere1", "--h", h, "--radius", String(3.5 * steps[size]), "--out", join(dir, "curvature")]);
-  const fielded = join(dir, "curvature.ply");
-  withoutFaceFields(join(dir, "curvature", "curvature.ply"), fielded);
-  for (const [label, ply, scalar] of [["no field", bare, "none"], ["4 fields", fielded, "H"]]) {
+  const fielded = join(dir, "curvature", "curvature.ply");
+  for (const [label, ply, scalar] of [["no field", bare, "none"], ["8 fields", fielded, "H"]]) {
     const page = join(dir, `${label.replace(" ", "-")}.html`);
     const write = run(["view", ply, "--scalar", scalar, "--out", page]);
     const faces = Number(/element face (\d+)/.exec(headerOf(ply))[1]);
