@@ -41,7 +41,7 @@ std::vector<std::string> mesh_names(const nlohmann::json& scene) {
 
 }  // namespace
 
-TEST_CASE("corrlap view: the meshes named by their files, their PLY scalars as fields; errors named") {
+TEST_CASE("corrlap view: the meshes named by their files, their PLY scalars as fields, errors named") {
   const std::string dir = fresh("cli_view");
   if (!has_viewer()) {
     std::string err;
@@ -93,7 +93,7 @@ TEST_CASE("corrlap view: the meshes named by their files, their PLY scalars as f
   CHECK(!fs::exists(dir + "/x.html"));
 }
 
-TEST_CASE("regularize and reconstruct write view.html; a study folder gets index.html") {
+TEST_CASE("regularize and reconstruct write view.html, a study folder gets index.html") {
   if (!has_viewer()) return;
   const std::string dir = fresh("cli_view_outputs");
   REQUIRE(run_cli("regularize --shape goursat --h 0.5 --out " + dir + "/g") == 0);

@@ -212,7 +212,7 @@ TEST_CASE("view_page: the colour maps and the common range are the PNG renderer'
   CHECK(parse(view_page({a}, o)).scene["initial_field"].is_null());
 }
 
-TEST_CASE("view_page: compressed pages carry the same scene and are smaller; write_view_page writes the page") {
+TEST_CASE("view_page: compressed pages carry the same scene and are smaller, write_view_page writes the page") {
   if (!has_viewer()) return;
   ViewSurface big = cube("cube");
   // A finer surface so that compression has something to work on: a 60 x 60 grid of quads.
