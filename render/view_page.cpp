@@ -209,8 +209,9 @@ std::pair<std::string, std::string> encode_data(const std::vector<std::uint8_t>&
   if (compress) {
     uLongf size = compressBound(uLong(bytes.size()));
     std::vector<std::uint8_t> packed(size);
-    // Level 6 (zlib's default): level 9 saves about 1 % more at twice the time here.
-    if (compress2(packed.data(), &size, bytes.data(), uLong(bytes.size()), 6) != Z_OK)
+    // Level 1: the page is written by default beside every regularization, whose time matters more
+    // than a few percent of the page's size (bench/RESULTS.md, "The viewer's pages").
+    if (compress2(packed.data(), &size, bytes.data(), uLong(bytes.size()), 1) != Z_OK)
       throw Error("view: zlib could not compress the geometry");
     return {base64(packed.data(), size), "deflate+base64"};
   }
