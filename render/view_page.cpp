@@ -29,10 +29,6 @@ namespace {
 
 using Json = nlohmann::json;
 
-// A browser holds the page's data in one JavaScript string, which V8 limits to about 512 M
-// characters; the script and the scene need some of it.
-constexpr std::size_t kMaxEncodedBytes = std::size_t(500) << 20;
-
 std::string_view script() {
 #if defined(CORRLAP_HAVE_VIEWER)
   return {reinterpret_cast<const char*>(detail::viewer_script), detail::viewer_script_size};
@@ -284,10 +280,10 @@ std::string view_page(const std::vector<ViewSurface>& surfaces, const ViewOption
     fields.push_back({{"name", n}, {"min", scale.min}, {"max", scale.max}, {"colormap", to_string(scale.map)}});
   }
   auto [data, encoding] = encode_data(buffer.bytes(), options.compress);
-  if (data.size() > kMaxEncodedBytes)
-    throw InputError("view: the geometry is " + std::to_string(data.size() >> 20) +
-                     " MB once encoded, too large for a browser page (at most " +
-                     std::to_string(kMaxEncodedBytes >> 20) + " MB); show fewer or coarser surfaces");
+  if (data.size() > options.max_encoded_bytes)
+    throw InputError("view: the geometry is " + std::to_string(data.size()) +
+                     " bytes once encoded, too large for a browser page (at most " +
+                     std::to_string(options.max_encoded_bytes) + "); show fewer or coarser surfaces");
 
   const Eigen::Vector3d d = options.view_direction.normalized(), u = options.up.normalized();
   const Json scene{

@@ -5,6 +5,7 @@
 // side, flat or smooth shading, wireframe, the value under the cursor. The page's script (three.js
 // and viewer/src/) is compiled into the library at build time; the format: viewer/README.md.
 #include <corrlap/core/polygon_mesh.hpp>
+#include <cstddef>
 #include <map>
 #include <string>
 #include <vector>
@@ -36,6 +37,9 @@ struct ViewOptions {
   /// "side": the visible surfaces side by side along the screen's right axis (staircase beside
   /// result); "overlay": where they are.
   std::string layout = "side";
+  /// The largest geometry (base64 text) a page may hold: a browser keeps it in one JavaScript string,
+  /// which V8 limits to about 512 M characters, and the script needs some of that.
+  std::size_t max_encoded_bytes = std::size_t(500) << 20;
   bool compress = true;  ///< zlib on the geometry (ignored in a build without zlib)
 };
 
@@ -47,7 +51,7 @@ void check_viewer();
 /// The page. Throws InputError on no surface, an empty one, positions that are not finite or not
 /// representable as float, a face with fewer than 3 or more than 255 corners or a missing vertex,
 /// a field of the wrong size, an unknown initial field or layout, or a page too large for a browser (its
-/// geometry over 1 GB once encoded); Error when the build has no viewer (has_viewer()).
+/// geometry over options.max_encoded_bytes once encoded); Error when the build has no viewer (has_viewer()).
 std::string view_page(const std::vector<ViewSurface>& surfaces, const ViewOptions& options = {});
 
 /// view_page written to `path`, which appears complete or not at all. Throws as view_page, and

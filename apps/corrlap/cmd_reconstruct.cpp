@@ -162,7 +162,7 @@ void run(const ReconstructArgs& a) {
     surfaces.push_back({"fine mesh", fine, {}, false});
     ViewOptions view_options;
     view_options.title = "reconstruct: " + a.mesh_file;
-    write_view_page(out.file("view.html"), surfaces, view_options);
+    write_view_beside(out.file("view.html"), surfaces, view_options);
     stages["view_s"] = view_time.lap();
   }
   m["time_s"] = stages;

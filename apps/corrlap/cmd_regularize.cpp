@@ -161,7 +161,7 @@ double write_regularization_view(const std::string& dir, const std::string& desc
   o.title = "regularize: " + description;
   for (const ScalarField& f : surfaces[1].fields)
     if (f.name == "H" && f.values.allFinite()) o.scales["H"] = colour_scale(f, RenderOptions{});
-  write_view_page(dir + "/view.html", surfaces, o);
+  write_view_beside(dir + "/view.html", surfaces, o);
   return t.lap();
 }
 
@@ -589,7 +589,7 @@ void run(const RegularizeArgs& a) {
       ViewOptions view;
       view.title = "regularize: " + a.source.volume + ", every label";
       view.layout = "overlay";
-      write_view_page(out->file("view.html"), surfaces, view);
+      write_view_beside(out->file("view.html"), surfaces, view);
     }
     out->commit();
   }

@@ -65,4 +65,14 @@ bool can_write_view(const std::string& file) {
   return false;
 }
 
+void write_view_beside(const std::string& file, const std::vector<ViewSurface>& surfaces, const ViewOptions& options) {
+  try {
+    write_view_page(file, surfaces, options);
+  } catch (const IoError&) {
+    throw;  // the folder the other outputs went to cannot take it either: a real failure
+  } catch (const InputError& e) {
+    std::cerr << "note: " << file << " not written: " << e.what() << "\n";
+  }
+}
+
 }  // namespace corrlap::cli

@@ -30,4 +30,8 @@ ViewSurface read_view_surface(const std::string& file, const std::string& name);
 /// without the viewer, false and a note on stderr; the command's other outputs stand.
 bool can_write_view(const std::string& file);
 
+/// write_view_page, except that surfaces the page refuses (too large for a browser) give a note on
+/// stderr instead of an error: the page is an extra, the command's other outputs stand.
+void write_view_beside(const std::string& file, const std::vector<ViewSurface>& surfaces, const ViewOptions& options);
+
 }  // namespace corrlap::cli

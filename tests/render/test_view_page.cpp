@@ -285,6 +285,9 @@ TEST_CASE("view_page: what it refuses is named") {
   o.scales["H"] = ColourScale{1.0, 1.0, Colormap::Sequential};
   refuses({cube("c")}, "colour range of 'H' is empty", o);
   o = {};
+  o.max_encoded_bytes = 64;  // what a page too large for a browser gets
+  refuses({cube("c")}, "too large for a browser page (at most 64)", o);
+  o = {};
   o.view_direction = Eigen::Vector3d::Zero();
   refuses({cube("c")}, "view and up directions", o);
 }
