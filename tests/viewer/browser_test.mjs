@@ -33,6 +33,9 @@ function check(ok, message) {
 const log = (message) => console.log(`[${((Date.now() - started) / 1000).toFixed(1)} s] ${message}`);
 
 // --- What the test needs; without it, skip. ---
+// playwright-core 1.65 needs Node 20 (Debian 12's own nodejs is 18; the build's bundling works with it).
+if (Number(process.versions.node.split(".")[0]) < 20)
+  skip(`playwright-core needs Node 20 or later, this is Node ${process.versions.node}`);
 let playwright;
 try {
   playwright = createRequire(join(nodeModules, "package.json"))("playwright-core");
