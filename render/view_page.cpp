@@ -252,15 +252,17 @@ std::string view_page(const std::vector<ViewSurface>& surfaces, const ViewOption
   if (!options.view_direction.allFinite() || options.view_direction.norm() == 0.0 || !options.up.allFinite() ||
       options.up.norm() == 0.0)
     throw InputError("view: the view and up directions must be finite nonzero vectors");
-  // Anything over 2^32 bytes cannot be encoded within kMaxEncodedBytes even compressed many times.
+  // Refused before the buffer is allocated: zlib shrinks the geometry about 2 to 3 times and base64
+  // grows it by a third, so 8 times the limit cannot fit.
   std::uint64_t raw = 0;
   for (const ViewSurface& s : surfaces) {
     raw += std::uint64_t(s.mesh.positions.rows()) * 12 + s.mesh.faces.num_corners() * 4 + s.mesh.faces.size();
     for (const ScalarField& f : s.fields) raw += std::uint64_t(f.values.size()) * 4;
   }
-  if (raw > (std::uint64_t(4) << 30))
-    throw InputError("view: the surfaces need " + std::to_string(raw >> 20) +
-                     " MB of geometry, too much for a browser page (at most about 500 MB encoded)");
+  if (raw > 8 * std::uint64_t(options.max_encoded_bytes))
+    throw InputError("view: the surfaces have " + std::to_string(raw) +
+                     " bytes of geometry, too large for a browser page (at most " +
+                     std::to_string(options.max_encoded_bytes) + " once encoded); show fewer or coarser surfaces");
 
   std::vector<std::string> names;  // in the order of first appearance
   for (const ViewSurface& s : surfaces)

@@ -285,8 +285,10 @@ TEST_CASE("view_page: what it refuses is named") {
   o.scales["H"] = ColourScale{1.0, 1.0, Colormap::Sequential};
   refuses({cube("c")}, "colour range of 'H' is empty", o);
   o = {};
-  o.max_encoded_bytes = 64;  // what a page too large for a browser gets
+  o.max_encoded_bytes = 64;  // what a page too large for a browser gets: refused once encoded
   refuses({cube("c")}, "too large for a browser page (at most 64)", o);
+  o.max_encoded_bytes = 8;  // or before, when the geometry is 8 times the limit (96 + 96 + 6 mesh bytes, 32 of H)
+  refuses({cube("c")}, "the surfaces have 230 bytes of geometry, too large for a browser page (at most 8 once", o);
   o = {};
   o.view_direction = Eigen::Vector3d::Zero();
   refuses({cube("c")}, "view and up directions", o);
