@@ -96,7 +96,8 @@ void write_study_index(const std::string& dir, const std::string& title, int max
        << "table { border-collapse: collapse; font: 12px ui-monospace, monospace; }\n"
        << "th, td { border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; }\n"
        << "th { background: #f0f0f0; position: sticky; top: 0; }\n"
-       << ".table { max-height: 30em; overflow: auto; display: inline-block; }\n.note { color: #666; }\n"
+       << ".table { max-height: 30em; max-width: 100%; overflow: auto; display: inline-block; }\n.note { color: #666; "
+          "}\n"
        << "</style></head><body>\n<h1>" << escape(title) << "</h1>\n";
   const std::vector<fs::path> pictures = files_in(folder / "plots", {".png", ".svg"});
   // One picture per figure: the PNG when there are both.

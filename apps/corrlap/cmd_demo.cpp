@@ -226,6 +226,7 @@ void regularization_study_section() {
   std::fflush(stdout);
   run_plot_script(dir);
   write_study_index(dir, "corrlap demo: regularization");
+  std::printf("   plots and table on one page: %s/index.html\n", dir.c_str());
 }
 
 void run_demo() {
