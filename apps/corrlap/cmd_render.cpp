@@ -22,27 +22,6 @@ struct RenderArgs {
   bool no_legend = false;
 };
 
-std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count) {
-  std::vector<double> v;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double x = 0.0;
-    try {
-      x = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(x))
-      throw InputError(option + " '" + text + "': '" + item + "' is not a number");
-    v.push_back(x);
-  }
-  if (v.size() != count)
-    throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " comma-separated numbers");
-  return v;
-}
-
 void run(const RenderArgs& a) {
   RenderOptions o;
   o.supersampling = a.supersampling;

@@ -1,11 +1,34 @@
 #include "render_output.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <corrlap/core/error.hpp>
 #include <corrlap/core/polygon_mesh.hpp>
 #include <iostream>
+#include <sstream>
 
 namespace corrlap::cli {
+
+std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double x = 0.0;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(x))
+      throw InputError(option + " '" + text + "': '" + item + "' is not a number");
+    v.push_back(x);
+  }
+  if (v.size() != count)
+    throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " comma-separated numbers");
+  return v;
+}
 
 std::optional<ScalarField> select_scalar(const MeshAttributes& attributes, const std::string& name,
                                          const std::string& file) {

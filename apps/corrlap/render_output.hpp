@@ -7,8 +7,13 @@
 #include <corrlap/render/view_page.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace corrlap::cli {
+
+/// `count` comma-separated finite numbers of an option's text ("1,-1.4,0.9"); InputError quoting
+/// the text and the option otherwise.
+std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count);
 
 /// The scalar `name` of a mesh file's attributes (vertex scalars first, then face scalars); "auto":
 /// H if present, else the first vertex scalar, else none; "none": none. InputError listing the

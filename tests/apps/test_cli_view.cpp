@@ -81,6 +81,16 @@ TEST_CASE("corrlap view: the meshes named by their files, their PLY scalars as f
   CHECK(c["meshes"][0]["vertex_fields"].contains("H"));
   CHECK(c["meshes"][0]["face_fields"].contains("H (faces)"));
 
+  // The first view, as render's --view and --up (normalized in the scene).
+  REQUIRE(run_cli("view " + dir + "/r/regularized.obj --view 0,0,2 --up 0,1,0 --out " + dir + "/top.html") == 0);
+  const nlohmann::json top = scene_of(dir + "/top.html");
+  CHECK(top["view"]["direction"] == nlohmann::json::array({0.0, 0.0, 1.0}));
+  CHECK(top["view"]["up"] == nlohmann::json::array({0.0, 1.0, 0.0}));
+  CHECK(run_cli("view " + dir + "/r/regularized.obj --view 0,x,1 --out " + dir + "/x.html", nullptr, &err) == 1);
+  CHECK(err.find("--view '0,x,1': 'x' is not a number") != std::string::npos);
+  CHECK(run_cli("view " + dir + "/r/regularized.obj --up 0,0,0 --out " + dir + "/x.html", nullptr, &err) == 1);
+  CHECK(err.find("view and up directions") != std::string::npos);
+
   CHECK(run_cli("view " + dir + "/r/regularized.obj --scalar K --out " + dir + "/x.html", nullptr, &err) == 1);
   CHECK(err.find("no surface has a field 'K' (they have none)") != std::string::npos);
   CHECK(run_cli("view " + dir + "/r/input.ply --scalar K --out " + dir + "/x.html", nullptr, &err) == 1);
