@@ -17,7 +17,8 @@ namespace corrlap::cli {
 namespace {
 
 struct RenderArgs {
-  std::string mesh, scalar = "auto", view, up, size, range, colormap, out;
+  std::string mesh, scalar = "auto", size, range, colormap, out;
+  ViewDirectionOptions directions;
   int supersampling = 2;
   bool no_legend = false;
 };
@@ -26,14 +27,7 @@ void run(const RenderArgs& a) {
   RenderOptions o;
   o.supersampling = a.supersampling;
   o.legend = !a.no_legend;
-  if (!a.view.empty()) {
-    const auto v = parse_numbers(a.view, "--view", 3);
-    o.view_direction = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-  if (!a.up.empty()) {
-    const auto v = parse_numbers(a.up, "--up", 3);
-    o.up = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
+  a.directions.apply(o.view_direction, o.up);
   if (!a.size.empty()) {
     // Each part judged, the message quoting the whole text the user gave.
     const auto pixels = [&](const std::string& part) {
@@ -82,8 +76,7 @@ RegisterCommand reg(43, "render", [](CLI::App& app) {
                   "vertex or face scalar of a PLY file to colour by; auto: H if present, else the first vertex "
                   "scalar, else none; none: grey")
       ->capture_default_str();
-  cmd->add_option("--view", args->view, "direction from the object towards the viewer, x,y,z (default 1,-1.4,0.9)");
-  cmd->add_option("--up", args->up, "direction drawn upwards, x,y,z (default 0,0,1)");
+  args->directions.add_options(*cmd);
   cmd->add_option("--size", args->size, "picture size in pixels, W or WxH (default 800x800; legend included)");
   cmd->add_option("--range", args->range,
                   "colour range MIN,MAX (default: the 2nd-98th percentiles, symmetric about 0 for signed fields)");

@@ -17,7 +17,8 @@ namespace {
 
 struct ViewArgs {
   std::vector<std::string> meshes;
-  std::string scalar = "auto", title, layout = ViewOptions{}.layout, view, up, out;
+  std::string scalar = "auto", title, layout = ViewOptions{}.layout, out;
+  ViewDirectionOptions directions;
 };
 
 // The file names without their folders and extensions, or the paths as given when two would be equal.
@@ -40,14 +41,7 @@ void run(const ViewArgs& a) {
   o.title = !a.title.empty() ? a.title : "corrlap view: " + names.front() + (names.size() > 1 ? ", ..." : "");
   o.initial_field = a.scalar;
   o.layout = a.layout;
-  if (!a.view.empty()) {
-    const auto v = parse_numbers(a.view, "--view", 3);
-    o.view_direction = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-  if (!a.up.empty()) {
-    const auto v = parse_numbers(a.up, "--up", 3);
-    o.up = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
+  a.directions.apply(o.view_direction, o.up);
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<ViewSurface> surfaces;
   std::size_t faces = 0;
@@ -77,9 +71,7 @@ RegisterCommand reg(43, "view", [](CLI::App& app) {
   cmd->add_option("--layout", args->layout, "several meshes: side (side by side) or overlay (where they are)")
       ->check(CLI::IsMember({"side", "overlay"}))
       ->capture_default_str();
-  cmd->add_option("--view", args->view,
-                  "first view: direction from the object towards the viewer, x,y,z (default 1,-1.4,0.9, as render)");
-  cmd->add_option("--up", args->up, "first view: direction drawn upwards, x,y,z (default 0,0,1)");
+  args->directions.add_options(*cmd);  // the first view
   cmd->add_option("--title", args->title, "the page's title (default: the first mesh's name)");
   cmd->add_option("--out", args->out, "output HTML file")->required();
   cmd->callback([args] { run(*args); });

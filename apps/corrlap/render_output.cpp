@@ -30,6 +30,22 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& op
   return v;
 }
 
+void ViewDirectionOptions::add_options(CLI::App& command) {
+  command.add_option("--view", view, "direction from the object towards the viewer, x,y,z (default 1,-1.4,0.9)");
+  command.add_option("--up", up, "direction drawn upwards, x,y,z (default 0,0,1)");
+}
+
+void ViewDirectionOptions::apply(Eigen::Vector3d& direction, Eigen::Vector3d& upwards) const {
+  if (!view.empty()) {
+    const std::vector<double> v = parse_numbers(view, "--view", 3);
+    direction = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  if (!up.empty()) {
+    const std::vector<double> v = parse_numbers(up, "--up", 3);
+    upwards = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+}
+
 std::optional<ScalarField> select_scalar(const MeshAttributes& attributes, const std::string& name,
                                          const std::string& file) {
   if (name == "none") return std::nullopt;

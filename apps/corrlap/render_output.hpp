@@ -1,6 +1,7 @@
 #pragma once
 // Pictures written by the commands: the scalar a user names, and the before/after pair of
 // `regularize` drawn with one view and one colour range.
+#include <CLI/CLI.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/io/mesh_io.hpp>
 #include <corrlap/render/render_mesh.hpp>
@@ -14,6 +15,15 @@ namespace corrlap::cli {
 /// `count` comma-separated finite numbers of an option's text ("1,-1.4,0.9"); InputError quoting
 /// the text and the option otherwise.
 std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count);
+
+/// --view and --up of `render` and `view`: the direction from the object towards the viewer and the
+/// one drawn upwards, each "x,y,z"; not given: the library's defaults stay.
+struct ViewDirectionOptions {
+  std::string view, up;
+  void add_options(CLI::App& command);
+  /// Parsed into `direction` and `upwards` where given; InputError naming the option otherwise.
+  void apply(Eigen::Vector3d& direction, Eigen::Vector3d& upwards) const;
+};
 
 /// The scalar `name` of a mesh file's attributes (vertex scalars first, then face scalars); "auto":
 /// H if present, else the first vertex scalar, else none; "none": none. InputError listing the
