@@ -82,11 +82,7 @@ class Buffer {
   std::vector<std::uint8_t> bytes_;
 };
 
-float to_float(double x, const std::string& what) {
-  if (!std::isfinite(x) || std::abs(x) > double(std::numeric_limits<float>::max()))
-    throw InputError("view: " + what + " is " + std::to_string(x) + ", not a finite float");
-  return float(x);
-}
+bool is_float(double x) { return std::isfinite(x) && std::abs(x) <= double(std::numeric_limits<float>::max()); }
 
 // Checked before anything is encoded, so that a bad surface fails with its name and nothing
 // half-built.
@@ -96,8 +92,12 @@ void check_surface(const ViewSurface& s) {
   if (nv == 0 || s.mesh.faces.empty()) throw InputError("view: " + name + " is empty");
   if (std::uint64_t(nv) > std::numeric_limits<std::uint32_t>::max())
     throw InputError("view: " + name + " has more than 2^32 vertices");
+  // The message is built for the first bad coordinate only: nothing is allocated per vertex.
   for (Eigen::Index v = 0; v < nv; ++v)
-    for (int c = 0; c < 3; ++c) (void)to_float(s.mesh.positions(v, c), name + ", vertex " + std::to_string(v));
+    for (int c = 0; c < 3; ++c)
+      if (!is_float(s.mesh.positions(v, c)))
+        throw InputError("view: " + name + ", vertex " + std::to_string(v) + " is " +
+                         std::to_string(s.mesh.positions(v, c)) + ", not a finite float");
   for (std::size_t f = 0; f < s.mesh.faces.size(); ++f) {
     const auto face = s.mesh.faces[f];
     if (face.size() < 3 || face.size() > 255)
