@@ -57,17 +57,17 @@ void report(const CLI::App& app, const corrlap::Error& e) {
   std::cerr << "\n";
 }
 
-// Transparent huge pages for the allocator's memory, on glibc >= 2.35 (the tunable
-// glibc.malloc.hugetlb=1, which can only be set in the environment at process start: the process
-// starts itself again once with it). The pipeline's arrays are touched page by page as they are
-// filled, and on virtual machines a page fault is expensive: at 256^3 the whole regularize ran
-// about a quarter faster (bench/RESULTS.md, "regularize at 256^3: huge pages and solve
-// accuracy"). A GLIBC_TUNABLES of the user's own is left alone, and so is CORRLAP_HUGE_PAGES=0;
-// where exec fails the run goes on as it is.
+// Transparent huge pages for the allocator's memory, on request (CORRLAP_HUGE_PAGES=1, glibc >=
+// 2.35: the tunable glibc.malloc.hugetlb=1 can only be set in the environment at process start, so
+// the process starts itself again once with it). Not by default: on virtual machines that report
+// free memory to the host (virtio-balloon's free page reporting), every fresh huge page is backed
+// by the host again on first touch, and the factorizations' fresh arrays made regularize slower,
+// not faster (bench/RESULTS.md, "Huge pages on a machine that reports free pages"). A
+// GLIBC_TUNABLES of the user's own is left alone; where exec fails the run goes on as it is.
 void use_huge_pages(char** argv) {
 #if defined(__GLIBC__) && defined(__linux__)
   if (std::getenv("GLIBC_TUNABLES") != nullptr) return;
-  if (const char* flag = std::getenv("CORRLAP_HUGE_PAGES"); flag != nullptr && std::string(flag) == "0") return;
+  if (const char* flag = std::getenv("CORRLAP_HUGE_PAGES"); flag == nullptr || std::string(flag) != "1") return;
   if (setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=1", 1) != 0) return;
   execv("/proc/self/exe", argv);
   unsetenv("GLIBC_TUNABLES");
