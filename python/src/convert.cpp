@@ -75,34 +75,32 @@ Eigen::MatrixX3d points_arg(py::handle obj, const std::string& name, Eigen::Inde
   return out;
 }
 
-FaceMatrix faces_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices) {
+FaceIds face_ids_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices, Eigen::Index min_corners,
+                     Eigen::Index max_corners, const std::string& shape_wanted) {
   const py::array a = numeric_array(obj, name);
   const char kind = a.dtype().kind();
   if (kind != 'i' && kind != 'u')
     throw py::value_error(name + ": vertex ids must be integers, got dtype " + std::string(py::str(a.dtype())));
-  if (a.ndim() != 2 || a.shape(1) != 4)
-    throw py::value_error(name + ": expected shape (m, 4) (quads), got " + shape_of(a));
-  const auto ids = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (a.ndim() != 2 || a.shape(1) < min_corners || a.shape(1) > max_corners)
+    throw py::value_error(name + ": expected shape " + shape_wanted + ", got " + shape_of(a));
+  FaceIds ids = FaceIds::ensure(a);
   const std::int64_t* p = ids.data();
-  const Eigen::Index m = a.shape(0);
-  FaceMatrix out(m, 4);
-  const Eigen::Index bad = first_bad(m, [&](Eigen::Index f) {
-    bool ok = true;
-    for (int j = 0; j < 4; ++j) {
-      const std::int64_t v = p[4 * f + j];
-      ok = ok && v >= 0 && v < num_vertices;
-      out(f, j) = int(v);
-    }
-    return !ok;
-  });
+  const Eigen::Index m = a.shape(0), d = a.shape(1);
+  const auto out_of_range = [&](std::int64_t v) { return v < 0 || v >= num_vertices; };
+  const Eigen::Index bad =
+      first_bad(m, [&](Eigen::Index f) { return std::any_of(p + f * d, p + (f + 1) * d, out_of_range); });
   if (bad < m) {
-    std::int64_t v = 0;
-    for (int j = 0; j < 4; ++j)
-      if (p[4 * bad + j] < 0 || p[4 * bad + j] >= num_vertices) v = p[4 * bad + j];
+    const std::int64_t v = *std::find_if(p + bad * d, p + (bad + 1) * d, out_of_range);
     throw py::value_error(name + ": face " + std::to_string(bad) + " has vertex id " + std::to_string(v) +
                           ", out of range [0, " + std::to_string(num_vertices) + ")");
   }
-  return out;
+  return ids;
+}
+
+FaceMatrix faces_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices) {
+  const FaceIds ids = face_ids_arg(obj, name, num_vertices, 4, 4, "(m, 4) (quads)");
+  return Eigen::Map<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 4, Eigen::RowMajor>>(ids.data(), ids.shape(0), 4)
+      .cast<int>();
 }
 
 Eigen::VectorXd vector_arg(py::handle obj, const std::string& name, Eigen::Index rows) {

@@ -22,7 +22,13 @@ using FaceMatrix = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
 /// Rows x 3 floats (any of int32/int64/float32/float64, any order), finite. `rows` < 0: any count.
 Eigen::MatrixX3d points_arg(py::handle obj, const std::string& name, Eigen::Index rows = -1);
-/// Quads: m x 4 integers in [0, num_vertices).
+/// Vertex ids of faces: an m x d integer array (any width) with ids in [0, num_vertices) and d in
+/// [min_corners, max_corners]; `shape_wanted` words the shape for the error, e.g. "(m, 4) (quads)".
+/// The ids as int64 in C order.
+using FaceIds = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+FaceIds face_ids_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices, Eigen::Index min_corners,
+                     Eigen::Index max_corners, const std::string& shape_wanted);
+/// Quads: face_ids_arg with d = 4.
 FaceMatrix faces_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices);
 /// A vector of `rows` finite values (rows < 0: any length).
 Eigen::VectorXd vector_arg(py::handle obj, const std::string& name, Eigen::Index rows = -1);

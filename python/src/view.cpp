@@ -9,27 +9,15 @@ namespace corrlap::python {
 
 namespace {
 
-// Faces of any one degree d in [3, 255]: an (m, d) integer array of ids in [0, num_vertices).
+// Faces of any one degree d in [3, 255] (the page fans them).
 FaceList polygons_arg(py::handle obj, const std::string& name, Eigen::Index num_vertices) {
-  const py::array a = numeric_array(obj, name);
-  const char kind = a.dtype().kind();
-  if (kind != 'i' && kind != 'u')
-    throw py::value_error(name + ": vertex ids must be integers, got dtype " + std::string(py::str(a.dtype())));
-  if (a.ndim() != 2 || a.shape(1) < 3 || a.shape(1) > 255)
-    throw py::value_error(name + ": expected shape (m, d) with 3 <= d <= 255 corners per face");
-  const auto ids = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+  const FaceIds ids = face_ids_arg(obj, name, num_vertices, 3, 255, "(m, d) with 3 <= d <= 255 corners per face");
   const std::int64_t* p = ids.data();
-  const Eigen::Index m = a.shape(0), d = a.shape(1);
+  const Eigen::Index m = ids.shape(0), d = ids.shape(1);
   FaceList faces;
   for (Eigen::Index f = 0; f < m; ++f) {
     faces.start_face();
-    for (Eigen::Index j = 0; j < d; ++j) {
-      const std::int64_t v = p[f * d + j];
-      if (v < 0 || v >= num_vertices)
-        throw py::value_error(name + ": face " + std::to_string(f) + " has vertex id " + std::to_string(v) +
-                              ", out of range [0, " + std::to_string(num_vertices) + ")");
-      faces.add_corner(int(v));
-    }
+    for (Eigen::Index j = 0; j < d; ++j) faces.add_corner(int(p[f * d + j]));
   }
   return faces;
 }
