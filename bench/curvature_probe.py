@@ -16,17 +16,24 @@ alpha0 = 10, which the analytic shapes keep.
     /usr/bin/python3 bench/curvature_probe.py passes N SHAPES R COUNT
         pass 1, then COUNT more solves, each with H estimated on the last result (ball of R
         voxels, its quad normals) and L, M of pass 1 (which a solver could keep factorized)
+    /usr/bin/python3 bench/curvature_probe.py ii N SHAPES R...
+        pass 1, then a second solve with the integral-invariant mean curvature
+        H = 8 / (3 R) - 4 V / (pi R^4) (V: the voxels' volume in a ball of R voxels, counted by
+        voxel centres) in balls centred on pass 1's result (on the staircase's own vertices, half
+        a voxel off the surface, V is off by about pi R^2 / 2)
     /usr/bin/python3 bench/curvature_probe.py bands N SHAPE
         the RMS error of H relative to the mean |H|, after 0, 4, 16 and 64 rounds of one-ring
         averaging (the error left at longer wavelengths), for H of the staircase and of pass 1
         in several balls (first grid shift only)
 
-SHAPES: comma-separated names of compare_surfaces' shapes. floor, second-pass and passes print the
-mean distance to the truth in voxels averaged over the 3 grid shifts."""
+SHAPES: comma-separated names of compare_surfaces' shapes. floor, second-pass, passes and ii print
+the mean distance to the truth in voxels averaged over the 3 grid shifts."""
 import os
 import sys
 
 import numpy as np
+import scipy.ndimage as ndi
+import scipy.signal as signal
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
@@ -65,6 +72,7 @@ class Input:
         a = np.load(volume)
         self.step = 2.0 / max(a.shape)  # the world step of digitize_volume
         centre = (np.array(a.shape) - 1) / 2.0
+        self.volume, self.centre = a, centre
         self.to_truth = lambda P: origin + h * (P / self.step + centre)
         self.V, self.F = corrlap.digitize_volume(a, threshold=0)
         self.tris = np.vstack([self.F[:, [0, 1, 2]], self.F[:, [0, 2, 3]]])
@@ -153,6 +161,24 @@ def passes(voxels, shapes, radius, count):
     table(shapes, keys, results)
 
 
+def integral_invariant(voxels, shapes, radii):
+    results, keys = {}, ["pass 1"] + ["ii %g" % r for r in radii]
+    for name, x in inputs(voxels, shapes):
+        row = {"pass 1": x.distance(x.P1)}
+        centres = (x.P1 / x.step + x.centre).T  # voxel index coordinates
+        for radius in radii:
+            r = int(np.ceil(radius))
+            g = np.arange(-r, r + 1)
+            ball = (g[:, None, None] ** 2 + g[None, :, None] ** 2 + g[None, None, :] ** 2 <= radius ** 2).astype(float)
+            count = signal.fftconvolve(x.volume.astype(float), ball, mode="same")
+            V = ndi.map_coordinates(count, centres, order=1)
+            H = (8.0 / (3.0 * radius) - 4.0 * V / (np.pi * radius ** 4)) / x.step
+            row["ii %g" % radius] = x.distance(x.solve(x.nf, H, 10.0))
+        for key, value in row.items():
+            results.setdefault((name, key), []).append(value)
+    table(shapes, keys, results)
+
+
 def bands(voxels, name):
     x = next(inputs(voxels, [name]))[1]
     n = len(x.V)
@@ -182,12 +208,14 @@ def bands(voxels, name):
 
 
 def main():
-    if len(sys.argv) < 4 or sys.argv[1] not in ("floor", "second-pass", "passes", "bands"):
+    if len(sys.argv) < 4 or sys.argv[1] not in ("floor", "second-pass", "passes", "ii", "bands"):
         print(__doc__)
         return 2
     mode, voxels = sys.argv[1], int(sys.argv[2])
     if mode == "bands":
         bands(voxels, sys.argv[3])
+    elif mode == "ii":
+        integral_invariant(voxels, sys.argv[3].split(","), [float(r) for r in sys.argv[4:]])
     elif mode == "passes":
         passes(voxels, sys.argv[3].split(","), float(sys.argv[4]), int(sys.argv[5]))
     elif mode == "floor":
