@@ -176,6 +176,10 @@ RegularizationCurvature regularization_curvature(const SurfelMesh& mesh, const N
   c.size = object_size(mesh, o);
   c.curvature_radius = o.curvature_radius ? *o.curvature_radius : default_curvature_radius(c.size, h, false);
   Stopwatch watch;
+  if (o.report_stage)
+    o.report_stage("mean curvature in balls of radius " + number_text(c.curvature_radius) + " (" +
+                   number_text(c.curvature_radius / h) + " voxels) at " + std::to_string(mesh.num_vertices()) +
+                   " vertices");
   // docs/math.md §9.2: H from the corrected curvature measures with the same normals (§8).
   // Principal edits need k1, k2 and their directions at every vertex; H alone is walked at sites
   // (§8.4) and interpolated.
@@ -325,6 +329,7 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     r.factor_flops = backend.factor_flops;
     return out;
   };
+  if (o.report_stage) o.report_stage("solving with alpha0 = " + number_text(r.alpha0));
   solved.push_back(solve_at(r.alpha));
   // Curvature edits move the surface away from the staircase on purpose: the bias test would undo them.
   const bool edited = o.h_scale != 1.0 || o.h_clamp || o.k1_edit.active() || o.k2_edit.active();
@@ -343,6 +348,10 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
                  max_regularization_alpha(surface_area(mesh), mesh.positions.cwiseAbs().maxCoeff()) * scale * scale);
     for (double next = next_alpha0(r.alpha0_trials, kAttachmentBiasLimit, largest); next > 0.0;
          next = next_alpha0(r.alpha0_trials, kAttachmentBiasLimit, largest)) {
+      if (o.report_stage)
+        o.report_stage("the result at alpha0 = " + number_text(r.alpha0_trials.back().alpha0) + " keeps " +
+                       number_text(r.alpha0_trials.back().bias) + " voxels from the input's local mean (limit " +
+                       number_text(kAttachmentBiasLimit) + "): solving with alpha0 = " + number_text(next));
       solved.push_back(solve_at(regularization_alpha(scale, next)));
       r.alpha0_trials.push_back({next, bias_of(solved.back().positions)});
     }

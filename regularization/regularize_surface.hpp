@@ -11,6 +11,7 @@
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <corrlap/regularization/solution_check.hpp>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -84,6 +85,10 @@ struct RegularizationOptions {
   /// The preconditioned solve stops when the error bound is below this many grid steps (0: to
   /// rounding). The direct solve is exact whatever it says.
   double solve_accuracy = kRegularizationSolveAccuracy;
+  /// Progress of a long run: called on the calling thread before the mean curvature and before
+  /// each solve (every trial of the automatic alpha0) with a line saying what comes, e.g.
+  /// "solving with alpha0 = 10". Empty: nothing is reported.
+  std::function<void(const std::string&)> report_stage;
 };
 
 /// Checks the options before any computation, in one wording for every front end (the CLI adds its

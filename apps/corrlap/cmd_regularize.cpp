@@ -51,6 +51,10 @@
 namespace corrlap::cli {
 namespace {
 
+// Surfaces from this many vertices take seconds per stage: regularize then prints a line before
+// the curvature and each solve (RegularizationOptions::report_stage).
+constexpr Eigen::Index kStageReportVertices = 100000;
+
 struct RegularizeArgs {
   SurfaceSource source;
   MethodOptions method;
@@ -244,6 +248,9 @@ void regularize_one(const RegularizeArgs& a, RegularizationOptions o, const Load
   // docs/math.md §9.2: vertex normals n (II by default: normalized sums of the face normals).
   const NormalFields normals = a.normals.resolve(surface, NormalKind::Vertex, "regularize");
   stages["normals_s"] = t.lap();
+  // Long runs say what they are doing (the curvature and each solve take seconds to minutes).
+  if (mesh.num_vertices() >= kStageReportVertices && is_output_rank())
+    o.report_stage = [](const std::string& stage) { std::cerr << "regularize: " << stage << "\n"; };
   const RegularizedSurface r = regularize_surface(surface, normals, o);
   for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
   stages["curvature_s"] = r.curvature_seconds;

@@ -8,6 +8,8 @@
 #include <corrlap/pipeline/load_surface.hpp>
 #include <corrlap/pipeline/surface_defaults.hpp>
 #include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "regularization/sphere_fixture.hpp"
@@ -137,4 +139,33 @@ TEST_CASE("regularize_surface, automatic alpha0: kept on a smooth sphere, raised
   CHECK(cube_auto.alpha0_trials.size() >= 2);
   CHECK(cube_auto.alpha0_trials.front().bias > kAttachmentBiasLimit);
   CHECK(d_auto < 0.8 * d_fixed);
+}
+
+TEST_CASE("regularize_surface reports its stages: the curvature, then one line per solve of the automatic alpha0") {
+  const RegularizationOptions defaults;
+  const std::vector<double> values = cube_volume(24, 16);
+  const LoadedSurface cube = load_surface(VolumeArrayInput::c_order(values, Eigen::Vector3i(24, 24, 24)));
+  const NormalFields n = resolve_normals(cube, NormalKind::Vertex, NormalRequest{});
+  std::vector<std::string> lines;
+  RegularizationOptions o;
+  o.report_stage = [&](const std::string& line) { lines.push_back(line); };
+  const RegularizedSurface r = regularize_surface(cube, n, o);
+  REQUIRE(r.alpha0_trials.size() >= 2);  // the cube raises alpha0 (the test above)
+  REQUIRE(lines.size() == 1 + r.alpha0_trials.size());
+  CHECK(lines[0].find("mean curvature in balls of radius") == 0);
+  CHECK(lines[1] == "solving with alpha0 = 10");
+  // Each raise names the last trial's bias and the next alpha0, as the trials record them.
+  for (std::size_t t = 1; t < r.alpha0_trials.size(); ++t) {
+    std::ostringstream bias, next;
+    bias << r.alpha0_trials[t - 1].bias;
+    next << r.alpha0_trials[t].alpha0;
+    CHECK(lines[1 + t].find("keeps " + bias.str() + " voxels") != std::string::npos);
+    CHECK(lines[1 + t].find("solving with alpha0 = " + next.str()) != std::string::npos);
+  }
+  // The same result as without a report, and a fixed alpha0 solves once.
+  CHECK((regularize_surface(cube, n, defaults).mesh.positions - r.mesh.positions).cwiseAbs().maxCoeff() == 0.0);
+  lines.clear();
+  o.alpha0_auto = false;
+  regularize_surface(cube, n, o);
+  CHECK(lines.size() == 2);
 }
