@@ -31,16 +31,10 @@ void run(const RenderArgs& a) {
   if (!a.size.empty()) {
     // Each part judged, the message quoting the whole text the user gave.
     const auto pixels = [&](const std::string& part) {
-      std::size_t used = 0;
-      double v = 0.0;
-      try {
-        v = std::stod(part, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != part.size() || !std::isfinite(v) || v != std::floor(v))
+      const std::optional<double> v = whole_number(part);
+      if (!v || *v != std::floor(*v))
         throw InputError("--size '" + a.size + "': expected WIDTHxHEIGHT or WIDTH in whole pixels, e.g. 800x600");
-      return int(std::clamp(v, -1.0, 1e6));
+      return int(std::clamp(*v, -1.0, 1e6));
     };
     const std::size_t x = a.size.find('x');
     o.width = pixels(a.size.substr(0, x));

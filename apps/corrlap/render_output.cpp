@@ -9,21 +9,26 @@
 
 namespace corrlap::cli {
 
+std::optional<double> whole_number(const std::string& text) {
+  std::size_t used = 0;
+  double x = 0.0;
+  try {
+    x = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used != text.size() || !std::isfinite(x)) return std::nullopt;
+  return x;
+}
+
 std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count) {
   std::vector<double> v;
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double x = 0.0;
-    try {
-      x = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(x))
-      throw InputError(option + " '" + text + "': '" + item + "' is not a number");
-    v.push_back(x);
+    const std::optional<double> x = whole_number(item);
+    if (!x) throw InputError(option + " '" + text + "': '" + item + "' is not a number");
+    v.push_back(*x);
   }
   if (v.size() != count)
     throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " comma-separated numbers");

@@ -12,6 +12,10 @@
 
 namespace corrlap::cli {
 
+/// The finite number that is the whole of `text` ("0.9", "1e3"), or none (empty, trailing
+/// characters, NaN, infinite).
+std::optional<double> whole_number(const std::string& text);
+
 /// `count` comma-separated finite numbers of an option's text ("1,-1.4,0.9"); InputError quoting
 /// the text and the option otherwise.
 std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count);
