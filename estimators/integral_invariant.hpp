@@ -3,6 +3,7 @@
 // the inner and outer voxel of each surfel, averaged; normal = eigenvector of the smallest
 // eigenvalue, oriented by the trivial normal.
 #include <Eigen/Core>
+#include <corrlap/core/progress.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/core/voxel_grid.hpp>
 #include <cstdint>
@@ -60,9 +61,6 @@ struct BallMoments {
   /// Unnormalized covariance sum yy^T - (1/m0) (sum y)(sum y)^T (translation invariant); 0 if empty.
   Eigen::Matrix3d covariance() const;
 };
-
-/// Progress callback: (done, total) in arbitrary units; may be called from worker threads.
-using ProgressFn = std::function<void(std::int64_t done, std::int64_t total)>;
 
 /// Moments at each voxel centre, brute force over the kernel cube (slow; reference for tests).
 std::vector<BallMoments> ii_moments_brute_force(const VoxelGrid& grid, double digital_radius, double h,

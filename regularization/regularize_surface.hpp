@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <corrlap/core/config.hpp>
 #include <corrlap/core/normal_fields.hpp>
+#include <corrlap/core/progress.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/regularization/attachment_bias.hpp>
 #include <corrlap/regularization/curvature_editing.hpp>
@@ -88,7 +89,7 @@ struct RegularizationOptions {
   /// Progress of a long run: called on the calling thread before the mean curvature and before
   /// each solve (every trial of the automatic alpha0) with a line saying what comes, e.g.
   /// "solving with alpha0 = 10". Empty: nothing is reported.
-  std::function<void(const std::string&)> report_stage;
+  ProgressLine report_stage;
 };
 
 /// Checks the options before any computation, in one wording for every front end (the CLI adds its

@@ -1,9 +1,6 @@
 #include "normal_options.hpp"
 
-#include <atomic>
 #include <iostream>
-#include <memory>
-#include <mutex>
 
 #include "library_errors.hpp"
 #include "validators.hpp"
@@ -11,20 +8,9 @@
 namespace corrlap::cli {
 
 ProgressFn stderr_progress(const std::string& what) {
-  auto last = std::make_shared<std::atomic<int>>(0);
-  auto mutex = std::make_shared<std::mutex>();
-  return [what, last, mutex](std::int64_t done, std::int64_t total) {
-    if (total < 20000) return;  // short runs: stay quiet
-    const int decile = int(10 * done / total);
-    int prev = last->load();
-    while (decile > prev) {
-      if (last->compare_exchange_weak(prev, decile)) {
-        std::lock_guard<std::mutex> lock(*mutex);
-        std::cerr << what << ": " << 10 * decile << "%\n";
-        break;
-      }
-    }
-  };
+  // Short runs stay quiet.
+  return tenths_progress(
+      what, [](const std::string& line) { std::cerr << line << "\n"; }, 20000);
 }
 
 void NormalOptions::add_options(CLI::App& cmd) {

@@ -70,6 +70,16 @@ def _thin_parts(value):
     raise TypeError(f"thin_parts: expected 'shrink', 'keep' or None, got {type(value).__name__} {value!r}")
 
 
+def _progress(progress):
+    """The progress keyword for _core: None, a callable, or True for lines on stderr."""
+    if progress is True:
+        import sys
+        return lambda line: print(line, file=sys.stderr, flush=True)
+    if progress is False:
+        return None
+    return progress
+
+
 def _real(value, name, required=False):
     """A real argument as a float, None (the default) as None. Its range is the library's to check
     (ValueError naming the parameter); here only the type: a bool, a string or a complex number is
@@ -178,7 +188,7 @@ def write_volume(path, array, affine=None, space=None):
 
 def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, method="fem", alpha0="auto",
                       curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
-                      space=None, curvature_spacing=None, thin_parts=None, **params):
+                      space=None, curvature_spacing=None, thin_parts=None, progress=None, **params):
     """The regularized surface of a volume, as `corrlap regularize --volume` computes it (II normals
     from the voxels, docs/regularization.md), in physical coordinates.
 
@@ -197,6 +207,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
                or 'LPS' (x and y flipped from the file's space, as `--output-space`; ValueError for a
                file that names no space, or with an array)
     thin_parts the II normals' balls where a part is thinner than them, as ii_normals (None: "shrink")
+    progress   as regularize; here also the II normals by tenths ("ii normals: 40%")
 
     Returns V (#V, 3) in physical coordinates and F (#F, 4) int64 quads facing outwards.
     """
@@ -209,7 +220,7 @@ def regularize_volume(volume, label=None, threshold=None, affine=None, h=None, m
         _alpha0(alpha0), _real(curvature_radius, "curvature_radius"),
         _real(curvature_spacing, "curvature_spacing"), _real(size, "size"),
         str(solver), dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"),
-        "" if space is None else str(space), _thin_parts(thin_parts))
+        "" if space is None else str(space), _thin_parts(thin_parts), _progress(progress))
     _warn(warnings)
     return V, F
 
@@ -392,7 +403,7 @@ def eigs(L, M, k=49, solver=None, eigen_solver="shift-invert", positions=None, p
 
 def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=None, alpha0="auto",
                curvature_radius=None, size=None, solver="cholmod", solver_options=None, solve_accuracy=None,
-               return_curvature=False, allow_nonmanifold=False, curvature_spacing=None, **params):
+               return_curvature=False, allow_nonmanifold=False, curvature_spacing=None, progress=None, **params):
     """Regularized positions of a closed digital surface (paper 4.1, docs/regularization.md): the
     positions P minimizing the distance to V plus the corrected Dirichlet energy, with
     Delta p = -2 H n from the corrected mean curvature H.
@@ -414,13 +425,19 @@ def regularize(V, F, face_normals=None, vertex_normals=None, method="fem", h=Non
     corner are split into one vertex per sheet (docs/math.md 1.4). A mesh from elsewhere is taken as
     it is. allow_nonmanifold: accepted and ignored (it let pinched digital surfaces through before
     they were split).
+    progress: None, True (each line printed to stderr, as `corrlap regularize` prints them on large
+    surfaces), or a callable taking one str, called before each long stage ("mean curvature in
+    balls of radius ...", "solving with alpha0 = 10", each further trial of alpha0='auto'). Ctrl-C
+    stops the computation at its next stage, with or without progress; an exception raised by the
+    callable stops it too and is raised here.
 
     Returns P (#V, 3), and H (#V,) too when return_curvature.
     """
     P, H, warnings = _core.regularize(V, F, face_normals, vertex_normals, str(method), _real(h, "h"), params,
                                       _alpha0(alpha0), _real(curvature_radius, "curvature_radius"),
                                       _real(curvature_spacing, "curvature_spacing"), _real(size, "size"), str(solver),
-                                      dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"))
+                                      dict(solver_options or {}), _real(solve_accuracy, "solve_accuracy"),
+                                      _progress(progress))
     _warn(warnings)
     return (P, H) if return_curvature else P
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace corrlap::python {
 namespace {
@@ -259,6 +260,35 @@ std::optional<bool> thin_parts_arg(const std::optional<std::string>& thin_parts)
   if (*thin_parts != "shrink" && *thin_parts != "keep")
     throw py::value_error("thin_parts: '" + *thin_parts + "': expected 'shrink' or 'keep'");
   return *thin_parts == "shrink";
+}
+
+ProgressLine progress_arg(const py::object& progress) {
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+    throw py::type_error("progress: expected None or a callable taking one str, got " +
+                         std::string(py::str(py::type::of(progress).attr("__name__"))));
+  // Shared by the copies of the returned function, which the computation may drop without the GIL:
+  // the callable is released with it taken.
+  struct State {
+    py::object callable;
+    std::atomic<bool> stopped{false};
+    ~State() {
+      py::gil_scoped_acquire gil;
+      callable = py::object();
+    }
+  };
+  auto state = std::make_shared<State>();
+  state->callable = progress;
+  return [state](const std::string& line) {
+    if (state->stopped) return;
+    py::gil_scoped_acquire gil;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (!state->callable.is_none()) state->callable(py::str(line));
+    } catch (...) {
+      state->stopped = true;
+      throw;
+    }
+  };
 }
 
 }  // namespace corrlap::python

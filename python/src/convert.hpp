@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Sparse>
 #include <corrlap/core/config.hpp>
+#include <corrlap/core/progress.hpp>
 #include <corrlap/core/surfel_mesh.hpp>
 #include <corrlap/estimators/normal_resolution.hpp>
 #include <corrlap/pipeline/load_surface.hpp>
@@ -19,6 +20,14 @@ namespace corrlap::python {
 
 namespace py = pybind11;
 using FaceMatrix = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+/// The `progress=` keyword: None or a callable taking one str. The line function returned calls it
+/// with each progress line (the GIL taken, from whichever thread reports) and, callable or not,
+/// checks for Ctrl-C, so that a long computation stops at its next report. What the callable
+/// raises, KeyboardInterrupt included, leaves through the computation as py::error_already_set and
+/// is raised in Python; later reports call nothing. TypeError for anything else than None or a
+/// callable.
+ProgressLine progress_arg(const py::object& progress);
 
 /// Rows x 3 floats (any of int32/int64/float32/float64, any order), finite. `rows` < 0: any count.
 Eigen::MatrixX3d points_arg(py::handle obj, const std::string& name, Eigen::Index rows = -1);

@@ -42,13 +42,15 @@ void bind_regularization(py::module_& m) {
       [](py::handle V, py::handle F, py::handle face_normals, py::handle vertex_normals, const std::string& method,
          std::optional<double> h, const py::dict& params, std::optional<double> alpha0,
          std::optional<double> curvature_radius, std::optional<double> curvature_spacing, std::optional<double> size,
-         const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy) {
+         const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy,
+         const py::object& progress) {
         const SurfelMesh mesh = mesh_arg(V, F, h);
         const NormalRequest request = given_normals_arg(face_normals, vertex_normals, mesh);
         if (request.face_normals.rows() == 0 && request.vertex_normals.rows() == 0)
           throw py::value_error("face_normals, vertex_normals: give one of them");
-        const RegularizationOptions o = regularization_options_arg(
+        RegularizationOptions o = regularization_options_arg(
             method, params, alpha0, curvature_radius, curvature_spacing, size, solver, solver_options, solve_accuracy);
+        o.report_stage = progress_arg(progress);
         const RegularizedSurface r = [&] {
           py::gil_scoped_release release;
           // As `corrlap regularize`: the same surface policy, and vertex normals the normalized sum of
@@ -64,7 +66,7 @@ void bind_regularization(py::module_& m) {
       },
       py::arg("V"), py::arg("F"), py::arg("face_normals"), py::arg("vertex_normals"), py::arg("method"), py::arg("h"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("curvature_spacing"), py::arg("size"),
-      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"));
+      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("progress"));
 }
 
 }  // namespace corrlap::python

@@ -192,8 +192,9 @@ void bind_surface(py::module_& m) {
          std::optional<double> h, const std::string& method, const py::dict& params, std::optional<double> alpha0,
          std::optional<double> curvature_radius, std::optional<double> curvature_spacing, std::optional<double> size,
          const std::string& solver, const py::dict& solver_options, std::optional<double> solve_accuracy,
-         const std::string& space, std::optional<std::string> thin_parts) {
+         const std::string& space, std::optional<std::string> thin_parts, const py::object& progress) {
         const InsideRule inside = inside_arg(label, threshold);
+        const ProgressLine progress_line = progress_arg(progress);
         NormalRequest ii_normals;  // II from the voxels, with the voxel defaults but for the thin parts asked
         if (const std::optional<bool> shrink = thin_parts_arg(thin_parts))
           ii_normals.ii = default_ii_params(/*implicit_shape=*/false, {}, {}, shrink);
@@ -217,8 +218,10 @@ void bind_surface(py::module_& m) {
           if (!affine.is_none()) in.geometry = geometry_arg(affine);
           input = in;
         }
-        const RegularizationOptions o = regularization_options_arg(
+        RegularizationOptions o = regularization_options_arg(
             method, params, alpha0, curvature_radius, curvature_spacing, size, solver, solver_options, solve_accuracy);
+        o.report_stage = progress_line;
+        ii_normals.progress = tenths_progress("ii normals", progress_line);
         std::vector<std::string> warnings;
         SurfelMesh out;
         {
@@ -252,7 +255,8 @@ void bind_surface(py::module_& m) {
       },
       py::arg("volume"), py::arg("label"), py::arg("threshold"), py::arg("affine"), py::arg("h"), py::arg("method"),
       py::arg("params"), py::arg("alpha0"), py::arg("curvature_radius"), py::arg("curvature_spacing"), py::arg("size"),
-      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"), py::arg("thin_parts"));
+      py::arg("solver"), py::arg("solver_options"), py::arg("solve_accuracy"), py::arg("space"), py::arg("thin_parts"),
+      py::arg("progress"));
   m.def(
       "read_mesh",
       [](const std::string& path) {

@@ -237,3 +237,78 @@ def test_regularize_curvature_spacing():
     assert np.abs(sites[1] - every[1]).mean() < 0.05 * np.abs(every[1]).mean()
     with pytest.raises(ValueError, match="curvature site spacing"):
         corrlap.regularize(V, F, face_normals=N, curvature_spacing=-1)
+
+
+def test_regularize_volume_reports_progress():
+    values, _ = ellipsoid((1.0, 1.0, 1.0))
+    lines = []
+    V, F = corrlap.regularize_volume(values, h=1.0, progress=lines.append)
+    # The II normals by tenths, in order (a tenth the loop's chunks jump over is not reported), then
+    # the curvature and the first solve, as the CLI's lines.
+    tenths = [line for line in lines if line.startswith("ii normals: ")]
+    percents = [int(line[len("ii normals: "):-1]) for line in tenths]
+    assert percents == sorted(set(percents)) and percents[-1] == 100
+    assert set(percents) <= set(range(10, 101, 10))
+    rest = lines[len(tenths):]
+    assert rest[0].startswith("mean curvature in balls of radius ")
+    assert rest[1] == "solving with alpha0 = 10"
+    # Reporting changes nothing.
+    V0, F0 = corrlap.regularize_volume(values, h=1.0)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)
+    with pytest.raises(TypeError, match="progress: expected None or a callable"):
+        corrlap.regularize_volume(values, h=1.0, progress="yes")
+
+
+def test_an_exception_in_progress_stops_the_computation():
+    values, _ = ellipsoid((1.0, 1.0, 1.0))
+    calls = []
+
+    def stop(line):
+        calls.append(line)
+        raise KeyError("stopped at " + line)
+
+    # From the II normals' loop (worker threads report too) ...
+    with pytest.raises(KeyError, match="stopped at ii normals: "):
+        corrlap.regularize_volume(values, h=1.0, progress=stop)
+    assert len(calls) == 1 and calls[0].startswith("ii normals: ")
+    # ... and from the regularization's stages, on a mesh.
+    V, F = corrlap.digitize_volume(values, h=1.0)
+    N = np.cross(V[F[:, 2]] - V[F[:, 0]], V[F[:, 3]] - V[F[:, 1]])
+    N /= np.linalg.norm(N, axis=1)[:, None]
+    calls.clear()
+    with pytest.raises(KeyError, match="stopped at mean curvature"):
+        corrlap.regularize(V, F, face_normals=N, progress=stop)
+    assert len(calls) == 1
+    # A callable that returns normally lets it finish, with the same result as without one.
+    seen = []
+    assert np.array_equal(corrlap.regularize(V, F, face_normals=N, progress=seen.append),
+                          corrlap.regularize(V, F, face_normals=N))
+    assert seen[0].startswith("mean curvature") and seen[1] == "solving with alpha0 = 10"
+
+
+def test_ctrl_c_stops_a_regularization_at_its_next_stage():
+    import collections
+    import signal
+    import threading
+    import time
+
+    values, _ = ellipsoid((1.0, 1.0, 1.0), axes=(40.0, 30.0, 24.0))
+    # SIGINT once the computation has reported once. The progress callable is a builtin (no Python
+    # code runs in the main thread until the computation returns), so only the library's own check
+    # at its next report can raise KeyboardInterrupt before the end.
+    lines = collections.deque()
+
+    def interrupt():
+        while not lines:
+            time.sleep(0.001)
+        signal.raise_signal(signal.SIGINT)
+
+    timer = threading.Thread(target=interrupt)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            corrlap.regularize_volume(values, h=1.0, progress=lines.append)
+    finally:
+        timer.join()
+    # Stopped before the solve was announced.
+    assert 1 <= len(lines) and "solving with alpha0 = 10" not in lines
