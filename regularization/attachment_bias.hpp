@@ -40,15 +40,18 @@ double alpha0_for_wavelength(double wavelength, double size_steps);
 ///   staircase  #V by 3 input positions
 ///   result     #V by 3 regularized positions
 ///   normals    #V by 3 unit normals
-///   mass       #V vertex masses (> 0)
+///   mass       #V vertex masses, the weights of the mean (>= 0, some > 0: 0 leaves a vertex out of
+///              the mean, not out of the smoothing)
 double attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& faces,
                        const Eigen::MatrixX3d& staircase, const Eigen::MatrixX3d& result,
                        const Eigen::MatrixX3d& normals, const Eigen::VectorXd& mass, double step,
                        int rounds = kAttachmentBiasRounds);
 
-/// One trial of the automatic choice: the alpha0 solved with and the bias of its result.
+/// One trial of the automatic choice: the alpha0 solved with and the bias of its result, or, when
+/// `estimated`, the bias estimated from patches without a solve (patch_bias.hpp).
 struct Alpha0Trial {
   double alpha0 = 0.0, bias = 0.0;
+  bool estimated = false;
 };
 
 /// The slope of the bias against alpha0 in log-log between trials a and b (a solved first):

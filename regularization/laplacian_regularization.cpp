@@ -171,6 +171,23 @@ PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMa
   curvature_rhs_ = curvature_rhs(L, normals, H);
 }
 
+PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMatrix<double>& L,
+                                                           const Eigen::SparseMatrix<double>& M,
+                                                           const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& g,
+                                                           LinearSolver& solver)
+    : L_(L), p_(p), solver_(solver) {
+  // The checks of L, M and p; the normals and H they also check are not used here.
+  Eigen::MatrixX3d unit = Eigen::MatrixX3d::Zero(p.rows(), 3);
+  unit.col(0).setOnes();
+  check_inputs(L, M, p, unit, Eigen::VectorXd::Zero(p.rows()));
+  if (g.rows() != p.rows() || !g.allFinite())
+    throw InputError("regularization: the curvature term must be finite, one row per vertex");
+  lumped_mass_ = lumped_mass(M);
+  mass_ = lumped_mass_.diagonal();
+  inverse_mass_ = mass_.cwiseInverse();
+  curvature_rhs_ = g;
+}
+
 Eigen::MatrixX3d PreconditionedRegularization::solve(double alpha, double accuracy, SolverReport* report,
                                                      double* error_bound, const Eigen::MatrixX3d* start) {
   if (!(accuracy >= 0.0) || !std::isfinite(accuracy))

@@ -77,6 +77,11 @@ class PreconditionedRegularization {
   PreconditionedRegularization(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H,
                                LinearSolver& solver);
+  /// The same system with its curvature term given whole: (L M_l^{-1} L + alpha M_l) q = alpha M_l p + g,
+  /// g (#V x 3, finite) in place of -2 L (H n): patch_attachment_bias solves on a patch with the
+  /// positions outside it held, where the curvature term has the held vertices' part too.
+  PreconditionedRegularization(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
+                               const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& g, LinearSolver& solver);
   /// p' for this alpha, as regularize_positions_preconditioned, with CG started from `start`
   /// (#V x 3, finite) when given, else from 0.
   Eigen::MatrixX3d solve(double alpha, double accuracy = 0.0, SolverReport* report = nullptr,

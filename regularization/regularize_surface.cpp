@@ -9,6 +9,7 @@
 #include <corrlap/discretizations/registry.hpp>
 #include <corrlap/estimators/corrected_curvature.hpp>
 #include <corrlap/regularization/attachment_bias.hpp>
+#include <corrlap/regularization/patch_bias.hpp>
 #include <corrlap/regularization/surface_quality.hpp>
 #include <corrlap/surface/extract_surface.hpp>
 #include <numbers>
@@ -300,8 +301,10 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
         double bound = 0.0;
         analyzed = !preconditioned;
         if (!preconditioned) preconditioned.emplace(ops.L, ops.M, mesh.positions, r.normals, r.H, *solver);
-        // A later trial starts from the last one's positions: a larger alpha0 moves them less.
-        const Eigen::MatrixX3d* start = solved.empty() ? nullptr : &solved.back().positions;
+        // A later trial starts from the last one's positions (a larger alpha0 moves them less), an
+        // estimated one has none.
+        const Eigen::MatrixX3d* start =
+            solved.empty() || solved.back().positions.rows() == 0 ? nullptr : &solved.back().positions;
         out.positions = preconditioned->solve(alpha, o.solve_accuracy * step, &cg, &bound, start);
         out.scheme = "preconditioned-cg";
         out.iterations = cg.iterations;
@@ -329,10 +332,32 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     r.factor_flops = backend.factor_flops;
     return out;
   };
-  if (o.report_stage) o.report_stage("solving with alpha0 = " + number_text(r.alpha0));
-  solved.push_back(solve_at(r.alpha));
   // Curvature edits move the surface away from the staircase on purpose: the bias test would undo them.
   const bool edited = o.h_scale != 1.0 || o.h_clamp || o.k1_edit.active() || o.k2_edit.active();
+  const bool automatic = o.alpha0_auto && !edited && r.alpha0 > 0.0;
+  // docs/math.md §9.5: on a large surface the first trial's bias is estimated from patches first;
+  // far above the limit, its result would not be kept and its solve is skipped.
+  // The patches are solved as the preconditioned scheme solves, which needs a direct backend.
+  if (automatic && r.solver != "cg" && mesh.num_vertices() >= o.patch_bias_min_vertices) {
+    const PatchBiasOptions patch_options;
+    if (o.report_stage)
+      o.report_stage("estimating the bias at alpha0 = " + number_text(r.alpha0) + " from " +
+                     std::to_string(patch_options.patches) + " patches");
+    try {
+      const PatchBias estimate = patch_attachment_bias(mesh.faces, ops.L, ops.M, mesh.positions, r.normals, r.H,
+                                                       r.alpha, alpha_step, o.solver, patch_options);
+      if (estimate.bias >= kPatchBiasSkipFactor * kAttachmentBiasLimit) {
+        r.alpha0_trials.push_back({r.alpha0, estimate.bias, /*estimated=*/true});
+        solved.emplace_back();  // no positions: solved below if it is the one kept
+      }
+    } catch (const SolverError&) {
+      // L not negative semi-definite (the whole solve then falls back to the direct scheme): no estimate.
+    }
+  }
+  if (solved.empty()) {
+    if (o.report_stage) o.report_stage("solving with alpha0 = " + number_text(r.alpha0));
+    solved.push_back(solve_at(r.alpha));
+  }
   if (o.alpha0_auto && !edited) {
     // docs/math.md §9.4: raise alpha0 while the result keeps away from the staircase's local mean
     // and the raise buys the bias back.
@@ -340,7 +365,7 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     const auto bias_of = [&](const Eigen::MatrixX3d& q) {
       return attachment_bias(mesh.faces, mesh.positions, q, r.normals, mass, alpha_step);
     };
-    r.alpha0_trials.push_back({r.alpha0, bias_of(solved.back().positions)});
+    if (r.alpha0_trials.empty()) r.alpha0_trials.push_back({r.alpha0, bias_of(solved.back().positions)});
     // The largest alpha0 the solve represents on this surface (check_regularization_options).
     const double scale = alpha_step * r.size;
     const double largest =
@@ -349,7 +374,8 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     for (double next = next_alpha0(r.alpha0_trials, kAttachmentBiasLimit, largest); next > 0.0;
          next = next_alpha0(r.alpha0_trials, kAttachmentBiasLimit, largest)) {
       if (o.report_stage)
-        o.report_stage("the result at alpha0 = " + number_text(r.alpha0_trials.back().alpha0) + " keeps " +
+        o.report_stage(std::string(r.alpha0_trials.back().estimated ? "the estimate" : "the result") +
+                       " at alpha0 = " + number_text(r.alpha0_trials.back().alpha0) + " keeps " +
                        number_text(r.alpha0_trials.back().bias) + " voxels from the input's local mean (limit " +
                        number_text(kAttachmentBiasLimit) + "): solving with alpha0 = " + number_text(next));
       solved.push_back(solve_at(regularization_alpha(scale, next)));
@@ -359,6 +385,13 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
     r.alpha0 = r.alpha0_trials[kept].alpha0;
     r.alpha = regularization_alpha(scale, r.alpha0);
     solved.resize(kept + 1);
+    if (r.alpha0_trials[kept].estimated) {
+      // The raise bought less than it should (the estimate was too high): the first trial is kept
+      // after all, solved now.
+      if (o.report_stage) o.report_stage("solving with alpha0 = " + number_text(r.alpha0));
+      solved.back() = solve_at(r.alpha);
+      r.alpha0_trials.push_back({r.alpha0, bias_of(solved.back().positions)});
+    }
   }
   Solved& result = solved.back();
   r.mesh.positions = std::move(result.positions);

@@ -10,6 +10,7 @@
 #include <corrlap/regularization/attachment_bias.hpp>
 #include <corrlap/regularization/curvature_editing.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
+#include <corrlap/regularization/patch_bias.hpp>
 #include <corrlap/regularization/solution_check.hpp>
 #include <cstdint>
 #include <functional>
@@ -72,6 +73,9 @@ struct RegularizationOptions {
   /// back, raise alpha0 and solve again (not from alpha0 = 0, no attachment asked, nor with curvature
   /// edits, which move the surface away on purpose). False: alpha0 as given (the paper's protocol).
   bool alpha0_auto = true;
+  /// From this many vertices, the automatic choice first estimates the bias at alpha0 from patches
+  /// and skips that solve when the estimate is far above the limit (patch_bias.hpp, docs/math.md §9.5).
+  Eigen::Index patch_bias_min_vertices = kPatchBiasMinVertices;
   /// The h of alpha when the positions' error is not the mesh's own step (a subdivided coarse
   /// staircase, paper §4.2: the coarse voxel size); default the mesh's grid step.
   std::optional<double> alpha_step;
@@ -112,8 +116,8 @@ struct RegularizedSurface {
   Eigen::MatrixX3d normals;  ///< #V x 3 unit normals n used: the input's, or n' after principal edits
   double h = 0.0, size = 1.0, curvature_radius = 0.0, alpha = 0.0;
   double alpha0 = 0.0;  ///< the alpha0 of the result (the options', or the automatic choice's)
-  /// With alpha0_auto: every alpha0 solved with and the bias of its result, in order (the last is
-  /// the result's).
+  /// With alpha0_auto: every alpha0 tried and the bias of its result (or its estimate), in order;
+  /// alpha0 names the one kept (an estimated trial that is kept is solved and listed again).
   std::vector<Alpha0Trial> alpha0_trials;
   std::string solver;  ///< backend name
   /// "preconditioned-cg" (regularize_positions_preconditioned, the default with a direct backend),

@@ -280,7 +280,10 @@ nlohmann::json regularization_metrics(const RegularizeArgs& a, const Regularizat
   m["alpha"] = r.alpha;
   if (o.alpha0_auto) {
     nlohmann::json trials = nlohmann::json::array();
-    for (const Alpha0Trial& t : r.alpha0_trials) trials.push_back({{"alpha0", t.alpha0}, {"bias", t.bias}});
+    for (const Alpha0Trial& t : r.alpha0_trials) {
+      trials.push_back({{"alpha0", t.alpha0}, {"bias", t.bias}});
+      if (t.estimated) trials.back()["estimated"] = true;
+    }
     m["alpha0_auto"] = {{"bias_limit", kAttachmentBiasLimit}, {"trials", trials}};
   }
   m["h_scale"] = a.h_scale;
