@@ -1,8 +1,12 @@
 #include "patch_bias.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <corrlap/backends/registry.hpp>
+#include <corrlap/core/config.hpp>
 #include <corrlap/core/error.hpp>
 #include <corrlap/regularization/laplacian_regularization.hpp>
 #include <string>
@@ -22,7 +26,7 @@ int patch_rings(double alpha, double step, const PatchBiasOptions& options) {
 PatchBias patch_attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& faces,
                                 const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                 const Eigen::MatrixX3d& staircase, const Eigen::MatrixX3d& normals,
-                                const Eigen::VectorXd& H, double alpha, double step, const Config& solver,
+                                const Eigen::VectorXd& H, double alpha, double step,
                                 const PatchBiasOptions& options) {
   const Eigen::Index n = staircase.rows();
   if (L.rows() != n || L.cols() != n || M.rows() != n || M.cols() != n || normals.rows() != n || H.size() != n)
@@ -52,10 +56,26 @@ PatchBias patch_attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eige
       for (int k = 0; k < 4; ++k) face_ids[std::size_t(next[std::size_t(faces(f, k))]++)] = f;
   }
 
-  std::vector<int> depth(std::size_t(n), -1);  // ring of each vertex in the current patch, -1 outside
-  std::vector<int> local(std::size_t(n), -1);
-  double weighted = 0.0, weight = 0.0;
-  for (int k = 0; k < options.patches; ++k) {
+  // Per thread: the ring of each vertex in the current patch and its local id, -1 outside.
+  struct Scratch {
+    std::vector<int> depth, local;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch([n] {
+    return Scratch{std::vector<int>(std::size_t(n), -1), std::vector<int>(std::size_t(n), -1)};
+  });
+  // Per patch, summed in order afterwards (the same sum whatever the threads).
+  struct Result {
+    double weighted = 0.0, weight = 0.0;
+    Eigen::Index vertices = 0, core_vertices = 0;
+  };
+  std::vector<Result> results(std::size_t(options.patches));
+  // Small independent solves: one per task, each factorized by Eigen's simplicial Cholesky (no BLAS,
+  // whose threads CHOLMOD's supernodal kernels would fight over).
+  Config eigen_solver;
+  eigen_solver.set("solver", "eigen-llt");
+  const auto solve_patch = [&](int k) {
+    std::vector<int>& depth = scratch.local().depth;
+    std::vector<int>& local = scratch.local().local;
     // Seeds spread over the vertex order, which follows the grid's scan on digital surfaces.
     const Eigen::Index seed = Eigen::Index((double(k) + 0.5) * double(n) / double(options.patches));
     // Breadth-first over L's graph (its exact zeros are no edges) up to `rings`.
@@ -114,21 +134,39 @@ PatchBias patch_attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eige
     for (std::size_t r = 0; r < kept.size(); ++r)
       for (int c = 0; c < 4; ++c) patch_faces(Eigen::Index(r), c) = local[std::size_t(faces(kept[r], c))];
 
-    auto patch_solver = make_linear_solver(solver, kDefaultLinearSolver);
+    auto patch_solver = make_linear_solver(eigen_solver, kDefaultLinearSolver);
     // For q = p + u: (L M_l^-1 L + alpha M_l) q = alpha M_l p - L M_l^-1 (r - L p), with p the
     // attachment target (its positions also order the factorization).
     const Eigen::MatrixX3d g = -(L_patch * (r_over_m - w.cwiseInverse().asDiagonal() * (L_patch * p)));
     PreconditionedRegularization regularization(L_patch, M_patch, p, g, *patch_solver);
     const Eigen::MatrixX3d q = regularization.solve(alpha, options.accuracy * step);
-    const double core_weight = core_mass.sum();
-    weighted += attachment_bias(patch_faces, p, q, nrm, core_mass, step, options.rounds) * core_weight;
-    weight += core_weight;
-    ++out.patches;
-    out.vertices += m;
-    out.core_vertices += (core_mass.array() > 0.0).count();
+    Result& result = results[std::size_t(k)];
+    result.weight = core_mass.sum();
+    result.weighted = attachment_bias(patch_faces, p, q, nrm, core_mass, step, options.rounds) * result.weight;
+    result.vertices = m;
+    result.core_vertices = (core_mass.array() > 0.0).count();
     for (const Eigen::Index v : patch) depth[std::size_t(v)] = local[std::size_t(v)] = -1;
+  };
+  // In rounds of every kBatches-th patch, each round spread over the whole vertex order, so that
+  // the estimate after any round samples the whole surface.
+  constexpr int kBatches = 4;
+  for (int batch = 0; batch < std::min(kBatches, options.patches); ++batch) {
+    const int count = (options.patches - batch + kBatches - 1) / kBatches;
+    tbb::parallel_for(0, count, [&](int i) { solve_patch(batch + i * kBatches); });
+    out.patches += count;
+    double weighted = 0.0, weight = 0.0;
+    out.vertices = out.core_vertices = 0;
+    for (int k = 0; k < options.patches; ++k) {
+      if (k % kBatches > batch) continue;
+      const Result& result = results[std::size_t(k)];
+      weighted += result.weighted;
+      weight += result.weight;
+      out.vertices += result.vertices;
+      out.core_vertices += result.core_vertices;
+    }
+    out.bias = weight > 0.0 ? weighted / weight : 0.0;
+    if (out.bias < options.stop_below) break;
   }
-  out.bias = weight > 0.0 ? weighted / weight : 0.0;
   return out;
 }
 

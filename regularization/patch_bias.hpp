@@ -4,7 +4,6 @@
 // alpha0 uses it on large surfaces to skip the first solve when its result would not be kept.
 #include <Eigen/Core>
 #include <Eigen/Sparse>
-#include <corrlap/core/config.hpp>
 #include <corrlap/regularization/attachment_bias.hpp>
 
 namespace corrlap {
@@ -27,6 +26,10 @@ struct PatchBiasOptions {
   double margin_lengths = 0.0;
   int rounds = kAttachmentBiasRounds;  ///< as attachment_bias
   double accuracy = 0.01;              ///< of each patch's solve, in steps (regularize_positions_preconditioned)
+  /// The patches are solved in 4 rounds, each spread over the surface; after a round, an estimate
+  /// below this stops (0: never). The automatic alpha0 passes half its skip threshold: a smooth
+  /// surface, whose first trial is solved anyway, pays a quarter of the patches.
+  double stop_below = 0.0;
 };
 
 /// The rings of L's graph a patch spans at this alpha: the core, the smoothing's rounds, and the
@@ -36,7 +39,7 @@ int patch_rings(double alpha, double step, const PatchBiasOptions& options = {})
 
 struct PatchBias {
   double bias = 0.0;               ///< the estimate of attachment_bias, in steps
-  int patches = 0;                 ///< solved
+  int patches = 0;                 ///< solved (fewer than asked after a stop_below)
   Eigen::Index vertices = 0;       ///< solved for, over every patch (a vertex in two counts twice)
   Eigen::Index core_vertices = 0;  ///< averaged over, over every patch
 };
@@ -47,12 +50,13 @@ struct PatchBias {
 /// displacements, whose matrix is L's principal submatrix). The smoothing of a core vertex reads
 /// `rounds` rings around it, all inside the patch. With one patch covering a whole component it is
 /// attachment_bias of that component's solve; otherwise its error is mostly the sampling of the
-/// cores. Arguments as attachment_bias and regularize_positions_preconditioned; `solver` configures
-/// each patch's direct solver (make_linear_solver). InputError on mismatched sizes.
+/// cores. Arguments as attachment_bias and regularize_positions_preconditioned. The patches are
+/// solved in parallel (TBB), each with Eigen's simplicial Cholesky; the sum over them is taken in
+/// their order, so the estimate does not depend on the threads. InputError on mismatched sizes.
 PatchBias patch_attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& faces,
                                 const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                 const Eigen::MatrixX3d& staircase, const Eigen::MatrixX3d& normals,
-                                const Eigen::VectorXd& H, double alpha, double step, const Config& solver,
+                                const Eigen::VectorXd& H, double alpha, double step,
                                 const PatchBiasOptions& options = {});
 
 }  // namespace corrlap

@@ -339,13 +339,14 @@ RegularizedSurface regularize_surface(const SurfelMesh& mesh, const NormalFields
   // far above the limit, its result would not be kept and its solve is skipped.
   // The patches are solved as the preconditioned scheme solves, which needs a direct backend.
   if (automatic && r.solver != "cg" && mesh.num_vertices() >= o.patch_bias_min_vertices) {
-    const PatchBiasOptions patch_options;
+    PatchBiasOptions patch_options;
+    patch_options.stop_below = 0.5 * kPatchBiasSkipFactor * kAttachmentBiasLimit;
     if (o.report_stage)
       o.report_stage("estimating the bias at alpha0 = " + number_text(r.alpha0) + " from " +
                      std::to_string(patch_options.patches) + " patches");
     try {
       const PatchBias estimate = patch_attachment_bias(mesh.faces, ops.L, ops.M, mesh.positions, r.normals, r.H,
-                                                       r.alpha, alpha_step, o.solver, patch_options);
+                                                       r.alpha, alpha_step, patch_options);
       if (estimate.bias >= kPatchBiasSkipFactor * kAttachmentBiasLimit) {
         r.alpha0_trials.push_back({r.alpha0, estimate.bias, /*estimated=*/true});
         solved.emplace_back();  // no positions: solved below if it is the one kept
