@@ -26,8 +26,7 @@ int patch_rings(double alpha, double step, const PatchBiasOptions& options) {
 PatchBias patch_attachment_bias(const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& faces,
                                 const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
                                 const Eigen::MatrixX3d& staircase, const Eigen::MatrixX3d& normals,
-                                const Eigen::VectorXd& H, double alpha, double step,
-                                const PatchBiasOptions& options) {
+                                const Eigen::VectorXd& H, double alpha, double step, const PatchBiasOptions& options) {
   const Eigen::Index n = staircase.rows();
   if (L.rows() != n || L.cols() != n || M.rows() != n || M.cols() != n || normals.rows() != n || H.size() != n)
     throw InputError("patch_attachment_bias: L, M, the staircase, normals and H need one row per vertex (" +

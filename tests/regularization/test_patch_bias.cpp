@@ -148,8 +148,7 @@ TEST_CASE("regularize_surface skips a first trial whose estimate is far above th
   CHECK_FALSE(b.alpha0_trials.front().estimated);
   // The first bias within the estimate's 15%, so the next alpha0 (bias^(1/0.4)) within a factor
   // 1.15^2.5 = 1.42 of the whole path's, and the result within the limit either way.
-  CHECK(std::abs(a.alpha0_trials.front().bias - b.alpha0_trials.front().bias) <=
-        0.15 * b.alpha0_trials.front().bias);
+  CHECK(std::abs(a.alpha0_trials.front().bias - b.alpha0_trials.front().bias) <= 0.15 * b.alpha0_trials.front().bias);
   CHECK(a.alpha0 == doctest::Approx(b.alpha0).epsilon(0.42));
   CHECK(a.alpha0_trials.back().bias <= kAttachmentBiasLimit);
   CHECK(b.alpha0_trials.back().bias <= kAttachmentBiasLimit);
