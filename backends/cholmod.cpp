@@ -2,6 +2,9 @@
 
 #include <cholmod.h>
 #include <omp.h>
+#if defined(__x86_64__) || defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include <atomic>
 #include <corrlap/backends/detail/blas_threads.hpp>
@@ -122,6 +125,30 @@ class ConcurrencyScope {
   ~ConcurrencyScope() { active_calls.fetch_sub(1); }
   ConcurrencyScope(const ConcurrencyScope&) = delete;
   ConcurrencyScope& operator=(const ConcurrencyScope&) = delete;
+};
+
+// Subnormal numbers flushed to zero on the calling thread for the scope (x86: FTZ and DAZ; elsewhere
+// nothing): at a large diagonal shift the factor's entries far from the diagonal fall below the
+// normal range, where each operation is many times slower, and values that small are far below the
+// rounding of any entry they meet. The CLI sets the flags for the whole process, OpenBLAS's
+// workers included (flush_subnormals_in_process); this scope gives library callers the main
+// thread's part.
+class FlushSubnormalsScope {
+ public:
+#if defined(__x86_64__) || defined(__SSE2__)
+  FlushSubnormalsScope() : saved_(_mm_getcsr() & kFlags) { _mm_setcsr(_mm_getcsr() | kFlags); }
+  // The two flags as they were; the exception status bits raised meanwhile stay.
+  ~FlushSubnormalsScope() { _mm_setcsr((_mm_getcsr() & ~kFlags) | saved_); }
+
+ private:
+  static constexpr unsigned kFlags = 0x8040u;  // FTZ, DAZ
+  unsigned saved_;
+#else
+  FlushSubnormalsScope() = default;
+#endif
+ public:
+  FlushSubnormalsScope(const FlushSubnormalsScope&) = delete;
+  FlushSubnormalsScope& operator=(const FlushSubnormalsScope&) = delete;
 };
 
 const char* ordering_name(int ordering) {
@@ -309,6 +336,7 @@ struct CholmodSolver::Impl {
     cholmod_sparse s = view<I>(A);
     ConcurrencyScope concurrent;
     OpenMpScope omp(openmp_threads);
+    FlushSubnormalsScope flush;
     Api<I>::factorize(&s, factor, &common);
     check_status("factorization");
     // Simplicial LDL^T only fails on a zero pivot: a negative D(k) (indefinite A) must be caught

@@ -2,6 +2,9 @@
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#if defined(__x86_64__) || defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include <cstdlib>
 #include <memory>
@@ -10,8 +13,10 @@
 
 #include "error.hpp"
 
-// OpenBLAS is optional at link time: the weak symbol is null when OpenBLAS is not loaded.
+// OpenBLAS is optional at link time: the weak symbols are null when OpenBLAS is not loaded.
 extern "C" void openblas_set_num_threads(int) __attribute__((weak));
+// Stops OpenBLAS's worker threads (its own fork handler); the next parallel call starts them again.
+extern "C" int blas_thread_shutdown_(void) __attribute__((weak));
 
 namespace corrlap {
 
@@ -29,6 +34,17 @@ void set_thread_count(int n) {
   g_control = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(value));
   g_threads = value;
   if (openblas_set_num_threads) openblas_set_num_threads(value);
+}
+
+bool flush_subnormals_in_process() {
+#if defined(__x86_64__) || defined(__SSE2__)
+  constexpr unsigned kFlushToZero = 0x8000, kDenormalsAreZero = 0x0040;
+  _mm_setcsr(_mm_getcsr() | kFlushToZero | kDenormalsAreZero);
+  if (blas_thread_shutdown_) blas_thread_shutdown_();
+  return true;
+#else
+  return false;
+#endif
 }
 
 int thread_count() {

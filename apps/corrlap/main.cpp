@@ -81,6 +81,8 @@ void use_huge_pages(char** argv) {
 int main(int argc, char** argv) {
   using namespace corrlap;
   cli::use_huge_pages(argv);
+  // Before any thread computes (core/threads.hpp says why).
+  flush_subnormals_in_process();
   // Under mpirun every rank runs the command (the PETSc backends solve together); rank 0 alone
   // prints results. Errors and warnings (stderr) stay on every rank: any rank may be the one failing.
   if (!is_output_rank() && std::freopen("/dev/null", "w", stdout) == nullptr) return 2;
