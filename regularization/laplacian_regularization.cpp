@@ -15,8 +15,10 @@ namespace corrlap {
 
 namespace {
 
+// The sizes and values of L, M and p, and of the normals and H where given (a curvature term given
+// whole has neither).
 void check_inputs(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
-                  const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H) {
+                  const Eigen::MatrixX3d* normals, const Eigen::VectorXd* H) {
   const Eigen::Index n = p.rows();
   const auto size_error = [&](const std::string& what, Eigen::Index rows, Eigen::Index cols) {
     std::ostringstream os;
@@ -30,21 +32,27 @@ void check_inputs(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatri
   if (n == 0) throw InputError("regularization: the surface has no vertex");
   if (L.rows() != n || L.cols() != n) size_error("L", L.rows(), L.cols());
   if (M.rows() != n || M.cols() != n) size_error("M", M.rows(), M.cols());
-  if (normals.rows() != n) size_error("normals", normals.rows(), normals.cols());
-  if (H.size() != n) size_error("H", H.size(), 1);
+  if (normals && normals->rows() != n) size_error("normals", normals->rows(), normals->cols());
+  if (H && H->size() != n) size_error("H", H->size(), 1);
   if (!p.allFinite()) throw InputError("regularization: a vertex position is not finite");
+  if (!normals || !H) return;
   for (Eigen::Index v = 0; v < n; ++v) {
-    if (!std::isfinite(H[v])) {
+    if (!std::isfinite((*H)[v])) {
       std::ostringstream os;
-      os << "regularization: the mean curvature of vertex " << v << " is " << H[v];
+      os << "regularization: the mean curvature of vertex " << v << " is " << (*H)[v];
       throw InputError(os.str());
     }
-    if (!normals.row(v).allFinite() || std::abs(normals.row(v).norm() - 1.0) > 1e-6) {
+    if (!normals->row(v).allFinite() || std::abs(normals->row(v).norm() - 1.0) > 1e-6) {
       std::ostringstream os;
-      os << "regularization: the normal of vertex " << v << " is not a unit vector (" << normals.row(v) << ")";
+      os << "regularization: the normal of vertex " << v << " is not a unit vector (" << normals->row(v) << ")";
       throw InputError(os.str());
     }
   }
+}
+
+void check_inputs(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M, const Eigen::MatrixX3d& p,
+                  const Eigen::MatrixX3d& normals, const Eigen::VectorXd& H) {
+  check_inputs(L, M, p, &normals, &H);
 }
 
 // The rows H_v n_v^T.
@@ -56,6 +64,15 @@ Eigen::MatrixX3d mean_curvature_normals(const Eigen::MatrixX3d& normals, const E
 Eigen::MatrixX3d curvature_rhs(const Eigen::SparseMatrix<double>& L, const Eigen::MatrixX3d& normals,
                                const Eigen::VectorXd& H) {
   return -2.0 * (L * mean_curvature_normals(normals, H));
+}
+
+// curvature_rhs after the checks of check_inputs (the first thing a constructor delegating to the
+// one with the curvature term given must do).
+Eigen::MatrixX3d checked_curvature_rhs(const Eigen::SparseMatrix<double>& L, const Eigen::SparseMatrix<double>& M,
+                                       const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
+                                       const Eigen::VectorXd& H) {
+  check_inputs(L, M, p, normals, H);
+  return curvature_rhs(L, normals, H);
 }
 
 // The right-hand side of the normal equations, alpha M_l p - 2 L (H n) (#V x 3), from its curvature part.
@@ -163,23 +180,14 @@ PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMa
                                                            const Eigen::SparseMatrix<double>& M,
                                                            const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& normals,
                                                            const Eigen::VectorXd& H, LinearSolver& solver)
-    : L_(L), p_(p), solver_(solver) {
-  check_inputs(L, M, p, normals, H);
-  lumped_mass_ = lumped_mass(M);
-  mass_ = lumped_mass_.diagonal();
-  inverse_mass_ = mass_.cwiseInverse();
-  curvature_rhs_ = curvature_rhs(L, normals, H);
-}
+    : PreconditionedRegularization(L, M, p, checked_curvature_rhs(L, M, p, normals, H), solver) {}
 
 PreconditionedRegularization::PreconditionedRegularization(const Eigen::SparseMatrix<double>& L,
                                                            const Eigen::SparseMatrix<double>& M,
                                                            const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& g,
                                                            LinearSolver& solver)
     : L_(L), p_(p), solver_(solver) {
-  // The checks of L, M and p; the normals and H they also check are not used here.
-  Eigen::MatrixX3d unit = Eigen::MatrixX3d::Zero(p.rows(), 3);
-  unit.col(0).setOnes();
-  check_inputs(L, M, p, unit, Eigen::VectorXd::Zero(p.rows()));
+  check_inputs(L, M, p, nullptr, nullptr);
   if (g.rows() != p.rows() || !g.allFinite())
     throw InputError("regularization: the curvature term must be finite, one row per vertex");
   lumped_mass_ = lumped_mass(M);
