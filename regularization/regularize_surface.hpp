@@ -90,9 +90,9 @@ struct RegularizationOptions {
   /// The preconditioned solve stops when the error bound is below this many grid steps (0: to
   /// rounding). The direct solve is exact whatever it says.
   double solve_accuracy = kRegularizationSolveAccuracy;
-  /// Progress of a long run: called on the calling thread before the mean curvature and before
-  /// each solve (every trial of the automatic alpha0) with a line saying what comes, e.g.
-  /// "solving with alpha0 = 10". Empty: nothing is reported.
+  /// Progress of a long run: called on the calling thread before the mean curvature, the patch
+  /// estimate of a large surface and each solve (every trial of the automatic alpha0) with a line
+  /// saying what comes, e.g. "solving with alpha0 = 10". Empty: nothing is reported.
   ProgressLine report_stage;
 };
 
